@@ -1,0 +1,15 @@
+#!/usr/bin/env bash
+# The README's test command: builds and runs the test suite on the host (release and ASan+UBSan)
+# and on ARM64 under qemu. Pass preset names to run a subset, e.g. `scripts/test.sh release`.
+set -euo pipefail
+cd "$(dirname "$0")/.."
+presets=("$@")
+[ ${#presets[@]} -eq 0 ] && presets=(release asan aarch64)
+for p in "${presets[@]}"; do
+  echo "=== [$p] configure + build"
+  cmake --preset "$p" >/dev/null
+  cmake --build --preset "$p"
+  echo "=== [$p] test"
+  ctest --preset "$p"
+done
+echo "scripts/test.sh: all presets passed (${presets[*]})"
