@@ -1,0 +1,129 @@
+// The on-board map: one versioned, little-endian binary blob, validated once and then used in place.
+//
+//   [MapHeader][SectionEntry x section_count][pad to 16][section 0][pad]...[section n-1]
+//
+// The header and section table are covered by header_crc; every section by its own CRC-32. load_map()
+// checks every size, offset, count, CRC, index and float before returning a MapView whose pointers
+// point into the caller's buffer (zero copy; the buffer must outlive the view and be 16-byte aligned).
+// The full specification is docs/map-format.md. Writing uses the same MapView type as input, so a map
+// round-trips through write_map()/load_map() without any other representation.
+#pragma once
+#include <cstddef>
+#include <cstdint>
+
+#include "gsf/status.h"
+
+namespace gsf {
+
+constexpr char kMapMagic[8] = {'G', 'S', 'F', 'M', 'A', 'P', '\r', '\n'};
+constexpr uint32_t kMapVersion = 1;
+
+// Parameters the map was built with that a localizer must agree with (checked by the Localizer).
+struct MapParams {
+  uint32_t num_classes;          // D
+  uint32_t instance_class_mask;  // ClassMask of instantiable classes
+  uint32_t field_input_dims;     // 2 (bird's-eye) or 3
+  uint32_t inducing_stride;      // rows reserved per instance in the inducing/alpha sections (max M)
+  uint32_t grid_nx, grid_ny, grid_layers;
+  uint32_t triangle_neighbours;  // K
+  float grid_spacing, layer_spacing, grid_z0;
+  float length_scale, signal_variance, noise_variance;
+  float field_radius;
+  float voxel_size;
+  float side_bin, min_side, max_side;
+  uint32_t reserved[4];
+};
+
+struct MapCounts {
+  uint32_t instances;
+  uint32_t triangles;
+  uint32_t index_keys;
+  uint32_t refine_points;  // 0 when the map has no refinement layer
+  float road_length_m;     // length of the mapping drive, for bytes-per-km reporting
+  float bounds_min[3];
+  float bounds_max[3];
+  uint32_t reserved;
+};
+
+struct MapHeader {
+  char magic[8];
+  uint32_t version;
+  uint32_t header_bytes;   // sizeof(MapHeader) + section table
+  uint64_t total_bytes;    // whole blob
+  uint32_t section_count;
+  uint32_t flags;
+  MapParams params;
+  MapCounts counts;
+  uint32_t header_crc;     // CRC-32 of header (this field as 0) + section table
+  uint32_t pad;
+};
+
+enum class MapSection : uint32_t {
+  Instances = 1,     // MapInstance x instances
+  FieldInputs,       // float x instances x inducing_stride x 3 (instance-local frame)
+  FieldAlpha,        // float x instances x inducing_stride x D  ((K + s^2 I)^-1 Y)
+  GridMean,          // float x instances x G x D  (posterior mean on the canonical, yaw-0 grid)
+  GridVar,           // float x instances x G      (posterior variance on that grid)
+  Triangles,         // MapTriangle x triangles
+  IndexKeys,         // uint64 x index_keys (sorted, unique)
+  IndexOffsets,      // uint32 x (index_keys + 1), CSR into IndexEntries
+  IndexEntries,      // uint32 x triangles (triangle ids)
+  RefinePoints,      // float x refine_points x 4 (x, y, z, label) - optional
+};
+constexpr uint32_t kMapSectionCount = 10;
+
+struct SectionEntry {
+  uint32_t id;
+  uint32_t elem_bytes;
+  uint64_t offset;
+  uint64_t bytes;
+  uint32_t crc;
+  uint32_t reserved;
+};
+
+struct MapInstance {
+  float centroid[3];
+  float stability;
+  uint32_t inducing_count;  // rows used in FieldInputs/FieldAlpha (<= inducing_stride)
+  uint32_t point_count;
+  uint8_t label;            // dense class
+  uint8_t pad[7];
+};
+static_assert(sizeof(MapInstance) == 32, "on-disk layout");
+
+struct MapTriangle {  // same meaning as gsf::Triangle: sides sorted d01 <= d12 <= d20
+  uint32_t v[3];
+  float side[3];
+  uint8_t label[3];
+  uint8_t pad;
+};
+static_assert(sizeof(MapTriangle) == 28, "on-disk layout");
+
+// Zero-copy view over a validated blob (or, for write_map, over the builder's arrays).
+struct MapView {
+  MapParams params{};
+  MapCounts counts{};
+  const MapInstance* instances = nullptr;
+  const float* field_inputs = nullptr;
+  const float* field_alpha = nullptr;
+  const float* grid_mean = nullptr;
+  const float* grid_var = nullptr;
+  const MapTriangle* triangles = nullptr;
+  const uint64_t* index_keys = nullptr;
+  const uint32_t* index_offsets = nullptr;
+  const uint32_t* index_entries = nullptr;
+  const float* refine_points = nullptr;
+  size_t total_bytes = 0;
+
+  uint32_t grid_points() const { return params.grid_nx * params.grid_ny * params.grid_layers; }
+};
+
+// Bytes write_map() needs for these contents.
+size_t map_serialized_size(const MapView& contents);
+// Serialise into `out` (16-byte aligned, >= map_serialized_size bytes). Padding is zeroed so the
+// same contents give the same bytes.
+Status write_map(const MapView& contents, void* out, size_t out_bytes, size_t* written);
+// Validate `data` completely and return a view into it. Never reads outside [data, data + bytes).
+Status load_map(const void* data, size_t bytes, MapView* out);
+
+}  // namespace gsf

@@ -1,0 +1,232 @@
+#include "gsf/map_format.h"
+
+#include <cmath>
+#include <cstring>
+
+#include "gsf/crc32.h"
+#include "gsf/semantic_classes.h"
+
+namespace gsf {
+namespace {
+
+constexpr uint64_t kAlign = 16;
+constexpr uint32_t kMaxInducingStride = 1024;
+constexpr uint32_t kMaxGridPointsInMap = 4096;
+
+uint64_t align_up(uint64_t v) { return (v + (kAlign - 1)) & ~(kAlign - 1); }
+
+struct SectionSpec {
+  MapSection id;
+  uint32_t elem_bytes;
+  uint64_t count;  // elements
+  const void* data;
+};
+
+// The section list a MapView implies: the single source of truth for sizes on write and on load.
+// Returns false if a count product overflows.
+bool section_specs(const MapView& m, SectionSpec* s) {
+  const uint64_t n = m.counts.instances;
+  const uint64_t stride = m.params.inducing_stride;
+  const uint64_t d = m.params.num_classes;
+  const uint64_t g = static_cast<uint64_t>(m.params.grid_nx) * m.params.grid_ny * m.params.grid_layers;
+  if (stride > kMaxInducingStride || g > kMaxGridPointsInMap || d > 64) return false;
+  s[0] = {MapSection::Instances, sizeof(MapInstance), n, m.instances};
+  s[1] = {MapSection::FieldInputs, sizeof(float), n * stride * 3, m.field_inputs};
+  s[2] = {MapSection::FieldAlpha, sizeof(float), n * stride * d, m.field_alpha};
+  s[3] = {MapSection::GridMean, sizeof(float), n * g * d, m.grid_mean};
+  s[4] = {MapSection::GridVar, sizeof(float), n * g, m.grid_var};
+  s[5] = {MapSection::Triangles, sizeof(MapTriangle), m.counts.triangles, m.triangles};
+  s[6] = {MapSection::IndexKeys, sizeof(uint64_t), m.counts.index_keys, m.index_keys};
+  s[7] = {MapSection::IndexOffsets, sizeof(uint32_t), uint64_t(m.counts.index_keys) + 1, m.index_offsets};
+  s[8] = {MapSection::IndexEntries, sizeof(uint32_t), m.counts.triangles, m.index_entries};
+  s[9] = {MapSection::RefinePoints, sizeof(float), uint64_t(m.counts.refine_points) * 4, m.refine_points};
+  return true;
+}
+
+uint64_t table_end() { return sizeof(MapHeader) + uint64_t(kMapSectionCount) * sizeof(SectionEntry); }
+
+bool all_finite(const float* p, uint64_t n) {
+  for (uint64_t i = 0; i < n; ++i)
+    if (!std::isfinite(p[i])) return false;
+  return true;
+}
+
+bool host_is_little_endian() {
+  const uint32_t one = 1;
+  uint8_t b;
+  std::memcpy(&b, &one, 1);
+  return b == 1;
+}
+
+Status check_params(const MapParams& p) {
+  if (p.num_classes != static_cast<uint32_t>(kNumClasses)) return Status::ConfigMismatch;
+  if (p.field_input_dims != 2 && p.field_input_dims != 3) return Status::CorruptData;
+  if (p.inducing_stride == 0 || p.inducing_stride > kMaxInducingStride) return Status::CorruptData;
+  const uint64_t g = uint64_t(p.grid_nx) * p.grid_ny * p.grid_layers;
+  if (g == 0 || g > kMaxGridPointsInMap) return Status::CorruptData;
+  const float fs[] = {p.grid_spacing, p.layer_spacing, p.grid_z0, p.length_scale, p.signal_variance,
+                      p.noise_variance, p.field_radius, p.voxel_size, p.side_bin, p.min_side, p.max_side};
+  if (!all_finite(fs, sizeof(fs) / sizeof(fs[0]))) return Status::CorruptData;
+  if (!(p.grid_spacing > 0 && p.length_scale > 0 && p.signal_variance > 0 && p.noise_variance > 0 &&
+        p.field_radius > 0 && p.voxel_size > 0 && p.side_bin > 0 && p.min_side >= 0 && p.max_side > p.min_side))
+    return Status::CorruptData;
+  return Status::Ok;
+}
+
+// Semantic checks on the validated sections: everything a later stage indexes with must be in range.
+Status check_contents(const MapView& m) {
+  const uint32_t n = m.counts.instances;
+  const uint32_t d = m.params.num_classes;
+  const uint64_t g = m.grid_points();
+  for (uint32_t i = 0; i < n; ++i) {
+    const MapInstance& in = m.instances[i];
+    if (!all_finite(in.centroid, 3) || !std::isfinite(in.stability) || in.stability < 0) return Status::CorruptData;
+    if (in.label >= d || in.inducing_count > m.params.inducing_stride) return Status::CorruptData;
+  }
+  const uint64_t stride = m.params.inducing_stride;
+  if (!all_finite(m.field_inputs, n * stride * 3) || !all_finite(m.field_alpha, n * stride * d) ||
+      !all_finite(m.grid_mean, n * g * d) || !all_finite(m.grid_var, n * g))
+    return Status::CorruptData;
+  for (uint64_t i = 0; i < n * g; ++i)
+    if (m.grid_var[i] < 0) return Status::CorruptData;
+  for (uint32_t t = 0; t < m.counts.triangles; ++t) {
+    const MapTriangle& tri = m.triangles[t];
+    for (int k = 0; k < 3; ++k) {
+      if (tri.v[k] >= n) return Status::CorruptData;
+      if (tri.label[k] != m.instances[tri.v[k]].label) return Status::CorruptData;
+    }
+    if (!all_finite(tri.side, 3) || !(tri.side[0] <= tri.side[1] && tri.side[1] <= tri.side[2]) || tri.side[0] < 0)
+      return Status::CorruptData;
+  }
+  // CSR index: strictly increasing keys, monotone offsets covering exactly the entries.
+  const uint32_t k = m.counts.index_keys;
+  if (m.index_offsets[0] != 0 || m.index_offsets[k] != m.counts.triangles) return Status::CorruptData;
+  for (uint32_t i = 0; i < k; ++i) {
+    if (m.index_offsets[i] > m.index_offsets[i + 1]) return Status::CorruptData;
+    if (i > 0 && m.index_keys[i - 1] >= m.index_keys[i]) return Status::CorruptData;
+  }
+  for (uint32_t i = 0; i < m.counts.triangles; ++i)
+    if (m.index_entries[i] >= m.counts.triangles) return Status::CorruptData;
+  if (!all_finite(m.refine_points, uint64_t(m.counts.refine_points) * 4)) return Status::CorruptData;
+  return Status::Ok;
+}
+
+}  // namespace
+
+size_t map_serialized_size(const MapView& contents) {
+  SectionSpec s[kMapSectionCount];
+  if (!section_specs(contents, s)) return 0;
+  uint64_t off = align_up(table_end());
+  for (const SectionSpec& sp : s) off = align_up(off + sp.count * sp.elem_bytes);
+  return static_cast<size_t>(off);
+}
+
+Status write_map(const MapView& m, void* out, size_t out_bytes, size_t* written) {
+  if (written) *written = 0;
+  if (!host_is_little_endian()) return Status::Unsupported;
+  if (out == nullptr || (reinterpret_cast<uintptr_t>(out) % kAlign) != 0) return Status::InvalidArgument;
+  Status ps = check_params(m.params);
+  if (ps != Status::Ok) return Status::InvalidArgument;
+  SectionSpec s[kMapSectionCount];
+  if (!section_specs(m, s)) return Status::InvalidArgument;
+  for (const SectionSpec& sp : s)
+    if (sp.count > 0 && sp.data == nullptr && sp.id != MapSection::IndexOffsets) return Status::InvalidArgument;
+  if (m.index_offsets == nullptr) return Status::InvalidArgument;
+  const size_t total = map_serialized_size(m);
+  if (total == 0) return Status::InvalidArgument;
+  if (out_bytes < total) return Status::BufferTooSmall;
+
+  uint8_t* base = static_cast<uint8_t*>(out);
+  std::memset(base, 0, total);
+  MapHeader h;
+  std::memset(&h, 0, sizeof(h));
+  std::memcpy(h.magic, kMapMagic, sizeof(kMapMagic));
+  h.version = kMapVersion;
+  h.header_bytes = static_cast<uint32_t>(table_end());
+  h.total_bytes = total;
+  h.section_count = kMapSectionCount;
+  h.params = m.params;
+  h.counts = m.counts;
+  SectionEntry table[kMapSectionCount];
+  std::memset(table, 0, sizeof(table));
+  uint64_t off = align_up(table_end());
+  for (uint32_t i = 0; i < kMapSectionCount; ++i) {
+    const uint64_t bytes = s[i].count * s[i].elem_bytes;
+    table[i].id = static_cast<uint32_t>(s[i].id);
+    table[i].elem_bytes = s[i].elem_bytes;
+    table[i].offset = off;
+    table[i].bytes = bytes;
+    if (bytes) std::memcpy(base + off, s[i].data, bytes);
+    table[i].crc = crc32(base + off, bytes);
+    off = align_up(off + bytes);
+  }
+  std::memcpy(base + sizeof(MapHeader), table, sizeof(table));
+  std::memcpy(base, &h, sizeof(h));
+  uint32_t crc = crc32(base, table_end());
+  std::memcpy(base + offsetof(MapHeader, header_crc), &crc, sizeof(crc));
+  if (written) *written = total;
+  return Status::Ok;
+}
+
+Status load_map(const void* data, size_t bytes, MapView* out) {
+  if (out == nullptr) return Status::InvalidArgument;
+  *out = MapView();
+  if (data == nullptr) return Status::InvalidArgument;
+  if (reinterpret_cast<uintptr_t>(data) % kAlign != 0) return Status::InvalidArgument;
+  if (!host_is_little_endian()) return Status::Unsupported;
+  if (bytes < sizeof(MapHeader)) return Status::Truncated;
+  const uint8_t* base = static_cast<const uint8_t*>(data);
+  MapHeader h;
+  std::memcpy(&h, base, sizeof(h));
+  if (std::memcmp(h.magic, kMapMagic, sizeof(kMapMagic)) != 0) return Status::CorruptData;
+  if (h.version != kMapVersion) return Status::VersionMismatch;
+  if (h.section_count != kMapSectionCount || h.header_bytes != table_end()) return Status::CorruptData;
+  if (bytes < table_end()) return Status::Truncated;
+  if (h.total_bytes > bytes) return Status::Truncated;
+  if (h.total_bytes != bytes) return Status::CorruptData;
+  // Header CRC over header (crc field zeroed) + section table.
+  uint32_t crc = crc32_update(0, base, offsetof(MapHeader, header_crc));
+  const uint32_t zero = 0;
+  crc = crc32_update(crc, &zero, sizeof(zero));
+  crc = crc32_update(crc, base + offsetof(MapHeader, header_crc) + 4, table_end() - offsetof(MapHeader, header_crc) - 4);
+  if (crc != h.header_crc) return Status::CorruptData;
+  const Status ps = check_params(h.params);
+  if (ps != Status::Ok) return ps;
+
+  MapView m;
+  m.params = h.params;
+  m.counts = h.counts;
+  m.total_bytes = bytes;
+  SectionSpec s[kMapSectionCount];
+  if (!section_specs(m, s)) return Status::CorruptData;
+  SectionEntry table[kMapSectionCount];
+  std::memcpy(table, base + sizeof(MapHeader), sizeof(table));
+  uint64_t prev_end = table_end();
+  const void* ptr[kMapSectionCount];
+  for (uint32_t i = 0; i < kMapSectionCount; ++i) {
+    const SectionEntry& e = table[i];
+    if (e.id != static_cast<uint32_t>(s[i].id) || e.elem_bytes != s[i].elem_bytes) return Status::CorruptData;
+    if (e.bytes != s[i].count * s[i].elem_bytes) return Status::CorruptData;
+    if (e.offset % kAlign != 0 || e.offset < prev_end || e.offset > bytes || e.bytes > bytes - e.offset)
+      return Status::CorruptData;
+    if (crc32(base + e.offset, e.bytes) != e.crc) return Status::CorruptData;
+    ptr[i] = base + e.offset;
+    prev_end = e.offset + e.bytes;
+  }
+  m.instances = static_cast<const MapInstance*>(ptr[0]);
+  m.field_inputs = static_cast<const float*>(ptr[1]);
+  m.field_alpha = static_cast<const float*>(ptr[2]);
+  m.grid_mean = static_cast<const float*>(ptr[3]);
+  m.grid_var = static_cast<const float*>(ptr[4]);
+  m.triangles = static_cast<const MapTriangle*>(ptr[5]);
+  m.index_keys = static_cast<const uint64_t*>(ptr[6]);
+  m.index_offsets = static_cast<const uint32_t*>(ptr[7]);
+  m.index_entries = static_cast<const uint32_t*>(ptr[8]);
+  m.refine_points = m.counts.refine_points ? static_cast<const float*>(ptr[9]) : nullptr;
+  const Status cs = check_contents(m);
+  if (cs != Status::Ok) return cs;
+  *out = m;
+  return Status::Ok;
+}
+
+}  // namespace gsf
