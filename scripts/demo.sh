@@ -7,7 +7,7 @@ cmake --preset release >/dev/null
 cmake --build --preset release
 out=${GSF_DEMO_OUT:-out/demo}
 mkdir -p "$out"
-if [ -x build/release/tools/gsf ]; then
+if build/release/tools/gsf demo --help >/dev/null 2>&1; then
   exec build/release/tools/gsf demo --out "$out" "$@"
 fi
 echo "demo: the gsf CLI is not built yet; ran the test suite instead" >&2

@@ -1,0 +1,83 @@
+// gsf inspect --map MAP [--json]: header, counts, section sizes and bytes per km of a map file.
+#include <cstdio>
+#include <cstring>
+
+#include "args.h"
+#include "commands.h"
+#include "gsf/map_format.h"
+#include "gsf/semantic_classes.h"
+#include "json_writer.h"
+
+namespace gsf::cli {
+
+int cmd_inspect(int argc, char** argv) {
+  const std::vector<OptionSpec> specs = {
+      {"map", "map file to inspect", "", false, true},
+      {"json", "print JSON instead of text", "", true, false},
+      {"help", "show this help", "", true, false},
+  };
+  for (int i = 2; i < argc; ++i)
+    if (!std::strcmp(argv[i], "--help")) {
+      std::printf("%s", usage_text("inspect", "Validate a map file and print what it holds.", specs).c_str());
+      return 0;
+    }
+  Args args;
+  std::string err;
+  if (!args.parse(argc, argv, 2, specs, &err)) return usage_error("inspect", err);
+  MapFile file;
+  if (read_map_file(args.get("map"), &file, &err) != Status::Ok) {
+    std::fprintf(stderr, "gsf inspect: %s\n", err.c_str());
+    return 1;
+  }
+  MapView map;
+  const Status s = load_map(file.data(), file.bytes, &map);
+  if (s != Status::Ok) {
+    std::fprintf(stderr, "gsf inspect: '%s' is not a valid map: %s\n", args.get("map").c_str(), to_string(s));
+    return 1;
+  }
+  const uint32_t per_class_max = kNumClasses;
+  uint32_t per_class[kNumClasses] = {};
+  for (uint32_t i = 0; i < map.counts.instances; ++i)
+    if (map.instances[i].label < per_class_max) per_class[map.instances[i].label]++;
+  const double km = map.counts.road_length_m / 1000.0;
+  const double bytes_per_km = km > 0 ? double(map.total_bytes) / km : 0.0;
+  if (args.flag("json")) {
+    JsonWriter j;
+    j.begin_object();
+    j.field("file", args.get("map"));
+    j.field("version", kMapVersion);
+    j.field("bytes", static_cast<unsigned long long>(map.total_bytes));
+    j.field("road_length_m", map.counts.road_length_m);
+    j.field("bytes_per_km", bytes_per_km);
+    j.field("instances", map.counts.instances);
+    j.field("triangles", map.counts.triangles);
+    j.field("index_keys", map.counts.index_keys);
+    j.field("refine_points", map.counts.refine_points);
+    j.field("grid_points", map.grid_points());
+    j.field("inducing_stride", map.params.inducing_stride);
+    j.key("instances_by_class");
+    j.begin_object();
+    for (int c = 0; c < kNumClasses; ++c)
+      if (per_class[c]) j.field(class_name(c), per_class[c]);
+    j.end_object();
+    j.end_object();
+    std::printf("%s\n", j.str().c_str());
+    return 0;
+  }
+  std::printf("map %s: valid, format version %u, %zu bytes\n", args.get("map").c_str(), kMapVersion, map.total_bytes);
+  std::printf("  road length     %.1f m  (%.2f MB per km)\n", map.counts.road_length_m, bytes_per_km / 1e6);
+  std::printf("  instances       %u\n", map.counts.instances);
+  for (int c = 0; c < kNumClasses; ++c)
+    if (per_class[c]) std::printf("    %-14s %u\n", class_name(c), per_class[c]);
+  std::printf("  triangles       %u in %u hash keys\n", map.counts.triangles, map.counts.index_keys);
+  std::printf("  refine points   %u\n", map.counts.refine_points);
+  std::printf("  field           %uD inputs, M <= %u inducing, grid %ux%ux%u @ %.2f m, kappa %.2f, noise %.3f, r %.1f m\n",
+              map.params.field_input_dims, map.params.inducing_stride, map.params.grid_nx, map.params.grid_ny,
+              map.params.grid_layers, map.params.grid_spacing, map.params.length_scale, map.params.noise_variance,
+              map.params.field_radius);
+  std::printf("  triangles       K=%u, sides [%.1f, %.1f] m, bin %.2f m\n", map.params.triangle_neighbours,
+              map.params.min_side, map.params.max_side, map.params.side_bin);
+  return 0;
+}
+
+}  // namespace gsf::cli

@@ -1,0 +1,30 @@
+// The gsf CLI's subcommands. Each returns the process exit code: 0 ok, 1 runtime failure, 2 usage error.
+#pragma once
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "gsf/status.h"
+
+namespace gsf::cli {
+
+int cmd_inspect(int argc, char** argv);
+int cmd_simulate(int argc, char** argv);
+int cmd_build_map(int argc, char** argv);
+int cmd_localize(int argc, char** argv);
+int cmd_evaluate(int argc, char** argv);
+int cmd_demo(int argc, char** argv);
+
+// A map file read into 16-byte aligned memory (as load_map requires).
+struct MapFile {
+  std::vector<uint64_t> words;
+  size_t bytes = 0;
+  const void* data() const { return words.data(); }
+};
+Status read_map_file(const std::string& path, MapFile* out, std::string* error);
+bool write_file(const std::string& path, const void* data, size_t bytes, std::string* error);
+
+// Prints "gsf <cmd>: error: msg" plus a hint, returns 2.
+int usage_error(const std::string& command, const std::string& message);
+
+}  // namespace gsf::cli
