@@ -98,6 +98,7 @@ struct MapTriangle {  // same meaning as gsf::Triangle: sides sorted d01 <= d12 
   uint8_t pad;
 };
 static_assert(sizeof(MapTriangle) == 28, "on-disk layout");
+static_assert(sizeof(MapHeader) == 184 && sizeof(SectionEntry) == 32, "on-disk layout (docs/map-format.md)");
 
 // Zero-copy view over a validated blob (or, for write_map, over the builder's arrays).
 struct MapView {
