@@ -1,0 +1,70 @@
+// Evaluation metrics as in Outram's evaluation code and the paper's Tables II and IV: success means
+// translation error < 5 m and rotation error < 10 deg, with errors from dT = T_est^-1 * T_gt; ATE/ARE are
+// means over successes; times are per query. Also the declining curve: precision (correct among
+// answered) against the share answered, when answers are ranked by the localizer's ambiguity.
+#pragma once
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include <Eigen/Geometry>
+
+namespace gsf::cli {
+
+struct PoseError {
+  double translation_m = 0;
+  double rotation_deg = 0;
+};
+PoseError pose_error(const Eigen::Isometry3d& estimate, const Eigen::Isometry3d& ground_truth);
+
+constexpr double kSuccessTranslation = 5.0;
+constexpr double kSuccessRotationDeg = 10.0;
+
+struct StageMs {  // per-stage wall time of one query, milliseconds
+  double voxel = 0, cluster = 0, field = 0, triangle = 0, match = 0, gsf = 0, clique = 0, pose = 0, refine = 0;
+};
+
+struct QueryRecord {
+  uint32_t index = 0;        // position in the query sequence
+  uint32_t frame = 0;        // file number
+  std::string status;        // gsf::to_string of the localize status ("Ok" = answered)
+  bool answered = false;
+  bool success = false;
+  bool in_zone = false;      // in the simulator's repetitive zone
+  PoseError error;
+  double time_ms = 0;
+  StageMs stages;
+  double ambiguity = 1.0;    // lower = more confident
+  uint32_t inliers = 0;
+  Eigen::Isometry3d estimate = Eigen::Isometry3d::Identity();
+  Eigen::Isometry3d truth = Eigen::Isometry3d::Identity();
+};
+
+struct CurvePoint {
+  double threshold;   // answer only if ambiguity <= threshold
+  double answered;    // share of all queries answered
+  double precision;   // successes among answered
+};
+
+struct ModeSummary {
+  std::string mode;
+  uint32_t queries = 0, answered = 0, successes = 0;
+  double success_rate = 0;           // successes / queries
+  uint32_t zone_queries = 0, zone_successes = 0;
+  double zone_success_rate = 0;
+  double ate_m = 0, are_deg = 0;     // mean over successes
+  double median_ms = 0, p95_ms = 0, mean_ms = 0;
+  StageMs median_stage;
+  double time_ratio_to_gsf_off = 0;  // filled by the caller when an instance-only row exists
+  uint64_t workspace_bytes = 0;
+  double default_threshold = 0;      // ambiguity threshold used for "answered at default"
+  double precision_at_default = 0, answered_at_default = 0;
+  double wrong_answers_at_default = 0;  // share of all queries answered wrongly at the default threshold
+  std::vector<CurvePoint> curve;
+};
+
+ModeSummary summarize(const std::string& mode, const std::vector<QueryRecord>& records, double default_threshold);
+
+double percentile(std::vector<double> v, double p);
+
+}  // namespace gsf::cli
