@@ -12,6 +12,7 @@
 #include <cstdint>
 
 #include "gsf/status.h"
+#include "gsf/triangle.h"
 
 namespace gsf {
 
@@ -91,13 +92,7 @@ struct MapInstance {
 };
 static_assert(sizeof(MapInstance) == 32, "on-disk layout");
 
-struct MapTriangle {  // same meaning as gsf::Triangle: sides sorted d01 <= d12 <= d20
-  uint32_t v[3];
-  float side[3];
-  uint8_t label[3];
-  uint8_t pad;
-};
-static_assert(sizeof(MapTriangle) == 28, "on-disk layout");
+using MapTriangle = Triangle;  // triangle.h: sides sorted d01 <= d12 <= d20
 static_assert(sizeof(MapHeader) == 184 && sizeof(SectionEntry) == 32, "on-disk layout (docs/map-format.md)");
 
 // Zero-copy view over a validated blob (or, for write_map, over the builder's arrays).

@@ -1,0 +1,84 @@
+// The Gaussian semantic field (GSF, the middle layer of the scene graph): per instance, a sparse GP
+// f: R^2 or R^3 -> R^D from positions around the instance to class-probability vectors.
+//
+// Matern-3/2 kernel k(r) = s^2 (1 + sqrt3 r / l) exp(-sqrt3 r / l); D independent outputs share the
+// kernel, so one M x M Cholesky of K + sigma^2 I serves all D: alpha = (K + sigma^2 I)^-1 Y (M x D).
+// Inputs are instance-local (relative to the centroid). input_dims = 2 gives a bird's-eye field: the
+// z coordinate is dropped, so ground-level "stuff" around a pole counts as much as the pole itself.
+// Probing on a fixed grid gives the posterior mean (G x D) and covariance (G x G, shared by all D
+// outputs) that the 2-Wasserstein similarity compares (wasserstein.h).
+#pragma once
+#include <cstdint>
+
+#include "gsf/arena.h"
+#include "gsf/semantic_classes.h"
+#include "gsf/status.h"
+
+namespace gsf {
+
+constexpr uint32_t kMaxInducing = 96;
+constexpr uint32_t kMaxGridPoints = 128;
+
+struct FieldConfig {
+  float radius = 8.0f;            // m; semantic points within this distance train the field
+  uint32_t inducing_points = 48;  // M (Algorithm 1 target), <= kMaxInducing
+  float length_scale = 2.0f;      // m; Matern kappa
+  float signal_variance = 1.0f;   // s^2
+  float noise_variance = 0.05f;   // sigma_y^2
+  uint32_t input_dims = 2;        // 2 = bird's-eye (x, y) field, 3 = full 3-D inputs
+  uint32_t grid_nx = 8, grid_ny = 8;
+  float grid_spacing = 1.5f;      // m
+  uint32_t grid_layers = 1;       // heights (3-D fields only; 1 for bird's-eye)
+  float layer_spacing = 1.0f;     // m between layers
+  float grid_z0 = 0.0f;           // m; lowest layer height relative to the centroid
+  uint64_t seed = 7;              // Algorithm 1's random choice
+};
+
+Status validate(const FieldConfig& config);
+inline uint32_t grid_points(const FieldConfig& c) { return c.grid_nx * c.grid_ny * c.grid_layers; }
+
+float matern32(float r, float length_scale, float signal_variance);
+
+// A fitted field: views into memory owned by someone else (arena or map blob).
+struct FieldView {
+  const float* inputs = nullptr;  // m x 3, instance-local (z = 0 for bird's-eye fields)
+  const float* alpha = nullptr;   // m x D
+  uint32_t m = 0;
+};
+
+// The probe grid: N_x x N_y (x layers) points centred on the instance, rotated by yaw about z.
+// out_xyz: grid_points(config) x 3.
+void make_probe_grid(const FieldConfig& config, float yaw_radians, float* out_xyz);
+
+// Workspace for fitting and probing; all memory comes from the arena at bind().
+class FieldSolver {
+ public:
+  static size_t required_bytes(const FieldConfig& config, uint32_t max_points);
+  Status bind(Arena& arena, const FieldConfig& config, uint32_t max_points);
+
+  // Fit from n semantic points (instance-local xyz: n x 3, targets: n x D, dense labels: n). When
+  // n > M, Algorithm 1 picks M of them. Writes inputs (M x 3), alpha (M x D) and the Cholesky factor
+  // (M x M, lower, row-major, kept for probing) into the given arrays; *m_out = rows used.
+  Status fit(const float* xyz, const float* targets, const uint8_t* labels, uint32_t n, float* inputs_out,
+             float* alpha_out, float* chol_out, uint32_t* m_out);
+  // Recompute the Cholesky factor of K + sigma^2 I for stored inputs (map side: not stored in the map).
+  Status factor(const float* inputs, uint32_t m, float* chol_out);
+
+  // Posterior at G grid points: mean (G x D), variance (G), optionally full covariance (G x G).
+  Status probe(const FieldView& field, const float* chol, const float* grid_xyz, uint32_t g, float* mean_out,
+               float* var_out, float* cov_out);
+
+  const FieldConfig& config() const { return config_; }
+
+ private:
+  float kernel(const float* a, const float* b) const;
+  FieldConfig config_{};
+  uint32_t max_points_ = 0;
+  uint32_t* selected_ = nullptr;
+  uint32_t* scratch_ = nullptr;
+  float* kstar_ = nullptr;  // M x G
+  float* work_ = nullptr;   // M x G
+  bool bound_ = false;
+};
+
+}  // namespace gsf

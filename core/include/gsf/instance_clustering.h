@@ -1,0 +1,72 @@
+// The object layer (top of the scene graph): instances clustered inside instantiable classes.
+//
+// Connected components over the voxel layer: two voxels of the same instantiable class are connected
+// when their centroids are within the class tolerance (searched through neighbouring voxel cells, BFS
+// with an explicit queue - no recursion). A component becomes an instance if it has at least
+// min_voxels and its horizontal extent is at most max_extent for its class (rejects walls of "poles").
+// Capacity: at most max_instances are kept - the largest by point count (ties: earlier discovery) -
+// and build() returns Status::CapacityExceeded as a warning; the kept instances are valid.
+// Instances are ordered by discovery (voxel order), so the result is deterministic.
+#pragma once
+#include <cstdint>
+
+#include "gsf/arena.h"
+#include "gsf/semantic_classes.h"
+#include "gsf/status.h"
+#include "gsf/voxel_layer.h"
+
+namespace gsf {
+
+struct ClusterConfig {
+  ClassMask instance_classes = kDefaultInstanceClasses;
+  float tolerance[kNumClasses];     // m, per class; default 0.6 (car 1.0)
+  uint32_t min_voxels[kNumClasses]; // default 3 (car 8)
+  float max_extent[kNumClasses];    // m, horizontal bbox diagonal; default 2.5 (car 8, trunk 2.5)
+  uint32_t max_instances = 128;
+  ClusterConfig() {
+    for (int c = 0; c < kNumClasses; ++c) { tolerance[c] = 0.6f; min_voxels[c] = 3; max_extent[c] = 2.5f; }
+    tolerance[kCar] = 1.0f; min_voxels[kCar] = 8; max_extent[kCar] = 8.0f;
+    max_extent[kTrafficSign] = 3.0f;
+  }
+};
+
+struct Instance {
+  float centroid[3];
+  float extent[3];        // axis-aligned bbox size
+  float stability;        // stability_weight(label)
+  uint32_t voxel_count;
+  uint32_t point_count;
+  uint32_t first_voxel;   // discovery order key
+  uint8_t label;          // dense class
+  uint8_t pad[3];
+};
+
+struct ClusterStats {
+  uint32_t components = 0, rejected_small = 0, rejected_extent = 0, dropped_capacity = 0, instances = 0;
+};
+
+class InstanceClustering {
+ public:
+  static size_t required_bytes(const ClusterConfig& config, uint32_t max_voxels);
+  Status bind(Arena& arena, const ClusterConfig& config, uint32_t max_voxels);
+  Status build(const VoxelLayer& voxels, ClusterStats* stats);
+
+  uint32_t size() const { return count_; }
+  const Instance& instance(uint32_t i) const { return instances_[i]; }
+  const Instance* instances() const { return instances_; }
+  // Instance id of each voxel after build (UINT32_MAX for voxels in no kept instance).
+  const uint32_t* voxel_instance() const { return voxel_instance_; }
+
+ private:
+  ClusterConfig config_{};
+  Instance* instances_ = nullptr;
+  uint32_t* queue_ = nullptr;
+  uint32_t* voxel_instance_ = nullptr;  // during build: component id; after: kept instance id
+  uint32_t* component_to_instance_ = nullptr;
+  uint32_t max_voxels_ = 0;
+  uint32_t max_components_ = 0;
+  uint32_t count_ = 0;
+  bool bound_ = false;
+};
+
+}  // namespace gsf

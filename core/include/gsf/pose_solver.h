@@ -1,0 +1,31 @@
+// Pose from correspondences, in double precision: weighted Kabsch (closed form) and the weighted
+// truncated least squares of paper Eq. 8,
+//     min_{R,t} sum_i w_i min(|b_i - R a_i - t|^2, c^2),
+// solved by graduated non-convexity (GNC-TLS, Yang et al. 2020) starting from weighted Kabsch: each
+// iteration is a weighted Kabsch with GNC weights, mu grows by 1.4 per iteration, bounded iterations.
+// Poses map query points a (scan frame) into map points b.
+#pragma once
+#include <cstdint>
+
+#include <Eigen/Geometry>
+
+#include "gsf/status.h"
+
+namespace gsf {
+
+// Weighted Kabsch. a, b: n x 3 floats; w: n weights (nullptr = all 1). InvalidInput when the weighted
+// points are degenerate (total weight <= 0, fewer than 3 points, or all collinear).
+Status kabsch(const float* a, const float* b, const float* w, uint32_t n, Eigen::Isometry3d* b_T_a);
+
+struct TlsResult {
+  Eigen::Isometry3d b_T_a = Eigen::Isometry3d::Identity();
+  uint32_t inliers = 0;   // residual <= c
+  double cost = 0.0;      // the truncated objective at the solution
+  uint32_t iterations = 0;
+};
+
+// inlier_mask (optional, n bytes) receives 1 for residual <= threshold.
+Status solve_tls(const float* a, const float* b, const float* w, uint32_t n, double threshold, uint32_t max_iterations,
+                 TlsResult* out, uint8_t* inlier_mask, float* scratch_weights /* n */);
+
+}  // namespace gsf

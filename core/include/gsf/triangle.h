@@ -1,0 +1,61 @@
+// Triangle descriptors over the object layer (Outram / STD style): each instance with its K nearest
+// instances forms triangles; the key is the sorted, quantised side lengths (permutation invariant).
+//
+// Canonical vertex order: side[0] = |v0 v1| <= side[1] = |v1 v2| <= side[2] = |v2 v0| (the paper's
+// d12 <= d23 <= d31), so v0 joins the shortest and longest sides. Exact ties are broken by instance id,
+// so the order is deterministic. The same vertex set reached from several anchors is emitted once.
+#pragma once
+#include <cstdint>
+
+#include "gsf/arena.h"
+#include "gsf/bounded_hash_map.h"
+#include "gsf/fixed_vector.h"
+#include "gsf/status.h"
+
+namespace gsf {
+
+struct TriangleConfig {
+  uint32_t neighbours = 10;        // K nearest instances per anchor
+  float min_side = 0.5f;           // m
+  float max_side = 50.0f;          // m
+  float side_bin = 1.0f;           // m, key quantisation
+  float relative_side_tolerance = 0.03f;  // match if |d_q - d_m| < tol * d_q on every side
+  uint32_t max_triangles = 4096;   // per scan (capacity)
+};
+
+struct Triangle {  // also the on-disk map record (map_format.h)
+  uint32_t v[3];
+  float side[3];
+  uint8_t label[3];
+  uint8_t pad;
+};
+static_assert(sizeof(Triangle) == 28, "map record layout");
+
+Status validate(const TriangleConfig& config);
+
+uint64_t triangle_key(int32_t q0, int32_t q1, int32_t q2);
+uint64_t triangle_key(const Triangle& t, float side_bin);
+
+// Canonical triangle of three instances (ids a, b, c with positions pa, pb, pc).
+Triangle make_triangle(uint32_t a, uint32_t b, uint32_t c, const float* pa, const float* pb, const float* pc,
+                       const uint8_t* labels);
+
+class TriangleBuilder {
+ public:
+  static size_t required_bytes(const TriangleConfig& config, uint32_t max_instances);
+  Status bind(Arena& arena, const TriangleConfig& config, uint32_t max_instances);
+  // centroids: n x 3 (stride floats apart), labels: n. Appends to `out` (cleared first). Returns
+  // CapacityExceeded (keeping the deterministic prefix) when out or max_triangles is full.
+  Status build(const float* centroids, uint32_t stride, const uint8_t* labels, uint32_t n, FixedVector<Triangle>& out);
+
+ private:
+  TriangleConfig config_{};
+  uint32_t max_instances_ = 0;
+  uint32_t* knn_ = nullptr;   // n x K neighbour ids
+  float* knn_d_ = nullptr;    // n x K distances
+  uint32_t* knn_count_ = nullptr;
+  BoundedHashMap<uint8_t> seen_;
+  bool bound_ = false;
+};
+
+}  // namespace gsf

@@ -1,0 +1,83 @@
+// The metric-semantic layer (bottom of the scene graph): a scan voxelised into a bounded hash of voxels,
+// each with its centroid, point count, mean class-probability vector and argmax label; plus a coarse
+// 2-D column index for radius gathers (the neighbourhood each instance's field is trained on).
+//
+// Per point: non-finite -> counted and skipped; range outside [min_range, max_range] -> skipped;
+// label -> class_from_kitti: ignored classes skipped, unknown ids counted and skipped; probability =
+// softmax(logits) when the scan carries logits, else one-hot of the label.
+// Capacity: when max_voxels is reached, points that fall into existing voxels still accumulate and
+// points needing a new voxel are dropped (counted). The layer stays fully usable; build() then returns
+// Status::CapacityExceeded as a warning (the voxels are valid).
+#pragma once
+#include <cstdint>
+
+#include "gsf/arena.h"
+#include "gsf/bounded_hash_map.h"
+#include "gsf/scan.h"
+#include "gsf/semantic_classes.h"
+#include "gsf/status.h"
+
+namespace gsf {
+
+struct VoxelConfig {
+  float voxel_size = 0.4f;     // m
+  float min_range = 2.5f;      // m; drops returns from the ego vehicle
+  float max_range = 80.0f;     // m
+  uint32_t max_voxels = 100000;
+  float column_size = 2.0f;    // m; cell of the 2-D gather index
+  uint32_t max_columns = 16384;  // gather index cells (hash capacity)
+};
+
+struct Voxel {
+  float centroid[3];
+  uint32_t count;
+  float prob[kNumClasses];  // mean class probability
+  uint8_t label;            // dense argmax class
+  uint8_t pad[3];
+};
+
+struct VoxelStats {
+  uint32_t points_in = 0, non_finite = 0, out_of_range = 0, ignored = 0, unknown_label = 0;
+  uint32_t voxels = 0, dropped_points = 0;
+};
+
+class VoxelLayer {
+ public:
+  static size_t required_bytes(const VoxelConfig& config);
+  Status bind(Arena& arena, const VoxelConfig& config);
+  Status build(const ScanView& scan, VoxelStats* stats);
+
+  uint32_t size() const { return count_; }
+  const Voxel& voxel(uint32_t i) const { return voxels_[i]; }
+  const Voxel* voxels() const { return voxels_; }
+  const VoxelConfig& config() const { return config_; }
+
+  // Indices of voxels whose centroid lies within `radius` of `center` (horizontal distance only when
+  // horizontal_only), in a deterministic order (column by column, ascending within a column). Returns the number written (<= max_out); *total (if
+  // given) is the number that matched, so a caller can tell it was truncated.
+  uint32_t gather_within(const float center[3], float radius, bool horizontal_only, uint32_t* out,
+                         uint32_t max_out, uint32_t* total = nullptr) const;
+  // Index of the voxel containing point p, or UINT32_MAX.
+  uint32_t find(const float p[3]) const;
+  uint64_t key_of(const float p[3]) const;
+  // Integer voxel coordinates of p (false if outside the representable +-2^20 voxels).
+  bool cell_of(const float p[3], int32_t out[3]) const;
+  // Voxel index at integer voxel coordinates, or UINT32_MAX.
+  uint32_t find_cell(int32_t x, int32_t y, int32_t z) const;
+
+ private:
+  struct ColumnCell { uint32_t begin, count; };
+  uint64_t column_key(float x, float y) const;
+  void build_columns();
+
+  VoxelConfig config_{};
+  Voxel* voxels_ = nullptr;
+  BoundedHashMap<uint32_t> index_;     // voxel key -> voxel index
+  BoundedHashMap<ColumnCell> columns_; // column key -> range in column_members_
+  uint32_t* column_members_ = nullptr; // voxel ids grouped by column
+  uint32_t* column_of_ = nullptr;      // scratch: per voxel its column slot order
+  uint32_t count_ = 0;
+  bool bound_ = false;
+};
+
+}  // namespace gsf

@@ -1,0 +1,62 @@
+#include "gsf/config.h"
+
+#include <cmath>
+
+namespace gsf {
+
+Status validate(const LocalizerConfig& c) {
+  if (c.max_scan_points == 0) return Status::InvalidArgument;
+  Status s = validate(c.field);
+  if (s != Status::Ok) return s;
+  s = validate(c.triangle);
+  if (s != Status::Ok) return s;
+  const MatchConfig& m = c.match;
+  if (m.max_matches_per_triangle == 0 || m.max_triangle_matches == 0 || m.yaw_bins < 4 || m.yaw_bins > 4096 ||
+      m.probe_cache_slots == 0 || m.similarity_cache_slots == 0 || !(m.tau > 0) || !(m.min_similarity >= 0) ||
+      m.max_correspondences < 3 || m.max_correspondences > 4096 || m.max_field_points == 0 ||
+      !(m.observed_variance > 0))
+    return Status::InvalidArgument;
+  if (!(c.clique.consistency_eps > 0) || c.clique.node_budget == 0) return Status::InvalidArgument;
+  if (!(c.pose.tls_threshold > 0) || c.pose.min_inliers < 3) return Status::InvalidArgument;
+  if (c.cluster.max_instances == 0 || c.cluster.max_instances >= (1u << 16)) return Status::InvalidArgument;
+  return Status::Ok;
+}
+
+MapParams map_params_from(const LocalizerConfig& c) {
+  MapParams p{};
+  p.num_classes = kNumClasses;
+  p.instance_class_mask = c.cluster.instance_classes;
+  p.field_input_dims = c.field.input_dims;
+  p.inducing_stride = c.field.inducing_points;
+  p.grid_nx = c.field.grid_nx;
+  p.grid_ny = c.field.grid_ny;
+  p.grid_layers = c.field.grid_layers;
+  p.triangle_neighbours = c.triangle.neighbours;
+  p.grid_spacing = c.field.grid_spacing;
+  p.layer_spacing = c.field.layer_spacing;
+  p.grid_z0 = c.field.grid_z0;
+  p.length_scale = c.field.length_scale;
+  p.signal_variance = c.field.signal_variance;
+  p.noise_variance = c.field.noise_variance;
+  p.field_radius = c.field.radius;
+  p.voxel_size = c.voxel.voxel_size;
+  p.side_bin = c.triangle.side_bin;
+  p.min_side = c.triangle.min_side;
+  p.max_side = c.triangle.max_side;
+  return p;
+}
+
+Status check_map_params(const LocalizerConfig& c, const MapParams& p) {
+  const MapParams w = map_params_from(c);
+  // Everything that shapes a field, a probe grid or a triangle key must match exactly.
+  if (p.num_classes != w.num_classes || p.instance_class_mask != w.instance_class_mask ||
+      p.field_input_dims != w.field_input_dims || p.inducing_stride != w.inducing_stride || p.grid_nx != w.grid_nx ||
+      p.grid_ny != w.grid_ny || p.grid_layers != w.grid_layers || p.grid_spacing != w.grid_spacing ||
+      p.layer_spacing != w.layer_spacing || p.grid_z0 != w.grid_z0 || p.length_scale != w.length_scale ||
+      p.signal_variance != w.signal_variance || p.noise_variance != w.noise_variance || p.field_radius != w.field_radius ||
+      p.voxel_size != w.voxel_size || p.side_bin != w.side_bin)
+    return Status::ConfigMismatch;
+  return Status::Ok;
+}
+
+}  // namespace gsf

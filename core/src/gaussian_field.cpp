@@ -1,0 +1,193 @@
+#include "gsf/gaussian_field.h"
+
+#include <cmath>
+
+#include "gsf/sparsify.h"
+
+namespace gsf {
+namespace {
+
+constexpr float kSqrt3 = 1.7320508075688772f;
+
+// In-place lower Cholesky of a row-major m x m SPD matrix (double accumulation). Returns false if not PD.
+bool cholesky(float* a, uint32_t m) {
+  for (uint32_t j = 0; j < m; ++j) {
+    double d = a[j * m + j];
+    for (uint32_t k = 0; k < j; ++k) d -= double(a[j * m + k]) * a[j * m + k];
+    if (!(d > 0.0)) return false;
+    const double ljj = std::sqrt(d);
+    a[j * m + j] = static_cast<float>(ljj);
+    for (uint32_t i = j + 1; i < m; ++i) {
+      double s = a[i * m + j];
+      for (uint32_t k = 0; k < j; ++k) s -= double(a[i * m + k]) * a[j * m + k];
+      a[i * m + j] = static_cast<float>(s / ljj);
+    }
+    for (uint32_t k = j + 1; k < m; ++k) a[j * m + k] = 0.0f;
+  }
+  return true;
+}
+
+// Solve L x = b in place (b: m x cols, row-major).
+void forward_solve(const float* l, uint32_t m, float* b, uint32_t cols) {
+  for (uint32_t i = 0; i < m; ++i) {
+    for (uint32_t c = 0; c < cols; ++c) {
+      double s = b[i * cols + c];
+      for (uint32_t k = 0; k < i; ++k) s -= double(l[i * m + k]) * b[k * cols + c];
+      b[i * cols + c] = static_cast<float>(s / l[i * m + i]);
+    }
+  }
+}
+
+// Solve L^T x = b in place.
+void backward_solve(const float* l, uint32_t m, float* b, uint32_t cols) {
+  for (uint32_t ii = m; ii-- > 0;) {
+    for (uint32_t c = 0; c < cols; ++c) {
+      double s = b[ii * cols + c];
+      for (uint32_t k = ii + 1; k < m; ++k) s -= double(l[k * m + ii]) * b[k * cols + c];
+      b[ii * cols + c] = static_cast<float>(s / l[ii * m + ii]);
+    }
+  }
+}
+
+}  // namespace
+
+float matern32(float r, float length_scale, float signal_variance) {
+  const float a = kSqrt3 * r / length_scale;
+  return signal_variance * (1.0f + a) * std::exp(-a);
+}
+
+Status validate(const FieldConfig& c) {
+  if (!(c.radius > 0 && c.length_scale > 0 && c.signal_variance > 0 && c.noise_variance > 0 && c.grid_spacing > 0))
+    return Status::InvalidArgument;
+  if (c.inducing_points == 0 || c.inducing_points > kMaxInducing) return Status::InvalidArgument;
+  if (c.input_dims != 2 && c.input_dims != 3) return Status::InvalidArgument;
+  if (c.grid_nx == 0 || c.grid_ny == 0 || c.grid_layers == 0 || grid_points(c) > kMaxGridPoints)
+    return Status::InvalidArgument;
+  if (c.input_dims == 2 && c.grid_layers != 1) return Status::InvalidArgument;
+  return Status::Ok;
+}
+
+void make_probe_grid(const FieldConfig& c, float yaw, float* out) {
+  const float cy = std::cos(yaw), sy = std::sin(yaw);
+  const float x0 = -0.5f * c.grid_spacing * float(c.grid_nx - 1);
+  const float y0 = -0.5f * c.grid_spacing * float(c.grid_ny - 1);
+  uint32_t g = 0;
+  for (uint32_t l = 0; l < c.grid_layers; ++l)
+    for (uint32_t j = 0; j < c.grid_ny; ++j)
+      for (uint32_t i = 0; i < c.grid_nx; ++i, ++g) {
+        const float x = x0 + c.grid_spacing * float(i), y = y0 + c.grid_spacing * float(j);
+        out[3 * g + 0] = cy * x - sy * y;
+        out[3 * g + 1] = sy * x + cy * y;
+        out[3 * g + 2] = c.input_dims == 2 ? 0.0f : c.grid_z0 + c.layer_spacing * float(l);
+      }
+}
+
+size_t FieldSolver::required_bytes(const FieldConfig& config, uint32_t max_points) {
+  Arena counting;
+  FieldSolver s;
+  s.bind(counting, config, max_points);
+  return counting.used();
+}
+
+Status FieldSolver::bind(Arena& arena, const FieldConfig& config, uint32_t max_points) {
+  bound_ = false;
+  const Status v = validate(config);
+  if (v != Status::Ok) return v;
+  if (max_points == 0) return Status::InvalidArgument;
+  config_ = config;
+  max_points_ = max_points;
+  selected_ = arena.allocate<uint32_t>(kMaxInducing);
+  scratch_ = arena.allocate<uint32_t>(max_points);
+  kstar_ = arena.allocate<float>(size_t(kMaxInducing) * kMaxGridPoints);
+  work_ = arena.allocate<float>(size_t(kMaxInducing) * kMaxGridPoints);
+  if (arena.counting()) return Status::Ok;
+  if (!selected_ || !scratch_ || !kstar_ || !work_) return Status::BufferTooSmall;
+  bound_ = true;
+  return Status::Ok;
+}
+
+float FieldSolver::kernel(const float* a, const float* b) const {
+  const float dx = a[0] - b[0], dy = a[1] - b[1];
+  const float dz = config_.input_dims == 3 ? a[2] - b[2] : 0.0f;
+  return matern32(std::sqrt(dx * dx + dy * dy + dz * dz), config_.length_scale, config_.signal_variance);
+}
+
+Status FieldSolver::factor(const float* inputs, uint32_t m, float* chol) {
+  if (!bound_) return Status::NotInitialized;
+  if (m == 0 || m > config_.inducing_points) return Status::InvalidArgument;
+  for (uint32_t i = 0; i < m; ++i)
+    for (uint32_t j = 0; j <= i; ++j) {
+      const float k = kernel(inputs + 3 * i, inputs + 3 * j) + (i == j ? config_.noise_variance : 0.0f);
+      chol[i * m + j] = k;
+      chol[j * m + i] = k;
+    }
+  return cholesky(chol, m) ? Status::Ok : Status::InvalidInput;
+}
+
+Status FieldSolver::fit(const float* xyz, const float* targets, const uint8_t* labels, uint32_t n, float* inputs,
+                        float* alpha, float* chol, uint32_t* m_out) {
+  *m_out = 0;
+  if (!bound_) return Status::NotInitialized;
+  if (n == 0) return Status::InvalidInput;
+  if (n > max_points_) return Status::CapacityExceeded;
+  const uint32_t m = sparsify_semantic(labels, n, config_.inducing_points, config_.seed, selected_, scratch_);
+  for (uint32_t r = 0; r < m; ++r) {
+    const uint32_t i = selected_[r];
+    for (int k = 0; k < 3; ++k) {
+      const float v = xyz[3 * i + k];
+      if (!std::isfinite(v)) return Status::InvalidInput;
+      inputs[3 * r + k] = (k == 2 && config_.input_dims == 2) ? 0.0f : v;
+    }
+    for (int d = 0; d < kNumClasses; ++d) {
+      const float y = targets[size_t(i) * kNumClasses + d];
+      if (!std::isfinite(y)) return Status::InvalidInput;
+      alpha[r * kNumClasses + d] = y;
+    }
+  }
+  const Status f = factor(inputs, m, chol);
+  if (f != Status::Ok) return f;
+  forward_solve(chol, m, alpha, kNumClasses);
+  backward_solve(chol, m, alpha, kNumClasses);
+  *m_out = m;
+  return Status::Ok;
+}
+
+Status FieldSolver::probe(const FieldView& field, const float* chol, const float* grid, uint32_t g, float* mean,
+                          float* var, float* cov) {
+  if (!bound_) return Status::NotInitialized;
+  const uint32_t m = field.m;
+  if (g == 0 || g > kMaxGridPoints || m > kMaxInducing) return Status::InvalidArgument;
+  const float prior = config_.signal_variance;
+  // k* (m x g); mean = k*^T alpha
+  for (uint32_t i = 0; i < m; ++i)
+    for (uint32_t s = 0; s < g; ++s) kstar_[i * g + s] = kernel(field.inputs + 3 * i, grid + 3 * s);
+  for (uint32_t s = 0; s < g; ++s)
+    for (int d = 0; d < kNumClasses; ++d) {
+      float acc = 0.0f;
+      for (uint32_t i = 0; i < m; ++i) acc += kstar_[i * g + s] * field.alpha[i * kNumClasses + d];
+      mean[s * kNumClasses + d] = acc;
+    }
+  // V = L^-1 k* ; var_s = k(0) - |V_s|^2 ; cov = K** - V^T V
+  for (uint32_t i = 0; i < m * g; ++i) work_[i] = kstar_[i];
+  if (m > 0) forward_solve(chol, m, work_, g);
+  for (uint32_t s = 0; s < g; ++s) {
+    float q = 0.0f;
+    for (uint32_t i = 0; i < m; ++i) q += work_[i * g + s] * work_[i * g + s];
+    const float v = prior - q;
+    var[s] = v > 0.0f ? v : 0.0f;
+  }
+  if (cov) {
+    for (uint32_t s = 0; s < g; ++s)
+      for (uint32_t t = 0; t <= s; ++t) {
+        float q = 0.0f;
+        for (uint32_t i = 0; i < m; ++i) q += work_[i * g + s] * work_[i * g + t];
+        const float c = kernel(grid + 3 * s, grid + 3 * t) - q;
+        cov[s * g + t] = c;
+        cov[t * g + s] = c;
+      }
+    for (uint32_t s = 0; s < g; ++s) cov[s * g + s] = var[s];
+  }
+  return Status::Ok;
+}
+
+}  // namespace gsf

@@ -1,0 +1,138 @@
+#include "gsf/instance_clustering.h"
+
+#include <algorithm>
+#include <cmath>
+
+namespace gsf {
+
+size_t InstanceClustering::required_bytes(const ClusterConfig& config, uint32_t max_voxels) {
+  Arena counting;
+  InstanceClustering c;
+  c.bind(counting, config, max_voxels);
+  return counting.used();
+}
+
+Status InstanceClustering::bind(Arena& arena, const ClusterConfig& config, uint32_t max_voxels) {
+  bound_ = false;
+  if (config.max_instances == 0 || max_voxels == 0) return Status::InvalidArgument;
+  for (int c = 0; c < kNumClasses; ++c)
+    if (!(config.tolerance[c] > 0.0f && config.tolerance[c] < 10.0f) || !(config.max_extent[c] > 0.0f))
+      return Status::InvalidArgument;
+  config_ = config;
+  max_voxels_ = max_voxels;
+  max_components_ = max_voxels;
+  instances_ = arena.allocate<Instance>(config.max_instances);
+  queue_ = arena.allocate<uint32_t>(max_voxels);
+  voxel_instance_ = arena.allocate<uint32_t>(max_voxels);
+  component_to_instance_ = arena.allocate<uint32_t>(max_components_);
+  count_ = 0;
+  if (arena.counting()) return Status::Ok;
+  if (!instances_ || !queue_ || !voxel_instance_ || !component_to_instance_) return Status::BufferTooSmall;
+  bound_ = true;
+  return Status::Ok;
+}
+
+Status InstanceClustering::build(const VoxelLayer& layer, ClusterStats* stats_out) {
+  ClusterStats stats;
+  count_ = 0;
+  if (!bound_) return Status::NotInitialized;
+  const uint32_t n = layer.size();
+  if (n > max_voxels_) return Status::InvalidArgument;
+  const Voxel* vox = layer.voxels();
+  const float vs = layer.config().voxel_size;
+  for (uint32_t i = 0; i < n; ++i) voxel_instance_[i] = UINT32_MAX;
+
+  uint32_t components = 0;
+  for (uint32_t seed = 0; seed < n; ++seed) {
+    const uint8_t label = vox[seed].label;
+    if (!(config_.instance_classes & class_bit(label)) || voxel_instance_[seed] != UINT32_MAX) continue;
+    const uint32_t comp = components++;
+    const float tol = config_.tolerance[label];
+    const float tol2 = tol * tol;
+    const int32_t reach = static_cast<int32_t>(std::ceil(tol / vs));
+    uint32_t head = 0, tail = 0;
+    queue_[tail++] = seed;
+    voxel_instance_[seed] = comp;
+    while (head < tail) {
+      const uint32_t v = queue_[head++];
+      int32_t c[3];
+      if (!layer.cell_of(vox[v].centroid, c)) continue;
+      for (int32_t dx = -reach; dx <= reach; ++dx)
+        for (int32_t dy = -reach; dy <= reach; ++dy)
+          for (int32_t dz = -reach; dz <= reach; ++dz) {
+            const uint32_t u = layer.find_cell(c[0] + dx, c[1] + dy, c[2] + dz);
+            if (u == UINT32_MAX || voxel_instance_[u] != UINT32_MAX || vox[u].label != label) continue;
+            const float ex = vox[u].centroid[0] - vox[v].centroid[0];
+            const float ey = vox[u].centroid[1] - vox[v].centroid[1];
+            const float ez = vox[u].centroid[2] - vox[v].centroid[2];
+            if (ex * ex + ey * ey + ez * ez > tol2) continue;
+            voxel_instance_[u] = comp;
+            queue_[tail++] = u;  // each voxel enters once: tail <= n
+          }
+    }
+    component_to_instance_[comp] = UINT32_MAX;
+    // Describe the component.
+    Instance in{};
+    double sum[3] = {0, 0, 0};
+    float lo[3] = {vox[seed].centroid[0], vox[seed].centroid[1], vox[seed].centroid[2]};
+    float hi[3] = {lo[0], lo[1], lo[2]};
+    uint32_t points = 0;
+    for (uint32_t q = 0; q < tail; ++q) {
+      const Voxel& v = vox[queue_[q]];
+      for (int k = 0; k < 3; ++k) {
+        sum[k] += double(v.centroid[k]) * v.count;
+        lo[k] = std::min(lo[k], v.centroid[k]);
+        hi[k] = std::max(hi[k], v.centroid[k]);
+      }
+      points += v.count;
+    }
+    for (int k = 0; k < 3; ++k) {
+      in.centroid[k] = static_cast<float>(sum[k] / points);
+      in.extent[k] = hi[k] - lo[k] + vs;
+    }
+    in.voxel_count = tail;
+    in.point_count = points;
+    in.first_voxel = seed;
+    in.label = label;
+    in.stability = stability_weight(label);
+    ++stats.components;
+    if (tail < config_.min_voxels[label]) { ++stats.rejected_small; continue; }
+    if (std::sqrt(in.extent[0] * in.extent[0] + in.extent[1] * in.extent[1]) > config_.max_extent[label]) {
+      ++stats.rejected_extent;
+      continue;
+    }
+    // Keep the largest max_instances; on overflow evict the smallest (latest discovered among equals).
+    uint32_t slot = count_;
+    if (count_ == config_.max_instances) {
+      uint32_t worst = 0;
+      for (uint32_t k = 1; k < count_; ++k) {
+        const Instance& a = instances_[k];
+        const Instance& b = instances_[worst];
+        if (a.point_count < b.point_count || (a.point_count == b.point_count && a.first_voxel > b.first_voxel))
+          worst = k;
+      }
+      ++stats.dropped_capacity;
+      if (in.point_count <= instances_[worst].point_count) continue;
+      component_to_instance_[voxel_instance_[instances_[worst].first_voxel]] = UINT32_MAX;
+      slot = worst;
+    } else {
+      ++count_;
+    }
+    instances_[slot] = in;
+    component_to_instance_[comp] = slot;
+  }
+  // Discovery order, then map voxels to their kept instance's final index.
+  std::sort(instances_, instances_ + count_,
+            [](const Instance& a, const Instance& b) { return a.first_voxel < b.first_voxel; });
+  for (uint32_t k = 0; k < count_; ++k) component_to_instance_[voxel_instance_[instances_[k].first_voxel]] = k;
+  for (uint32_t i = 0; i < n; ++i)
+    if (voxel_instance_[i] != UINT32_MAX) {
+      const uint32_t comp = voxel_instance_[i];
+      voxel_instance_[i] = component_to_instance_[comp];
+    }
+  stats.instances = count_;
+  if (stats_out) *stats_out = stats;
+  return stats.dropped_capacity ? Status::CapacityExceeded : Status::Ok;
+}
+
+}  // namespace gsf

@@ -1,0 +1,84 @@
+#include "gsf/triangle_index.h"
+
+#include <algorithm>
+#include <cmath>
+
+namespace gsf {
+
+bool TriangleIndexView::lookup(uint64_t key, uint32_t* begin, uint32_t* end) const {
+  *begin = *end = 0;
+  uint32_t lo = 0, hi = key_count;
+  while (lo < hi) {
+    const uint32_t mid = lo + (hi - lo) / 2;
+    if (keys[mid] < key) lo = mid + 1; else hi = mid;
+  }
+  if (lo >= key_count || keys[lo] != key) return false;
+  *begin = offsets[lo];
+  *end = offsets[lo + 1];
+  return true;
+}
+
+Status TriangleIndexView::validate(uint32_t triangle_count) const {
+  if (key_count > 0 && (!keys || !entries)) return Status::CorruptData;
+  if (!offsets || offsets[0] != 0 || offsets[key_count] != entry_count) return Status::CorruptData;
+  for (uint32_t i = 0; i < key_count; ++i) {
+    if (offsets[i] > offsets[i + 1]) return Status::CorruptData;
+    if (i > 0 && keys[i - 1] >= keys[i]) return Status::CorruptData;
+  }
+  for (uint32_t i = 0; i < entry_count; ++i)
+    if (entries[i] >= triangle_count) return Status::CorruptData;
+  return Status::Ok;
+}
+
+Status build_triangle_index(const Triangle* t, uint32_t n, float bin, uint64_t* keys, uint32_t* offsets,
+                            uint32_t* entries, uint32_t* key_count, uint64_t* scratch) {
+  *key_count = 0;
+  if (!(bin > 0.0f)) return Status::InvalidArgument;
+  for (uint32_t i = 0; i < n; ++i) {
+    scratch[i] = triangle_key(t[i], bin);
+    entries[i] = i;
+  }
+  std::sort(entries, entries + n, [&](uint32_t a, uint32_t b) {
+    return scratch[a] < scratch[b] || (scratch[a] == scratch[b] && a < b);
+  });
+  uint32_t k = 0;
+  for (uint32_t i = 0; i < n; ++i) {
+    const uint64_t key = scratch[entries[i]];
+    if (k == 0 || keys[k - 1] != key) {
+      keys[k] = key;
+      offsets[k] = i;
+      ++k;
+    }
+  }
+  offsets[k] = n;
+  *key_count = k;
+  return Status::Ok;
+}
+
+Status match_triangle(const Triangle& q, uint32_t qid, const TriangleIndexView& index, const Triangle* map,
+                      const TriangleConfig& config, uint32_t per_query_cap, FixedVector<TriangleMatch>& out) {
+  int32_t qk[3];
+  for (int i = 0; i < 3; ++i) qk[i] = static_cast<int32_t>(std::floor(q.side[i] / config.side_bin));
+  uint32_t accepted = 0;
+  for (int d0 = -1; d0 <= 1; ++d0)
+    for (int d1 = -1; d1 <= 1; ++d1)
+      for (int d2 = -1; d2 <= 1; ++d2) {
+        uint32_t b, e;
+        if (!index.lookup(triangle_key(qk[0] + d0, qk[1] + d1, qk[2] + d2), &b, &e)) continue;
+        for (uint32_t it = b; it < e; ++it) {
+          const uint32_t mid = index.entries[it];
+          const Triangle& m = map[mid];
+          if (m.label[0] != q.label[0] || m.label[1] != q.label[1] || m.label[2] != q.label[2]) continue;
+          bool ok = true;
+          for (int s = 0; s < 3 && ok; ++s)
+            ok = std::fabs(q.side[s] - m.side[s]) < config.relative_side_tolerance * q.side[s];
+          if (!ok) continue;
+          if (accepted >= per_query_cap) return Status::CapacityExceeded;
+          if (!out.push_back(TriangleMatch{qid, mid})) return Status::CapacityExceeded;
+          ++accepted;
+        }
+      }
+  return Status::Ok;
+}
+
+}  // namespace gsf

@@ -1,0 +1,217 @@
+#include "gsf/voxel_layer.h"
+
+#include <cmath>
+
+namespace gsf {
+namespace {
+
+constexpr int32_t kCoordLimit = 1 << 20;  // 21-bit packed voxel coordinates
+
+bool cell_coord(float v, float inv_size, int32_t* out) {
+  const float c = std::floor(v * inv_size);
+  if (!(c > -float(kCoordLimit) && c < float(kCoordLimit - 1))) return false;
+  *out = static_cast<int32_t>(c);
+  return true;
+}
+
+uint64_t pack3(int32_t x, int32_t y, int32_t z) {
+  return (uint64_t(uint32_t(x + kCoordLimit)) << 42) | (uint64_t(uint32_t(y + kCoordLimit)) << 21) |
+         uint64_t(uint32_t(z + kCoordLimit));
+}
+
+}  // namespace
+
+size_t VoxelLayer::required_bytes(const VoxelConfig& config) {
+  Arena counting;
+  VoxelLayer v;
+  v.bind(counting, config);
+  return counting.used();
+}
+
+Status VoxelLayer::bind(Arena& arena, const VoxelConfig& config) {
+  bound_ = false;
+  if (!(config.voxel_size > 0.0f) || !(config.column_size >= config.voxel_size) || config.max_voxels == 0 ||
+      config.max_columns == 0 || !(config.min_range >= 0.0f) || !(config.max_range > config.min_range))
+    return Status::InvalidArgument;
+  config_ = config;
+  voxels_ = arena.allocate<Voxel>(config.max_voxels);
+  const bool ok_index = index_.bind(arena, config.max_voxels);
+  const bool ok_columns = columns_.bind(arena, config.max_columns);
+  column_members_ = arena.allocate<uint32_t>(config.max_voxels);
+  column_of_ = arena.allocate<uint32_t>(config.max_voxels);
+  count_ = 0;
+  if (arena.counting()) return Status::Ok;
+  if (!voxels_ || !ok_index || !ok_columns || !column_members_ || !column_of_) return Status::BufferTooSmall;
+  bound_ = true;
+  return Status::Ok;
+}
+
+uint64_t VoxelLayer::key_of(const float p[3]) const {
+  const float inv = 1.0f / config_.voxel_size;
+  int32_t x, y, z;
+  if (!cell_coord(p[0], inv, &x) || !cell_coord(p[1], inv, &y) || !cell_coord(p[2], inv, &z)) return UINT64_MAX;
+  return pack3(x, y, z);
+}
+
+bool VoxelLayer::cell_of(const float p[3], int32_t out[3]) const {
+  const float inv = 1.0f / config_.voxel_size;
+  return cell_coord(p[0], inv, &out[0]) && cell_coord(p[1], inv, &out[1]) && cell_coord(p[2], inv, &out[2]);
+}
+
+uint32_t VoxelLayer::find_cell(int32_t x, int32_t y, int32_t z) const {
+  if (x <= -kCoordLimit || x >= kCoordLimit - 1 || y <= -kCoordLimit || y >= kCoordLimit - 1 ||
+      z <= -kCoordLimit || z >= kCoordLimit - 1)
+    return UINT32_MAX;
+  const uint32_t* v = index_.find(pack3(x, y, z));
+  return v ? *v : UINT32_MAX;
+}
+
+uint32_t VoxelLayer::find(const float p[3]) const {
+  const uint64_t k = key_of(p);
+  if (k == UINT64_MAX) return UINT32_MAX;
+  const uint32_t* v = index_.find(k);
+  return v ? *v : UINT32_MAX;
+}
+
+uint64_t VoxelLayer::column_key(float x, float y) const {
+  const float inv = 1.0f / config_.column_size;
+  int32_t cx, cy;
+  if (!cell_coord(x, inv, &cx) || !cell_coord(y, inv, &cy)) return UINT64_MAX;
+  return pack3(cx, cy, 0);
+}
+
+Status VoxelLayer::build(const ScanView& scan, VoxelStats* stats_out) {
+  VoxelStats stats;
+  count_ = 0;
+  index_.clear();
+  columns_.clear();
+  if (!bound_) return Status::NotInitialized;
+  if (scan.count == 0) {
+    if (stats_out) *stats_out = stats;
+    return Status::InvalidInput;
+  }
+  if (scan.points == nullptr || scan.labels == nullptr || scan.stride < 3) return Status::InvalidArgument;
+  const bool use_logits = scan.logits != nullptr;
+  if (use_logits && scan.logit_dim != static_cast<uint32_t>(kNumClasses)) return Status::InvalidArgument;
+
+  const float min_r2 = config_.min_range * config_.min_range;
+  const float max_r2 = config_.max_range * config_.max_range;
+  float prob[kNumClasses];
+  stats.points_in = scan.count;
+  for (uint32_t i = 0; i < scan.count; ++i) {
+    const float* p = scan.points + static_cast<size_t>(i) * scan.stride;
+    if (!std::isfinite(p[0]) || !std::isfinite(p[1]) || !std::isfinite(p[2])) { ++stats.non_finite; continue; }
+    const float r2 = p[0] * p[0] + p[1] * p[1] + p[2] * p[2];
+    if (!(r2 >= min_r2 && r2 <= max_r2)) { ++stats.out_of_range; continue; }
+    const int c = class_from_kitti(scan.labels[i]);
+    if (c == kUnknownClass) { ++stats.unknown_label; continue; }
+    if (c == kIgnoredClass) { ++stats.ignored; continue; }
+    if (use_logits) {
+      const float* l = scan.logits + static_cast<size_t>(i) * kNumClasses;
+      float mx = l[0];
+      bool finite = true;
+      for (int k = 0; k < kNumClasses; ++k) {
+        finite = finite && std::isfinite(l[k]);
+        mx = l[k] > mx ? l[k] : mx;
+      }
+      if (!finite) { ++stats.non_finite; continue; }
+      float sum = 0.0f;
+      for (int k = 0; k < kNumClasses; ++k) sum += (prob[k] = std::exp(l[k] - mx));
+      const float inv = 1.0f / sum;
+      for (int k = 0; k < kNumClasses; ++k) prob[k] *= inv;
+    }
+    const uint64_t key = key_of(p);
+    if (key == UINT64_MAX) { ++stats.out_of_range; continue; }
+    bool inserted = false;
+    uint32_t* slot = index_.find_or_insert(key, &inserted);
+    if (slot == nullptr) { ++stats.dropped_points; continue; }
+    if (inserted) {
+      *slot = count_;
+      Voxel& v = voxels_[count_++];
+      v.centroid[0] = v.centroid[1] = v.centroid[2] = 0.0f;
+      v.count = 0;
+      for (int k = 0; k < kNumClasses; ++k) v.prob[k] = 0.0f;
+      v.label = 0;
+      v.pad[0] = v.pad[1] = v.pad[2] = 0;
+    }
+    Voxel& v = voxels_[*slot];
+    v.centroid[0] += p[0];
+    v.centroid[1] += p[1];
+    v.centroid[2] += p[2];
+    v.count += 1;
+    if (use_logits) {
+      for (int k = 0; k < kNumClasses; ++k) v.prob[k] += prob[k];
+    } else {
+      v.prob[c] += 1.0f;
+    }
+  }
+  for (uint32_t i = 0; i < count_; ++i) {
+    Voxel& v = voxels_[i];
+    const float inv = 1.0f / static_cast<float>(v.count);
+    v.centroid[0] *= inv; v.centroid[1] *= inv; v.centroid[2] *= inv;
+    int best = 0;
+    for (int k = 0; k < kNumClasses; ++k) {
+      v.prob[k] *= inv;
+      if (v.prob[k] > v.prob[best]) best = k;
+    }
+    v.label = static_cast<uint8_t>(best);
+  }
+  build_columns();
+  stats.voxels = count_;
+  if (stats_out) *stats_out = stats;
+  if (count_ == 0) return Status::InvalidInput;
+  return stats.dropped_points ? Status::CapacityExceeded : Status::Ok;
+}
+
+void VoxelLayer::build_columns() {
+  // Counting sort of voxels into 2-D columns: count, prefix-sum (slot order), fill in voxel order.
+  for (uint32_t i = 0; i < count_; ++i) {
+    const Voxel& v = voxels_[i];
+    ColumnCell* cell = columns_.find_or_insert(column_key(v.centroid[0], v.centroid[1]));
+    if (cell) cell->count += 1;
+    column_of_[i] = cell ? 1u : 0u;  // 0: not indexed (column capacity exhausted)
+  }
+  uint32_t running = 0;
+  columns_.for_each([&](uint64_t, ColumnCell& c) {
+    c.begin = running;
+    running += c.count;
+    c.count = 0;
+  });
+  for (uint32_t i = 0; i < count_; ++i) {
+    if (!column_of_[i]) continue;
+    const Voxel& v = voxels_[i];
+    ColumnCell* cell = columns_.find(column_key(v.centroid[0], v.centroid[1]));
+    column_members_[cell->begin + cell->count++] = i;
+  }
+}
+
+uint32_t VoxelLayer::gather_within(const float center[3], float radius, bool horizontal_only, uint32_t* out,
+                                   uint32_t max_out, uint32_t* total) const {
+  uint32_t written = 0, matched = 0;
+  if (bound_ && count_ > 0 && radius > 0.0f && std::isfinite(center[0]) && std::isfinite(center[1]) &&
+      std::isfinite(center[2])) {
+    const float inv = 1.0f / config_.column_size;
+    const float r2 = radius * radius;
+    int32_t x0, x1, y0, y1;
+    if (cell_coord(center[0] - radius, inv, &x0) && cell_coord(center[0] + radius, inv, &x1) &&
+        cell_coord(center[1] - radius, inv, &y0) && cell_coord(center[1] + radius, inv, &y1)) {
+      for (int32_t cx = x0; cx <= x1; ++cx)
+        for (int32_t cy = y0; cy <= y1; ++cy) {
+          const ColumnCell* cell = columns_.find(pack3(cx, cy, 0));
+          if (!cell) continue;
+          for (uint32_t m = 0; m < cell->count; ++m) {
+            const uint32_t id = column_members_[cell->begin + m];
+            const float* c = voxels_[id].centroid;
+            const float dx = c[0] - center[0], dy = c[1] - center[1], dz = horizontal_only ? 0.0f : c[2] - center[2];
+            if (dx * dx + dy * dy + dz * dz > r2) continue;
+            ++matched;
+            if (written < max_out) out[written++] = id;
+          }
+        }
+    }
+  }
+  if (total) *total = matched;
+  return written;
+}
+
+}  // namespace gsf

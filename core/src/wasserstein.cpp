@@ -1,0 +1,136 @@
+#include "gsf/wasserstein.h"
+
+#include <cmath>
+#include <new>
+
+#include <Eigen/Eigenvalues>
+
+#include "gsf/gaussian_field.h"
+#include "gsf/semantic_classes.h"
+
+namespace gsf {
+
+using MaxGridMatrix = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, 0, kMaxGridPoints, kMaxGridPoints>;
+// Max-size storage lives inline in the arena: the eigen-solve allocates nothing.
+struct W2Exact::Solver {
+  MaxGridMatrix c;
+  Eigen::SelfAdjointEigenSolver<MaxGridMatrix> eig;
+};
+
+void stability_weights(float* out) {
+  for (int c = 0; c < kNumClasses; ++c) out[c] = stability_weight(c);
+}
+
+double w2_mean_term(const float* m1, const float* m2, uint32_t g, const float* w) {
+  double acc = 0.0;
+  for (uint32_t s = 0; s < g; ++s)
+    for (int d = 0; d < kNumClasses; ++d) {
+      const double e = double(m1[s * kNumClasses + d]) - m2[s * kNumClasses + d];
+      acc += w[d] * e * e;
+    }
+  return acc;
+}
+
+static double trace_weights(const float* w) {
+  double t = 0.0;
+  for (int d = 0; d < kNumClasses; ++d) t += w[d];
+  return t;
+}
+
+double w2_squared_diag(const float* m1, const float* v1, const float* m2, const float* v2, uint32_t g, const float* w) {
+  double cov = 0.0;
+  for (uint32_t s = 0; s < g; ++s) {
+    const double e = std::sqrt(double(v1[s] > 0 ? v1[s] : 0)) - std::sqrt(double(v2[s] > 0 ? v2[s] : 0));
+    cov += e * e;
+  }
+  return w2_mean_term(m1, m2, g, w) + trace_weights(w) * cov;
+}
+
+ObservedW2 w2_squared_diag_observed(const float* mq, const float* vq, const float* mm, const float* vm, uint32_t g,
+                                    const float* w, float max_var) {
+  ObservedW2 r;
+  const double tw = trace_weights(w);
+  for (uint32_t s = 0; s < g; ++s) {
+    if (!(vq[s] <= max_var)) continue;
+    double acc = 0.0;
+    for (int d = 0; d < kNumClasses; ++d) {
+      const double e = double(mq[s * kNumClasses + d]) - mm[s * kNumClasses + d];
+      acc += w[d] * e * e;
+    }
+    const double e = std::sqrt(double(vq[s] > 0 ? vq[s] : 0)) - std::sqrt(double(vm[s] > 0 ? vm[s] : 0));
+    r.w2 += acc + tw * e * e;
+    r.used++;
+  }
+  return r;
+}
+
+size_t W2Exact::required_bytes(uint32_t max_grid) {
+  Arena counting;
+  W2Exact w;
+  w.bind(counting, max_grid);
+  return counting.used();
+}
+
+Status W2Exact::bind(Arena& arena, uint32_t max_grid) {
+  if (max_grid == 0 || max_grid > kMaxGridPoints) return Status::InvalidArgument;
+  max_grid_ = max_grid;
+  l1_ = arena.allocate<double>(size_t(max_grid) * max_grid);
+  tmp_ = arena.allocate<double>(size_t(max_grid) * max_grid);
+  void* mem = arena.allocate_bytes(sizeof(Solver), alignof(Solver) < 16 ? 16 : alignof(Solver));
+  if (arena.counting()) return Status::Ok;
+  if (!l1_ || !tmp_ || !mem) return Status::BufferTooSmall;
+  solver_ = new (mem) Solver();
+  return Status::Ok;
+}
+
+Status W2Exact::w2_squared(const float* m1, const float* s1, const float* m2, const float* s2, uint32_t g,
+                           const float* w, double* out) {
+  *out = 0.0;
+  if (!solver_) return Status::NotInitialized;
+  if (g == 0 || g > max_grid_) return Status::InvalidArgument;
+  // L1: Cholesky of S1 + jitter (S1 is PSD; the jitter keeps a rank-deficient posterior factorable).
+  double tr1 = 0.0, tr2 = 0.0;
+  for (uint32_t s = 0; s < g; ++s) { tr1 += s1[s * g + s]; tr2 += s2[s * g + s]; }
+  const double jitter = 1e-9 * (tr1 / g + 1e-12);
+  for (uint32_t j = 0; j < g; ++j) {
+    double d = double(s1[j * g + j]) + jitter;
+    for (uint32_t k = 0; k < j; ++k) d -= l1_[j * g + k] * l1_[j * g + k];
+    if (!(d > 0.0)) d = jitter;  // numerically singular direction: contributes ~0 to the trace term
+    const double ljj = std::sqrt(d);
+    l1_[j * g + j] = ljj;
+    for (uint32_t i = j + 1; i < g; ++i) {
+      double s = s1[i * g + j];
+      for (uint32_t k = 0; k < j; ++k) s -= l1_[i * g + k] * l1_[j * g + k];
+      l1_[i * g + j] = s / ljj;
+    }
+    for (uint32_t k = j + 1; k < g; ++k) l1_[j * g + k] = 0.0;
+  }
+  // tmp = S2 L1 ; C = L1^T tmp
+  for (uint32_t i = 0; i < g; ++i)
+    for (uint32_t j = 0; j < g; ++j) {
+      double acc = 0.0;
+      for (uint32_t k = j; k < g; ++k) acc += double(s2[i * g + k]) * l1_[k * g + j];
+      tmp_[i * g + j] = acc;
+    }
+  solver_->c.resize(g, g);
+  for (uint32_t i = 0; i < g; ++i)
+    for (uint32_t j = 0; j <= i; ++j) {
+      double acc = 0.0;
+      for (uint32_t k = i; k < g; ++k) acc += l1_[k * g + i] * tmp_[k * g + j];
+      solver_->c(i, j) = acc;
+      solver_->c(j, i) = acc;
+    }
+  solver_->eig.compute(solver_->c, Eigen::EigenvaluesOnly);
+  if (solver_->eig.info() != Eigen::Success) return Status::InvalidInput;
+  double cross = 0.0;
+  for (uint32_t i = 0; i < g; ++i) {
+    const double l = solver_->eig.eigenvalues()(i);
+    cross += l > 0.0 ? std::sqrt(l) : 0.0;
+  }
+  double cov_term = tr1 + tr2 - 2.0 * cross;
+  if (cov_term < 0.0) cov_term = 0.0;  // rounding
+  *out = w2_mean_term(m1, m2, g, w) + trace_weights(w) * cov_term;
+  return Status::Ok;
+}
+
+}  // namespace gsf
