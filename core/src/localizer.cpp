@@ -74,6 +74,8 @@ struct Localizer::Impl {
   float* sub_w = nullptr;
   float* tls_weights = nullptr;       // C
   uint8_t* mask = nullptr;            // C
+  uint8_t* in_clique = nullptr;       // C: membership in the answer's clique
+  uint32_t selected = 0;              // correspondences given to the clique in the last call
 };
 
 // The one layout of the workspace: run on a counting arena by required_bytes and on the caller's
@@ -117,6 +119,7 @@ static Status bind_workspace(Arena& ar, const LocalizerConfig& config, Localizer
   im.sub_w = ar.allocate<float>(C);
   im.tls_weights = ar.allocate<float>(C);
   im.mask = ar.allocate<uint8_t>(C);
+  im.in_clique = ar.allocate<uint8_t>(C);
   if (ar.overflowed()) return Status::BufferTooSmall;
   return Status::Ok;
 }
@@ -199,7 +202,8 @@ float field_similarity(Localizer::Impl& im, const LocalizerConfig& cfg, const Ma
     }
     const ObservedW2 r = w2_squared_diag_observed(mean, var, map.grid_mean + size_t(mi) * G * kNumClasses,
                                                   map.grid_var + size_t(mi) * G, G, im.weights,
-                                                  cfg.match.observed_variance * cfg.field.signal_variance);
+                                                  cfg.match.observed_variance * cfg.field.signal_variance,
+                                                  cfg.match.normalize_mass, cfg.match.covariance_weight);
     if (r.used >= 4) omega = static_cast<float>(std::exp(-(r.w2 / r.used) / cfg.match.tau));
   }
   if (float* slot = im.similarity.find_or_insert(skey)) *slot = omega;
@@ -298,6 +302,7 @@ Status Localizer::localize(const ScanView& scan, LocalizeResult* out_ptr) {
   im.corr_index.clear();
   im.probe_used = 0;
   im.corr_count = 0;
+  im.selected = 0;
   uint32_t survivors = 0;
   for (uint32_t k = 0; k < im.matches.size(); ++k) {
     const Triangle& qt = im.triangles[im.matches[k].query];
@@ -362,6 +367,8 @@ Status Localizer::localize(const ScanView& scan, LocalizeResult* out_ptr) {
     im.w[i] = c.weight;
   }
   out.correspondences = C;
+  im.selected = C;
+  for (uint32_t i = 0; i < C; ++i) im.in_clique[i] = 0;
   if (C < cfg.pose.min_inliers) return finish(Status::NoSolution);
 
   // 8. Maximum clique of the consistency graph.
@@ -376,6 +383,7 @@ Status Localizer::localize(const ScanView& scan, LocalizeResult* out_ptr) {
 
   // 9. Weighted TLS pose on the clique.
   const uint32_t q = im.clique.size();
+  for (uint32_t i = 0; i < q; ++i) im.in_clique[im.clique[i]] = 1;
   for (uint32_t i = 0; i < q; ++i) {
     const uint32_t id = im.clique[i];
     for (int d = 0; d < 3; ++d) { im.sub_a[3 * i + d] = im.a[3 * id + d]; im.sub_b[3 * i + d] = im.b[3 * id + d]; }
@@ -414,6 +422,24 @@ Status Localizer::localize(const ScanView& scan, LocalizeResult* out_ptr) {
   out.ambiguity = best_score > 0 ? std::min(1.0, second / best_score) : 1.0;
   lap(&out.times.pose);
   return finish(Status::Ok);
+}
+
+}  // namespace gsf
+
+namespace gsf {
+
+uint32_t Localizer::last_correspondences(Correspondence* out, uint32_t max) const {
+  if (!impl_) return 0;
+  const Impl& im = *impl_;
+  for (uint32_t i = 0; i < im.selected && i < max; ++i) {
+    const CorrespondenceAcc& c = im.corr[im.order[i]];
+    out[i].query_instance = c.query;
+    out[i].map_instance = c.map;
+    for (int d = 0; d < 3; ++d) out[i].query_xyz[d] = im.a[3 * i + d];
+    out[i].weight = c.weight;
+    out[i].in_clique = im.in_clique[i] != 0;
+  }
+  return im.selected;
 }
 
 }  // namespace gsf

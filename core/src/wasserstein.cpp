@@ -47,15 +47,24 @@ double w2_squared_diag(const float* m1, const float* v1, const float* m2, const 
 }
 
 ObservedW2 w2_squared_diag_observed(const float* mq, const float* vq, const float* mm, const float* vm, uint32_t g,
-                                    const float* w, float max_var) {
+                                    const float* w, float max_var, float normalize_mass, float cov_weight) {
   ObservedW2 r;
-  const double tw = trace_weights(w);
+  const double tw = trace_weights(w) * cov_weight;
   for (uint32_t s = 0; s < g; ++s) {
     if (!(vq[s] <= max_var)) continue;
+    const float* a = mq + s * kNumClasses;
+    const float* b = mm + s * kNumClasses;
+    double sa = 1.0, sb = 1.0;
+    if (normalize_mass > 0.0f) {
+      sa = sb = 0.0;
+      for (int d = 0; d < kNumClasses; ++d) { sa += a[d] > 0 ? a[d] : 0; sb += b[d] > 0 ? b[d] : 0; }
+      if (sa < normalize_mass || sb < normalize_mass) continue;
+    }
     double acc = 0.0;
     for (int d = 0; d < kNumClasses; ++d) {
-      const double e = double(mq[s * kNumClasses + d]) - mm[s * kNumClasses + d];
-      acc += w[d] * e * e;
+      const double x = normalize_mass > 0.0f ? (a[d] > 0 ? a[d] : 0) / sa : a[d];
+      const double y = normalize_mass > 0.0f ? (b[d] > 0 ? b[d] : 0) / sb : b[d];
+      acc += w[d] * (x - y) * (x - y);
     }
     const double e = std::sqrt(double(vq[s] > 0 ? vq[s] : 0)) - std::sqrt(double(vm[s] > 0 ? vm[s] : 0));
     r.w2 += acc + tw * e * e;

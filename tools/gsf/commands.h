@@ -24,6 +24,9 @@ struct MapFile {
 Status read_map_file(const std::string& path, MapFile* out, std::string* error);
 bool write_file(const std::string& path, const void* data, size_t bytes, std::string* error);
 
+// True if --help/-h is among the arguments (then print usage and exit 0).
+bool wants_help(int argc, char** argv);
+
 // Prints "gsf <cmd>: error: msg" plus a hint, returns 2.
 int usage_error(const std::string& command, const std::string& message);
 

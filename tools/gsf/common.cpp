@@ -35,6 +35,12 @@ bool write_file(const std::string& path, const void* data, size_t bytes, std::st
   return true;
 }
 
+bool wants_help(int argc, char** argv) {
+  for (int i = 2; i < argc; ++i)
+    if (std::string(argv[i]) == "--help" || std::string(argv[i]) == "-h") return true;
+  return false;
+}
+
 int usage_error(const std::string& command, const std::string& message) {
   std::fprintf(stderr, "gsf %s: error: %s\n(see 'gsf %s --help')\n", command.c_str(), message.c_str(), command.c_str());
   return 2;

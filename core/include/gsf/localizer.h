@@ -49,6 +49,16 @@ class Localizer {
   // One-shot global localization of one scan. Always fills `out` (status inside as well as returned).
   Status localize(const ScanView& scan, LocalizeResult* out);
 
+  // The correspondences the last localize() passed to the max clique (for pictures and debugging):
+  // copies up to `max` into `out`, returns how many there were.
+  struct Correspondence {
+    uint32_t query_instance, map_instance;
+    float query_xyz[3];
+    float weight;
+    bool in_clique;
+  };
+  uint32_t last_correspondences(Correspondence* out, uint32_t max) const;
+
   bool initialized() const { return initialized_; }
   const LocalizerConfig& config() const { return config_; }
   size_t workspace_bytes() const { return arena_.used(); }

@@ -1,0 +1,56 @@
+// SemanticKITTI layout reader and writer:
+//   <root>/sequences/<seq>/velodyne/NNNNNN.bin   float32 x, y, z, intensity per point
+//   <root>/sequences/<seq>/labels/NNNNNN.label   uint32 per point: semantic id (low 16) | instance (high 16)
+//   <root>/sequences/<seq>/logits/NNNNNN.bin     optional, format in docs/data-formats.md
+//   <root>/sequences/<seq>/poses.txt             3x4 row-major per frame (camera frame); 13 numbers = time first
+//   <root>/sequences/<seq>/calib.txt             Tr: velodyne -> camera (identity if absent)
+// LiDAR pose in the world: Tr^-1 * P_i * Tr (KITTI / SemanticKITTI convention).
+#pragma once
+#include <string>
+#include <vector>
+
+#include "gsf/port/scan_source.h"
+
+namespace gsf::port {
+
+struct KittiReadOptions {
+  bool require_labels = true;
+  bool load_logits = true;        // when logits/ exists
+  bool drop_non_finite = false;   // false: a NaN/Inf point rejects the scan with InvalidInput
+};
+
+class SemanticKittiSource final : public ScanSource {
+ public:
+  Status open(const std::string& dataset_root, const std::string& sequence, const KittiReadOptions& options = {});
+  uint32_t size() const override { return static_cast<uint32_t>(frames_.size()); }
+  uint32_t frame_id(uint32_t index) const override { return index < frames_.size() ? frames_[index] : 0; }
+  Status read(uint32_t index, ScanBuffer& out) override;
+  Status pose(uint32_t index, Eigen::Isometry3d* world_T_lidar) const override;
+  bool has_logits() const { return has_logits_; }
+  const std::string& directory() const { return dir_; }
+
+ private:
+  std::string dir_;
+  KittiReadOptions options_;
+  std::vector<uint32_t> frames_;
+  std::vector<Eigen::Isometry3d> poses_;  // by frame number; identity rows for missing are flagged
+  std::vector<bool> has_pose_;
+  bool has_logits_ = false;
+  std::vector<char> bytes_;  // reused file buffer
+};
+
+class SemanticKittiWriter {
+ public:
+  Status open(const std::string& dataset_root, const std::string& sequence);
+  Status write_scan(uint32_t frame, const float* xyzi, const uint32_t* labels, const float* logits_or_null, uint32_t count);
+  // Writes poses.txt (LiDAR poses, line i = frame i) and calib.txt with an identity Tr.
+  Status write_poses(const std::vector<Eigen::Isometry3d>& world_T_lidar);
+
+ private:
+  std::string dir_;
+};
+
+// Logits file: "GSFL", u16 version = 1, u16 D, u32 count, then count x D float32 (little-endian).
+constexpr char kLogitsMagic[4] = {'G', 'S', 'F', 'L'};
+
+}  // namespace gsf::port

@@ -1,0 +1,68 @@
+// gsf evaluate --map MAP --dataset DIR --sequence 01 --json OUT.json [--mode gsf|instance|scan-context|all]
+#include <cstdio>
+#include <sstream>
+
+#include "args.h"
+#include "commands.h"
+#include "run_evaluation.h"
+
+namespace gsf::cli {
+
+bool parse_modes(const std::string& s, std::vector<std::string>* modes) {
+  modes->clear();
+  std::stringstream ss(s);
+  std::string m;
+  while (std::getline(ss, m, ',')) {
+    if (m == "all") {
+      for (const char* x : {"instance", "gsf", "scan-context"}) modes->push_back(x);
+    } else if (m == "instance" || m == "gsf" || m == "scan-context") {
+      modes->push_back(m);
+    } else {
+      return false;
+    }
+  }
+  return !modes->empty();
+}
+
+int cmd_evaluate(int argc, char** argv) {
+  const std::vector<OptionSpec> specs = {
+      {"map", "map file (gsf build-map)", "", false, true},
+      {"dataset", "dataset root with the query sequence", "", false, true},
+      {"sequence", "query sequence", "01"},
+      {"map-sequence", "mapping sequence (Scan Context peer database)", "00"},
+      {"mode", "comma list of instance (GSF off, Outram), gsf, scan-context, or all", "all"},
+      {"json", "write per-mode summaries and per-query results here", ""},
+      {"svg", "directory for the pictures (map + trajectory, correspondences)", ""},
+      {"logits", "synthetic or none (see build-map)", "synthetic"},
+      {"threshold", "ambiguity threshold for answering (precision vs answered)", "0.5"},
+      {"limit", "evaluate only the first N queries", "0"},
+      {"set", "config overrides name=value[,name=value] (see pipeline.cpp), e.g. match.tau=0.1", ""},
+      {"quiet", "no progress on stderr", "", true},
+  };
+  if (wants_help(argc, argv)) {
+    std::printf("%s", usage_text("evaluate", "Localize a query sequence with ground truth; report success rate "
+                                             "(t < 5 m, r < 10 deg), ATE/ARE, time per stage, memory.", specs).c_str());
+    return 0;
+  }
+  Args args;
+  std::string err;
+  if (!args.parse(argc, argv, 2, specs, &err)) return usage_error("evaluate", err);
+  EvalOptions o;
+  o.map_path = args.get("map");
+  o.dataset = args.get("dataset");
+  o.sequence = args.get("sequence");
+  o.map_sequence = args.get("map-sequence");
+  o.json_out = args.get("json");
+  o.svg_dir = args.get("svg");
+  o.progress = !args.flag("quiet");
+  o.overrides = args.get("set");
+  if (!parse_modes(args.get("mode"), &o.modes)) return usage_error("evaluate", "bad --mode '" + args.get("mode") + "'");
+  if (!parse_logit_mode(args.get("logits"), &o.logits)) return usage_error("evaluate", "--logits must be synthetic or none");
+  long long lim;
+  if (!args.get_double("threshold", &o.threshold, &err) || !args.get_int("limit", &lim, &err) || lim < 0)
+    return usage_error("evaluate", err.empty() ? "--limit must be >= 0" : err);
+  o.limit = static_cast<uint32_t>(lim);
+  return run_evaluation(o);
+}
+
+}  // namespace gsf::cli

@@ -1,0 +1,159 @@
+#include "pipeline.h"
+
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <memory>
+#include <sstream>
+
+#include "gsf/port/nuscenes.h"
+
+namespace gsf::cli {
+
+LocalizerConfig default_config() {
+  LocalizerConfig c;
+  c.max_scan_points = kMaxScanPoints;
+  return c;
+}
+
+bool apply_override(LocalizerConfig* c, const std::string& a, std::string* error) {
+  const auto eq = a.find('=');
+  if (eq == std::string::npos) { *error = "override '" + a + "' is not name=value"; return false; }
+  const std::string k = a.substr(0, eq), v = a.substr(eq + 1);
+  char* end = nullptr;
+  const double x = std::strtod(v.c_str(), &end);
+  if (v.empty() || *end != '\0') { *error = "override '" + a + "': value is not a number"; return false; }
+  struct F { const char* name; float* f; uint32_t* u; };
+  const F fields[] = {
+      {"match.tau", &c->match.tau, nullptr},
+      {"match.min_similarity", &c->match.min_similarity, nullptr},
+      {"match.observed_variance", &c->match.observed_variance, nullptr},
+      {"match.normalize_mass", &c->match.normalize_mass, nullptr},
+      {"match.covariance_weight", &c->match.covariance_weight, nullptr},
+      {"match.yaw_bins", nullptr, &c->match.yaw_bins},
+      {"match.max_correspondences", nullptr, &c->match.max_correspondences},
+      {"match.max_matches_per_triangle", nullptr, &c->match.max_matches_per_triangle},
+      {"clique.consistency_eps", &c->clique.consistency_eps, nullptr},
+      {"pose.tls_threshold", &c->pose.tls_threshold, nullptr},
+      {"field.length_scale", &c->field.length_scale, nullptr},
+      {"field.radius", &c->field.radius, nullptr},
+      {"field.grid_spacing", &c->field.grid_spacing, nullptr},
+      {"field.noise_variance", &c->field.noise_variance, nullptr},
+      {"field.inducing_points", nullptr, &c->field.inducing_points},
+      {"field.grid_nx", nullptr, &c->field.grid_nx},
+      {"field.grid_ny", nullptr, &c->field.grid_ny},
+      {"triangle.relative_side_tolerance", &c->triangle.relative_side_tolerance, nullptr},
+      {"triangle.neighbours", nullptr, &c->triangle.neighbours},
+      {"voxel.voxel_size", &c->voxel.voxel_size, nullptr},
+  };
+  for (const F& f : fields)
+    if (k == f.name) {
+      if (f.f) *f.f = static_cast<float>(x);
+      else if (x < 0 || x != static_cast<double>(static_cast<uint32_t>(x))) { *error = "override '" + a + "' needs a whole number"; return false; }
+      else *f.u = static_cast<uint32_t>(x);
+      return true;
+    }
+  *error = "unknown config name '" + k + "'";
+  return false;
+}
+
+bool apply_overrides(LocalizerConfig* c, const std::string& list, std::string* error) {
+  std::stringstream ss(list);
+  std::string item;
+  while (std::getline(ss, item, ','))
+    if (!item.empty() && !apply_override(c, item, error)) return false;
+  return true;
+}
+
+bool parse_logit_mode(const std::string& s, LogitMode* out) {
+  if (s == "none") { *out = LogitMode::None; return true; }
+  if (s == "synthetic") { *out = LogitMode::Synthetic; return true; }
+  return false;
+}
+
+std::unique_ptr<port::ScanSource> open_source(const std::string& root, const std::string& seq, Status* status) {
+  namespace fs = std::filesystem;
+  std::error_code ec;
+  if (fs::is_directory(fs::path(root) / "sequences" / seq / "lidarseg", ec)) {
+    auto src = std::make_unique<port::NuScenesLidarsegSource>();
+    *status = src->open(root, seq);
+    return src;
+  }
+  auto src = std::make_unique<port::SemanticKittiSource>();
+  *status = src->open(root, seq);
+  return src;
+}
+
+Status read_scan(port::ScanSource& src, uint32_t index, port::ScanBuffer& buf, LogitMode mode, uint64_t scan_id) {
+  const Status s = src.read(index, buf);
+  if (s != Status::Ok) return s;
+  if (mode == LogitMode::Synthetic && buf.logits && !buf.has_logits) {
+    port::LogitModel model;
+    port::synthesize_logits(model, scan_id, buf.labels, buf.count, buf.logits, buf.labels);
+    buf.has_logits = true;
+  }
+  return Status::Ok;
+}
+
+Meta read_meta(const std::string& root) {
+  Meta m;
+  std::ifstream f(std::filesystem::path(root) / "meta.json");
+  if (!f) return m;
+  std::stringstream ss;
+  ss << f.rdbuf();
+  const std::string s = ss.str();
+  m.present = true;
+  auto pos = s.find("\"road_length_m\":");
+  if (pos != std::string::npos) m.road_length_m = std::strtof(s.c_str() + pos + 16, nullptr);
+  pos = s.find("\"query_in_repetitive_zone\": [");
+  if (pos != std::string::npos) {
+    for (size_t i = pos + 29; i < s.size() && s[i] != ']'; ++i)
+      if (s[i] == '0' || s[i] == '1') m.query_in_zone.push_back(s[i] == '1');
+  }
+  return m;
+}
+
+double path_length(port::ScanSource& src) {
+  double len = 0;
+  Eigen::Isometry3d prev;
+  bool have = false;
+  for (uint32_t i = 0; i < src.size(); ++i) {
+    Eigen::Isometry3d p;
+    if (src.pose(i, &p) != Status::Ok) continue;
+    if (have) {
+      const double d = (p.translation() - prev.translation()).norm();
+      if (d < 50.0) len += d;
+    }
+    prev = p;
+    have = true;
+  }
+  return len;
+}
+
+Status build_map(port::ScanSource& src, const LocalizerConfig& config, LogitMode logits, float road_length,
+                 std::vector<uint64_t>* blob, size_t* bytes, mapping::MapBuildStats* stats, bool progress) {
+  mapping::MapBuilder builder(config);
+  port::OwnedScanBuffer buf(kMaxScanPoints, true);
+  for (uint32_t i = 0; i < src.size(); ++i) {
+    Eigen::Isometry3d pose;
+    Status s = src.pose(i, &pose);
+    if (s != Status::Ok) return s;
+    s = read_scan(src, i, buf.buffer(), logits, 1000000u + src.frame_id(i));
+    if (s != Status::Ok) return s;
+    s = builder.add_scan(buf.buffer().view(), pose);
+    if (s != Status::Ok) return s;
+    if (progress && (i % 25 == 0 || i + 1 == src.size()))
+      std::fprintf(stderr, "\r  build-map: accumulated %u / %u scans", i + 1, src.size());
+  }
+  if (progress) std::fprintf(stderr, "\n");
+  builder.set_road_length(road_length);
+  mapping::Progress cb;
+  if (progress)
+    cb = [](const char* stage, uint64_t done, uint64_t total) {
+      std::fprintf(stderr, "\r  build-map: %s %llu / %llu", stage, (unsigned long long)done, (unsigned long long)total);
+      if (done == total) std::fprintf(stderr, "\n");
+    };
+  return builder.build(blob, bytes, stats, cb);
+}
+
+}  // namespace gsf::cli

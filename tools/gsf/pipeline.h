@@ -1,0 +1,47 @@
+// Shared host-side glue for the CLI: default config, dataset reading with synthetic logits, map
+// building from a scan source, and the simulator's meta.json.
+#pragma once
+#include <cstdint>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "gsf/config.h"
+#include "gsf/port/logit_synthesis.h"
+#include "gsf/port/scan_source.h"
+#include "gsf/port/semantic_kitti.h"
+#include "mapping/map_builder.h"
+
+namespace gsf::cli {
+
+LocalizerConfig default_config();
+// Applies "name=value" overrides (e.g. match.tau=0.1); false with a message for unknown names/values.
+bool apply_override(LocalizerConfig* config, const std::string& assignment, std::string* error);
+bool apply_overrides(LocalizerConfig* config, const std::string& comma_list, std::string* error);
+
+enum class LogitMode { None, Synthetic };
+bool parse_logit_mode(const std::string& s, LogitMode* out);
+
+// Opens a dataset sequence: SemanticKITTI layout, or nuScenes-lidarseg (lidarseg/ folder) automatically.
+std::unique_ptr<port::ScanSource> open_source(const std::string& root, const std::string& sequence, Status* status);
+
+// Reads scan `index` and, for LogitMode::Synthetic, replaces labels by the confusion model's argmax
+// ("what a network predicted") and fills logits. scan_id keeps map and query draws independent.
+Status read_scan(port::ScanSource& src, uint32_t index, port::ScanBuffer& buf, LogitMode mode, uint64_t scan_id);
+
+struct Meta {
+  bool present = false;
+  float road_length_m = 0;
+  std::vector<bool> query_in_zone;
+};
+Meta read_meta(const std::string& dataset_root);
+
+// Length of a drive from its poses (sum of steps shorter than 50 m, so jumps between roads do not count).
+double path_length(port::ScanSource& src);
+
+Status build_map(port::ScanSource& src, const LocalizerConfig& config, LogitMode logits, float road_length,
+                 std::vector<uint64_t>* blob, size_t* bytes, mapping::MapBuildStats* stats, bool progress);
+
+constexpr uint32_t kMaxScanPoints = 262144;
+
+}  // namespace gsf::cli

@@ -1,0 +1,331 @@
+#include "run_evaluation.h"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+
+#include "commands.h"
+#include "evaluation.h"
+#include "gsf/localizer.h"
+#include "gsf/map_format.h"
+#include "gsf/port/clock.h"
+#include "json_writer.h"
+#include "scan_context.h"
+#include "svg.h"
+
+namespace gsf::cli {
+namespace {
+
+double ms(uint64_t ns) { return double(ns) / 1e6; }
+
+struct ModeRun {
+  std::string mode;
+  std::vector<QueryRecord> records;
+  std::vector<std::vector<Localizer::Correspondence>> corr;  // per query (for the figure)
+  uint64_t workspace_bytes = 0;
+};
+
+void write_json(const std::string& path, const EvalOptions& o, const MapView& map, const std::vector<ModeRun>& runs,
+                const std::vector<ModeSummary>& sums) {
+  JsonWriter j;
+  j.begin_object();
+  j.field("map", o.map_path);
+  j.field("dataset", o.dataset);
+  j.field("sequence", o.sequence);
+  j.field("map_bytes", static_cast<unsigned long long>(map.total_bytes));
+  j.field("road_length_m", map.counts.road_length_m);
+  j.field("map_bytes_per_km", map.counts.road_length_m > 0 ? map.total_bytes / (map.counts.road_length_m / 1000.0) : 0.0);
+  j.field("map_instances", map.counts.instances);
+  j.field("map_triangles", map.counts.triangles);
+  j.field("success_translation_m", kSuccessTranslation);
+  j.field("success_rotation_deg", kSuccessRotationDeg);
+  j.key("modes");
+  j.begin_object();
+  for (size_t m = 0; m < runs.size(); ++m) {
+    const ModeSummary& s = sums[m];
+    j.key(runs[m].mode);
+    j.begin_object();
+    j.key("summary");
+    j.begin_object();
+    j.field("queries", s.queries);
+    j.field("answered", s.answered);
+    j.field("successes", s.successes);
+    j.field("success_rate", s.success_rate);
+    j.field("zone_queries", s.zone_queries);
+    j.field("zone_success_rate", s.zone_success_rate);
+    j.field("ate_m", s.ate_m);
+    j.field("are_deg", s.are_deg);
+    j.field("median_ms", s.median_ms);
+    j.field("p95_ms", s.p95_ms);
+    j.field("mean_ms", s.mean_ms);
+    j.field("time_ratio_to_instance", s.time_ratio_to_gsf_off);
+    j.field("workspace_bytes", static_cast<unsigned long long>(runs[m].workspace_bytes));
+    j.key("median_stage_ms");
+    j.begin_object();
+    j.field("voxel", s.median_stage.voxel);
+    j.field("cluster", s.median_stage.cluster);
+    j.field("field", s.median_stage.field);
+    j.field("triangle", s.median_stage.triangle);
+    j.field("match", s.median_stage.match);
+    j.field("gsf", s.median_stage.gsf);
+    j.field("clique", s.median_stage.clique);
+    j.field("pose", s.median_stage.pose);
+    j.end_object();
+    j.field("ambiguity_threshold", s.default_threshold);
+    j.field("precision_at_threshold", s.precision_at_default);
+    j.field("answered_at_threshold", s.answered_at_default);
+    j.field("wrong_answers_at_threshold", s.wrong_answers_at_default);
+    j.key("precision_curve");
+    j.begin_array();
+    for (const auto& p : s.curve) {
+      j.begin_object();
+      j.field("threshold", p.threshold);
+      j.field("answered", p.answered);
+      j.field("precision", p.precision);
+      j.end_object();
+    }
+    j.end_array();
+    j.end_object();
+    j.key("queries");
+    j.begin_array();
+    for (const auto& r : runs[m].records) {
+      j.begin_object();
+      j.field("index", r.index);
+      j.field("frame", r.frame);
+      j.field("status", r.status);
+      j.field("success", r.success);
+      j.field("in_zone", r.in_zone);
+      j.field("translation_error_m", r.answered ? r.error.translation_m : -1.0);
+      j.field("rotation_error_deg", r.answered ? r.error.rotation_deg : -1.0);
+      j.field("time_ms", r.time_ms);
+      j.field("ambiguity", r.ambiguity);
+      j.field("inliers", r.inliers);
+      j.end_object();
+    }
+    j.end_array();
+    j.end_object();
+  }
+  j.end_object();
+  j.end_object();
+  std::ofstream f(path);
+  f << j.str() << "\n";
+}
+
+void write_svgs(const EvalOptions& o, const MapView& map, const std::vector<ModeRun>& runs) {
+  std::filesystem::create_directories(o.svg_dir);
+  const ModeRun* gsf = nullptr;
+  const ModeRun* inst = nullptr;
+  for (const auto& r : runs) {
+    if (r.mode == "gsf") gsf = &r;
+    if (r.mode == "instance") inst = &r;
+  }
+  const ModeRun* shown = gsf ? gsf : (runs.empty() ? nullptr : &runs[0]);
+  if (!shown) return;
+  // 1. Map instances by class + query trajectory coloured by success.
+  const float* lo = map.counts.bounds_min;
+  const float* hi = map.counts.bounds_max;
+  SvgCanvas c(lo[0] - 20, lo[1] - 20, hi[0] + 20, hi[1] + 20, 1400);
+  for (uint32_t i = 0; i < map.counts.instances; ++i)
+    c.circle(map.instances[i].centroid[0], map.instances[i].centroid[1], 1.6, class_colour(map.instances[i].label), 0.8);
+  for (const auto& r : shown->records) {
+    const auto t = r.truth.translation();
+    c.circle(t.x(), t.y(), 5, r.success ? "#1a9850" : (r.answered ? "#d73027" : "#999999"), 0.9);
+  }
+  c.text_px(20, 16, "map instances by class; queries (" + shown->mode + "): green = success, red = wrong pose, grey = no answer", 13);
+  c.save(o.svg_dir + "/map_trajectory.svg");
+  // 2. Correspondences before/after the GSF filter for one repetitive-zone query (paper Fig. 3).
+  if (!gsf || !inst) return;
+  int pick = -1;
+  for (size_t q = 0; q < gsf->records.size(); ++q)
+    if (gsf->records[q].in_zone && gsf->records[q].success && !inst->records[q].success) { pick = int(q); break; }
+  for (size_t q = 0; q < gsf->records.size() && pick < 0; ++q)
+    if (gsf->records[q].in_zone) pick = int(q);
+  if (pick < 0) return;
+  for (const ModeRun* run : {inst, gsf}) {
+    const QueryRecord& r = run->records[pick];
+    const Eigen::Isometry3d& T = r.truth;
+    const Eigen::Vector3d p = T.translation();
+    SvgCanvas f(p.x() - 60, p.y() - 45, p.x() + 60, p.y() + 45, 900);
+    for (uint32_t i = 0; i < map.counts.instances; ++i) {
+      const float* m = map.instances[i].centroid;
+      if (std::fabs(m[0] - p.x()) < 60 && std::fabs(m[1] - p.y()) < 45) f.circle(m[0], m[1], 3, class_colour(map.instances[i].label), 0.5);
+    }
+    for (const auto& k : run->corr[pick]) {
+      const Eigen::Vector3d q = T * Eigen::Vector3d(k.query_xyz[0], k.query_xyz[1], k.query_xyz[2]);
+      const float* m = map.instances[k.map_instance].centroid;
+      const bool right = (q - Eigen::Vector3d(m[0], m[1], m[2])).norm() < 2.0;
+      f.line(q.x(), q.y(), m[0], m[1], right ? "#1a9850" : "#d73027", k.in_clique ? 2.0 : 0.7, k.in_clique ? 0.95 : 0.45);
+      f.circle(q.x(), q.y(), 2, "#000000", 0.8);
+    }
+    f.circle(p.x(), p.y(), 5, "#000000", 1.0);
+    char title[200];
+    std::snprintf(title, sizeof(title), "query %u, %s: %zu correspondences (green = true, red = false; thick = clique), %s",
+                  r.frame, run->mode.c_str(), run->corr[pick].size(), r.success ? "localized" : "failed");
+    f.text_px(10, 14, title, 12);
+    f.save(o.svg_dir + "/correspondences_" + run->mode + ".svg");
+  }
+}
+
+}  // namespace
+
+int run_evaluation(const EvalOptions& o) {
+  MapFile file;
+  std::string err;
+  if (read_map_file(o.map_path, &file, &err) != Status::Ok) {
+    std::fprintf(stderr, "gsf evaluate: %s\n", err.c_str());
+    return 1;
+  }
+  MapView map;
+  Status s = load_map(file.data(), file.bytes, &map);
+  if (s != Status::Ok) {
+    std::fprintf(stderr, "gsf evaluate: invalid map '%s': %s\n", o.map_path.c_str(), to_string(s));
+    return 1;
+  }
+  auto src = open_source(o.dataset, o.sequence, &s);
+  if (s != Status::Ok || src->size() == 0) {
+    std::fprintf(stderr, "gsf evaluate: cannot open query sequence '%s' under '%s': %s\n", o.sequence.c_str(),
+                 o.dataset.c_str(), s == Status::Ok ? "no scans" : to_string(s));
+    return 1;
+  }
+  const Meta meta = read_meta(o.dataset);
+  const uint32_t nq = o.limit ? std::min<uint32_t>(o.limit, src->size()) : src->size();
+  port::OwnedScanBuffer buf(kMaxScanPoints, true);
+  port::SteadyClock clock;
+  std::vector<ModeRun> runs;
+  for (const std::string& mode : o.modes) {
+    ModeRun run;
+    run.mode = mode;
+    if (mode == "instance" || mode == "gsf") {
+      LocalizerConfig cfg = default_config();
+      std::string oerr;
+      if (!apply_overrides(&cfg, o.overrides, &oerr)) {
+        std::fprintf(stderr, "gsf evaluate: %s\n", oerr.c_str());
+        return 2;
+      }
+      cfg.match.use_gsf = mode == "gsf";
+      const size_t need = Localizer::required_bytes(cfg);
+      std::vector<uint64_t> workspace(need / 8 + 2);
+      Localizer loc;
+      s = loc.init(cfg, map, workspace.data(), workspace.size() * 8, &clock);
+      if (s != Status::Ok) {
+        std::fprintf(stderr, "gsf evaluate: localizer init failed for mode %s: %s\n", mode.c_str(), to_string(s));
+        return 1;
+      }
+      run.workspace_bytes = need;
+      std::vector<Localizer::Correspondence> corr(cfg.match.max_correspondences);
+      for (uint32_t q = 0; q < nq; ++q) {
+        QueryRecord r;
+        r.index = q;
+        r.frame = src->frame_id(q);
+        r.in_zone = q < meta.query_in_zone.size() && meta.query_in_zone[q];
+        src->pose(q, &r.truth);
+        s = read_scan(*src, q, buf.buffer(), o.logits, 2000000u + r.frame);
+        LocalizeResult res;
+        if (s == Status::Ok) {
+          loc.localize(buf.buffer().view(), &res);
+        } else {
+          res.status = s;
+        }
+        r.status = to_string(res.status);
+        r.answered = res.status == Status::Ok;
+        r.estimate = res.map_T_scan;
+        r.ambiguity = res.ambiguity;
+        r.inliers = res.inliers;
+        r.time_ms = ms(res.times.total);
+        r.stages = StageMs{ms(res.times.voxel), ms(res.times.cluster), ms(res.times.field), ms(res.times.triangle),
+                           ms(res.times.match), ms(res.times.gsf), ms(res.times.clique), ms(res.times.pose), 0};
+        if (r.answered) {
+          r.error = pose_error(r.estimate, r.truth);
+          r.success = r.error.translation_m < kSuccessTranslation && r.error.rotation_deg < kSuccessRotationDeg;
+        }
+        const uint32_t nc = loc.last_correspondences(corr.data(), static_cast<uint32_t>(corr.size()));
+        run.corr.emplace_back(corr.begin(), corr.begin() + std::min<size_t>(nc, corr.size()));
+        run.records.push_back(r);
+        if (o.progress && (q % 10 == 0 || q + 1 == nq))
+          std::fprintf(stderr, "\r  evaluate [%s]: %u / %u", mode.c_str(), q + 1, nq);
+      }
+      if (o.progress) std::fprintf(stderr, "\n");
+    } else if (mode == "scan-context") {
+      auto map_src = open_source(o.dataset, o.map_sequence, &s);
+      if (s != Status::Ok) {
+        std::fprintf(stderr, "gsf evaluate: scan-context needs the map sequence '%s': %s\n", o.map_sequence.c_str(), to_string(s));
+        return 1;
+      }
+      bench::ScanContextConfig sc;
+      bench::ScanContextDatabase db(sc);
+      for (uint32_t i = 0; i < map_src->size(); ++i) {
+        Eigen::Isometry3d pose;
+        if (map_src->pose(i, &pose) != Status::Ok || map_src->read(i, buf.buffer()) != Status::Ok) continue;
+        db.add(bench::make_scan_context(sc, buf.buffer().points, 4, buf.buffer().count), pose);
+      }
+      run.workspace_bytes = db.size() * (sizeof(float) * (sc.rings * sc.sectors + sc.rings) + sizeof(Eigen::Isometry3d));
+      for (uint32_t q = 0; q < nq; ++q) {
+        QueryRecord r;
+        r.index = q;
+        r.frame = src->frame_id(q);
+        r.in_zone = q < meta.query_in_zone.size() && meta.query_in_zone[q];
+        src->pose(q, &r.truth);
+        if (src->read(q, buf.buffer()) == Status::Ok) {
+          const auto t0 = std::chrono::steady_clock::now();
+          const auto desc = bench::make_scan_context(sc, buf.buffer().points, 4, buf.buffer().count);
+          const auto m = db.query(desc);
+          r.time_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+          r.answered = m.found;
+          r.estimate = m.pose;
+          // Ambiguity: how close the best place at least 10 m away comes to the best match.
+          r.ambiguity = m.second_distance > 0 ? std::min(1.0, double(m.distance) / m.second_distance) : 1.0;
+          r.status = m.found ? "Ok" : "NoSolution";
+          if (r.answered) {
+            r.error = pose_error(r.estimate, r.truth);
+            r.success = r.error.translation_m < kSuccessTranslation && r.error.rotation_deg < kSuccessRotationDeg;
+          }
+        } else {
+          r.status = "IoError";
+        }
+        run.corr.emplace_back();
+        run.records.push_back(r);
+      }
+    } else {
+      std::fprintf(stderr, "gsf evaluate: unknown mode '%s'\n", mode.c_str());
+      return 2;
+    }
+    runs.push_back(std::move(run));
+  }
+  // Summaries, with time ratios against the instance-only row of the same run.
+  std::vector<ModeSummary> sums;
+  for (const auto& r : runs) sums.push_back(summarize(r.mode, r.records, o.threshold));
+  double base = 0;
+  for (const auto& s2 : sums)
+    if (s2.mode == "instance") base = s2.median_ms;
+  for (auto& s2 : sums) s2.time_ratio_to_gsf_off = base > 0 ? s2.median_ms / base : 0;
+  const double km = map.counts.road_length_m / 1000.0;
+  std::printf("\nmap: %zu bytes, %u instances, %u triangles, %.0f m of road -> %.2f MB/km\n", map.total_bytes,
+              map.counts.instances, map.counts.triangles, map.counts.road_length_m, km > 0 ? map.total_bytes / 1e6 / km : 0.0);
+  std::printf("queries: %u (%u in the repetitive zone); success = t < %.0f m and r < %.0f deg\n\n", nq,
+              sums.empty() ? 0 : sums[0].zone_queries, kSuccessTranslation, kSuccessRotationDeg);
+  std::printf("%-13s %8s %8s %7s %7s %9s %9s %7s %10s %9s %9s\n", "mode", "success", "repet.", "ATE m", "ARE deg",
+              "median ms", "p95 ms", "x off", "workspace", "prec@thr", "answered");
+  for (size_t m = 0; m < sums.size(); ++m) {
+    const ModeSummary& x = sums[m];
+    std::printf("%-13s %7.1f%% %7.1f%% %7.2f %7.2f %9.1f %9.1f %7.2f %8.1fMB %8.1f%% %8.1f%%\n", x.mode.c_str(),
+                100 * x.success_rate, 100 * x.zone_success_rate, x.ate_m, x.are_deg, x.median_ms, x.p95_ms,
+                x.time_ratio_to_gsf_off, runs[m].workspace_bytes / 1e6, 100 * x.precision_at_default,
+                100 * x.answered_at_default);
+  }
+  for (const auto& x : sums)
+    if (x.mode != "scan-context")
+      std::printf("  %s median stage ms: voxel %.1f  cluster %.1f  field %.1f  triangle %.1f  match %.1f  gsf %.1f  "
+                  "clique %.1f  pose %.1f\n", x.mode.c_str(), x.median_stage.voxel, x.median_stage.cluster,
+                  x.median_stage.field, x.median_stage.triangle, x.median_stage.match, x.median_stage.gsf,
+                  x.median_stage.clique, x.median_stage.pose);
+  std::printf("  (prec@thr / answered: precision and share answered when declining queries with ambiguity > %.2f)\n",
+              o.threshold);
+  if (!o.json_out.empty()) write_json(o.json_out, o, map, runs, sums);
+  if (!o.svg_dir.empty()) write_svgs(o, map, runs);
+  return 0;
+}
+
+}  // namespace gsf::cli

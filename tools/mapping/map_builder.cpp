@@ -1,0 +1,255 @@
+#include "mapping/map_builder.h"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstring>
+
+#include "gsf/arena.h"
+#include "gsf/fixed_vector.h"
+#include "gsf/gaussian_field.h"
+#include "gsf/instance_clustering.h"
+#include "gsf/map_format.h"
+#include "gsf/triangle.h"
+#include "gsf/triangle_index.h"
+#include "gsf/voxel_layer.h"
+
+namespace gsf::mapping {
+namespace {
+
+double seconds_since(std::chrono::steady_clock::time_point t0) {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+}
+
+uint64_t world_key(const Eigen::Vector3d& p, double size) {
+  const int64_t x = static_cast<int64_t>(std::floor(p.x() / size)) + (1 << 20);
+  const int64_t y = static_cast<int64_t>(std::floor(p.y() / size)) + (1 << 20);
+  const int64_t z = static_cast<int64_t>(std::floor(p.z() / size)) + (1 << 20);
+  return (uint64_t(x & 0x1FFFFF) << 42) | (uint64_t(y & 0x1FFFFF) << 21) | uint64_t(z & 0x1FFFFF);
+}
+
+// Arena-backed stage objects sized for a whole map.
+struct Workspace {
+  std::vector<uint64_t> memory;
+  Arena arena;
+  explicit Workspace(size_t bytes) : memory(bytes / 8 + 2), arena(memory.data(), memory.size() * 8) {}
+};
+
+}  // namespace
+
+MapBuilder::MapBuilder(const LocalizerConfig& config, float refine_voxel) : config_(config), refine_voxel_(refine_voxel) {
+  scan_arena_.resize(VoxelLayer::required_bytes(config_.voxel) + 64);
+}
+
+Status MapBuilder::add_scan(const ScanView& scan, const Eigen::Isometry3d& world_T_lidar) {
+  const auto t0 = std::chrono::steady_clock::now();
+  void* base = reinterpret_cast<void*>((reinterpret_cast<uintptr_t>(scan_arena_.data()) + 15) & ~uintptr_t(15));
+  Arena arena(base, scan_arena_.size() - 16);
+  VoxelLayer layer;
+  Status s = layer.bind(arena, config_.voxel);
+  if (s != Status::Ok) return s;
+  s = layer.build(scan, nullptr);
+  if (s != Status::Ok && s != Status::CapacityExceeded) return s;
+  const double vs = config_.voxel.voxel_size;
+  for (uint32_t i = 0; i < layer.size(); ++i) {
+    const Voxel& v = layer.voxel(i);
+    const Eigen::Vector3d p = world_T_lidar * Eigen::Vector3d(v.centroid[0], v.centroid[1], v.centroid[2]);
+    Accum& a = voxels_[world_key(p, vs)];
+    for (int k = 0; k < 3; ++k) a.sum[k] += p[k] * v.count;
+    for (int c = 0; c < kNumClasses; ++c) a.prob[c] += double(v.prob[c]) * v.count;
+    a.count += v.count;
+  }
+  stats_.scans++;
+  stats_.points += scan.count;
+  stats_.seconds_accumulate += seconds_since(t0);
+  return Status::Ok;
+}
+
+Status MapBuilder::build(std::vector<uint64_t>* blob, size_t* bytes_out, MapBuildStats* stats_out,
+                         const Progress& progress) {
+  *bytes_out = 0;
+  MapBuildStats st = stats_;
+  // Deterministic voxel order (unordered_map iteration order is not).
+  std::vector<uint64_t> keys;
+  keys.reserve(voxels_.size());
+  for (const auto& kv : voxels_) keys.push_back(kv.first);
+  std::sort(keys.begin(), keys.end());
+  const uint32_t nv = static_cast<uint32_t>(keys.size());
+  st.map_voxels = nv;
+  if (nv == 0) return Status::InvalidInput;
+
+  // The map as one "scan" of voxel centroids with log-probabilities as logits: the same VoxelLayer then
+  // reproduces the accumulated voxels (same grid, one point each) and the localizer's stages apply.
+  std::vector<float> pts(size_t(nv) * 4), logits(size_t(nv) * kNumClasses);
+  std::vector<uint32_t> labels(nv);
+  for (uint32_t i = 0; i < nv; ++i) {
+    const Accum& a = voxels_[keys[i]];
+    int best = 0;
+    for (int k = 0; k < 3; ++k) pts[4 * i + k] = static_cast<float>(a.sum[k] / a.count);
+    pts[4 * i + 3] = 0.0f;
+    for (int c = 0; c < kNumClasses; ++c) {
+      const double p = a.prob[c] / a.count;
+      logits[size_t(i) * kNumClasses + c] = static_cast<float>(std::log(p + 1e-6));
+      if (a.prob[c] > a.prob[best]) best = c;
+    }
+    labels[i] = kitti_from_class(best);
+  }
+  VoxelConfig vc = config_.voxel;
+  vc.min_range = 0.0f;
+  vc.max_range = 1e7f;
+  vc.max_voxels = nv + 16;
+  vc.max_columns = nv + 16;
+  ClusterConfig cc = config_.cluster;
+  cc.max_instances = 65535;
+  const auto t_cluster = std::chrono::steady_clock::now();
+  Workspace ws(VoxelLayer::required_bytes(vc) + InstanceClustering::required_bytes(cc, vc.max_voxels) + 4096);
+  VoxelLayer layer;
+  InstanceClustering clusters;
+  if (layer.bind(ws.arena, vc) != Status::Ok || clusters.bind(ws.arena, cc, vc.max_voxels) != Status::Ok)
+    return Status::InvalidArgument;
+  ScanView sv;
+  sv.points = pts.data();
+  sv.stride = 4;
+  sv.labels = labels.data();
+  sv.logits = logits.data();
+  sv.logit_dim = kNumClasses;
+  sv.count = nv;
+  Status s = layer.build(sv, nullptr);
+  if (s != Status::Ok) return s;
+  s = clusters.build(layer, nullptr);
+  if (s != Status::Ok && s != Status::CapacityExceeded) return s;
+  const uint32_t ni = clusters.size();
+  st.instances = ni;
+  st.seconds_cluster = seconds_since(t_cluster);
+  if (progress) progress("clustered instances", ni, ni);
+
+  // Fields: fit each instance's GP on its neighbourhood, probe the canonical grid.
+  const auto t_fields = std::chrono::steady_clock::now();
+  const FieldConfig& fc = config_.field;
+  const uint32_t M = fc.inducing_points, G = grid_points(fc), D = kNumClasses;
+  const uint32_t max_pts = 200000;
+  Workspace fws(FieldSolver::required_bytes(fc, max_pts) + 4096);
+  FieldSolver solver;
+  if (solver.bind(fws.arena, fc, max_pts) != Status::Ok) return Status::InvalidArgument;
+  std::vector<MapInstance> instances(ni);
+  std::vector<float> inputs(size_t(ni) * M * 3, 0.0f), alpha(size_t(ni) * M * D, 0.0f);
+  std::vector<float> mean(size_t(ni) * G * D, 0.0f), var(size_t(ni) * G, fc.signal_variance);
+  std::vector<uint32_t> ids(max_pts);
+  std::vector<float> xyz(size_t(max_pts) * 3), targets(size_t(max_pts) * D), chol(size_t(M) * M), grid(size_t(G) * 3);
+  std::vector<uint8_t> gl(max_pts);
+  std::vector<float> centroids(size_t(ni) * 3);
+  std::vector<uint8_t> inst_labels(ni);
+  make_probe_grid(fc, 0.0f, grid.data());
+  for (uint32_t i = 0; i < ni; ++i) {
+    const Instance& in = clusters.instance(i);
+    MapInstance& mi = instances[i];
+    std::memset(&mi, 0, sizeof(mi));
+    for (int k = 0; k < 3; ++k) mi.centroid[k] = centroids[3 * i + k] = in.centroid[k];
+    mi.stability = in.stability;
+    mi.point_count = in.point_count;
+    mi.label = inst_labels[i] = in.label;
+    st.instances_by_class[in.label]++;
+    const uint32_t got = layer.gather_within(in.centroid, fc.radius, fc.input_dims == 2, ids.data(), max_pts);
+    for (uint32_t k = 0; k < got; ++k) {
+      const Voxel& v = layer.voxel(ids[k]);
+      for (int d = 0; d < 3; ++d) xyz[3 * k + d] = v.centroid[d] - in.centroid[d];
+      for (uint32_t d = 0; d < D; ++d) targets[size_t(k) * D + d] = v.prob[d];
+      gl[k] = v.label;
+    }
+    uint32_t m = 0;
+    float* in_i = inputs.data() + size_t(i) * M * 3;
+    float* al_i = alpha.data() + size_t(i) * M * D;
+    if (solver.fit(xyz.data(), targets.data(), gl.data(), got, in_i, al_i, chol.data(), &m) == Status::Ok) {
+      mi.inducing_count = m;
+      FieldView f{in_i, al_i, m};
+      solver.probe(f, chol.data(), grid.data(), G, mean.data() + size_t(i) * G * D, var.data() + size_t(i) * G, nullptr);
+    } else {
+      st.fields_failed++;
+    }
+    if (progress && (i % 200 == 0 || i + 1 == ni)) progress("fields", i + 1, ni);
+  }
+  st.seconds_fields = seconds_since(t_fields);
+
+  // Triangles and the hash index over all map instances.
+  const auto t_tri = std::chrono::steady_clock::now();
+  TriangleConfig tc = config_.triangle;
+  const uint64_t tri_cap = std::min<uint64_t>(uint64_t(ni) * tc.neighbours * (tc.neighbours - 1) / 2 + 16, 1u << 30);
+  tc.max_triangles = static_cast<uint32_t>(tri_cap);
+  Workspace tws(TriangleBuilder::required_bytes(tc, ni + 1) + size_t(tri_cap) * sizeof(Triangle) + 4096);
+  TriangleBuilder tb;
+  FixedVector<Triangle> tris;
+  if (tb.bind(tws.arena, tc, ni + 1) != Status::Ok || !tris.bind(tws.arena, tc.max_triangles)) return Status::InvalidArgument;
+  s = tb.build(centroids.data(), 3, inst_labels.data(), ni, tris);
+  if (s != Status::Ok) return s;
+  const uint32_t nt = tris.size();
+  std::vector<uint64_t> ikeys(nt + 1), scratch(nt + 1);
+  std::vector<uint32_t> offsets(nt + 2), entries(nt + 1);
+  uint32_t key_count = 0;
+  build_triangle_index(tris.data(), nt, tc.side_bin, ikeys.data(), offsets.data(), entries.data(), &key_count, scratch.data());
+  st.triangles = nt;
+  st.index_keys = key_count;
+  st.seconds_triangles = seconds_since(t_tri);
+  if (progress) progress("triangles", nt, nt);
+
+  // Refinement layer: long-term structure downsampled to refine_voxel.
+  std::vector<float> refine;
+  if (refine_voxel_ > 0.0f) {
+    std::unordered_map<uint64_t, std::pair<Eigen::Vector3d, uint32_t>> cells;
+    std::vector<uint64_t> order;
+    for (uint32_t i = 0; i < layer.size(); ++i) {
+      const Voxel& v = layer.voxel(i);
+      if (stability_weight(v.label) < 1.0f) continue;
+      const Eigen::Vector3d p(v.centroid[0], v.centroid[1], v.centroid[2]);
+      const uint64_t k = world_key(p, refine_voxel_);
+      auto it = cells.find(k);
+      if (it == cells.end()) {
+        cells.emplace(k, std::make_pair(p, uint32_t(v.label)));
+        order.push_back(k);
+      }
+    }
+    std::sort(order.begin(), order.end());
+    for (uint64_t k : order) {
+      const auto& c = cells[k];
+      refine.insert(refine.end(), {float(c.first.x()), float(c.first.y()), float(c.first.z()), float(c.second)});
+    }
+  }
+  st.refine_points = static_cast<uint32_t>(refine.size() / 4);
+
+  MapView view;
+  view.params = map_params_from(config_);
+  view.counts.instances = ni;
+  view.counts.triangles = nt;
+  view.counts.index_keys = key_count;
+  view.counts.refine_points = st.refine_points;
+  view.counts.road_length_m = road_length_;
+  for (int k = 0; k < 3; ++k) { view.counts.bounds_min[k] = 1e30f; view.counts.bounds_max[k] = -1e30f; }
+  for (uint32_t i = 0; i < ni; ++i)
+    for (int k = 0; k < 3; ++k) {
+      view.counts.bounds_min[k] = std::min(view.counts.bounds_min[k], instances[i].centroid[k]);
+      view.counts.bounds_max[k] = std::max(view.counts.bounds_max[k], instances[i].centroid[k]);
+    }
+  if (ni == 0)
+    for (int k = 0; k < 3; ++k) view.counts.bounds_min[k] = view.counts.bounds_max[k] = 0.0f;
+  view.instances = instances.data();
+  view.field_inputs = inputs.data();
+  view.field_alpha = alpha.data();
+  view.grid_mean = mean.data();
+  view.grid_var = var.data();
+  view.triangles = tris.data();
+  view.index_keys = ikeys.data();
+  view.index_offsets = offsets.data();
+  view.index_entries = entries.data();
+  view.refine_points = refine.empty() ? nullptr : refine.data();
+  const size_t size = map_serialized_size(view);
+  if (size == 0) return Status::InvalidArgument;
+  blob->assign(size / 8 + 2, 0);
+  size_t written = 0;
+  s = write_map(view, blob->data(), blob->size() * 8, &written);
+  if (s != Status::Ok) return s;
+  *bytes_out = written;
+  st.bytes = written;
+  if (stats_out) *stats_out = st;
+  return Status::Ok;
+}
+
+}  // namespace gsf::mapping

@@ -1,0 +1,61 @@
+// Offline map building (host side; may use the heap). Scans with their poses are voxelised one by one
+// with the same VoxelLayer the localizer uses, and their voxels accumulate into one world-frame voxel
+// map (class probabilities averaged, weighted by point counts). build() then runs the localizer's own
+// stages over the whole map: instance clustering (an object seen from many scans is one instance), one
+// Gaussian semantic field per instance probed on its canonical grid, triangles and the hash index,
+// plus a downsampled point layer for refinement, and serialises the map blob (map_format.h).
+#pragma once
+#include <cstdint>
+#include <functional>
+#include <string>
+#include <unordered_map>
+#include <vector>
+
+#include <Eigen/Geometry>
+
+#include "gsf/config.h"
+#include "gsf/scan.h"
+#include "gsf/status.h"
+
+namespace gsf::mapping {
+
+struct MapBuildStats {
+  uint32_t scans = 0;
+  uint64_t points = 0;
+  uint32_t map_voxels = 0;
+  uint32_t instances = 0;
+  uint32_t instances_by_class[kNumClasses] = {};
+  uint32_t triangles = 0;
+  uint32_t index_keys = 0;
+  uint32_t refine_points = 0;
+  uint32_t fields_failed = 0;
+  size_t bytes = 0;
+  double seconds_accumulate = 0, seconds_cluster = 0, seconds_fields = 0, seconds_triangles = 0;
+};
+
+using Progress = std::function<void(const char* stage, uint64_t done, uint64_t total)>;
+
+class MapBuilder {
+ public:
+  // `config` supplies the stages' settings; its per-scan capacities are raised for the whole map.
+  explicit MapBuilder(const LocalizerConfig& config, float refine_voxel = 1.0f);
+  Status add_scan(const ScanView& scan, const Eigen::Isometry3d& world_T_lidar);
+  void set_road_length(float metres) { road_length_ = metres; }
+  // Serialises the map into `blob` (16-byte aligned words); *bytes is the map's size.
+  Status build(std::vector<uint64_t>* blob, size_t* bytes, MapBuildStats* stats, const Progress& progress = nullptr);
+
+ private:
+  struct Accum {
+    double sum[3] = {0, 0, 0};
+    double prob[kNumClasses] = {};
+    uint64_t count = 0;
+  };
+  LocalizerConfig config_;
+  float refine_voxel_;
+  float road_length_ = 0.0f;
+  MapBuildStats stats_;
+  std::unordered_map<uint64_t, Accum> voxels_;
+  std::vector<uint8_t> scan_arena_;
+};
+
+}  // namespace gsf::mapping

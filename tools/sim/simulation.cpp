@@ -1,0 +1,156 @@
+#include "sim/simulation.h"
+
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+
+#include "gsf/bounded_hash_map.h"
+#include "gsf/port/semantic_kitti.h"
+#include "gsf/rng.h"
+
+namespace gsf::sim {
+namespace {
+
+Eigen::Isometry3d make_pose(float x, float y, float z, double yaw, double roll = 0, double pitch = 0) {
+  Eigen::Isometry3d t = Eigen::Isometry3d::Identity();
+  t.linear() = (Eigen::AngleAxisd(yaw, Eigen::Vector3d::UnitZ()) * Eigen::AngleAxisd(pitch, Eigen::Vector3d::UnitY()) *
+                Eigen::AngleAxisd(roll, Eigen::Vector3d::UnitX()))
+                   .toRotationMatrix();
+  t.translation() = Eigen::Vector3d(x, y, z);
+  return t;
+}
+
+}  // namespace
+
+SimConfig SimConfig::demo() {
+  SimConfig c;
+  c.world.seed = 2024;
+  c.world.blocks_x = 4;
+  c.world.blocks_y = 3;
+  c.world.block_size = 100.0f;
+  c.world.zone_length = 300.0f;
+  c.time_gap.seed = 7;
+  return c;
+}
+
+SimConfig SimConfig::tiny() {
+  SimConfig c;
+  c.world.seed = 11;
+  c.world.blocks_x = 2;
+  c.world.blocks_y = 1;
+  c.world.block_size = 80.0f;
+  c.world.zone_length = 100.0f;
+  c.world.zone_margin = 40.0f;
+  c.lidar.beams = 24;
+  c.lidar.azimuth_step_deg = 0.6f;
+  c.lidar.max_range = 60.0f;
+  c.map_spacing = 10.0f;
+  c.query_spacing = 30.0f;
+  c.time_gap.seed = 5;
+  return c;
+}
+
+uint64_t scan_seed(uint64_t seed, int sequence, uint32_t frame) {
+  return gsf::mix64(seed * 1000003u + uint64_t(sequence) * 7919u + frame);
+}
+
+Drive mapping_drive(const World& w, const SimConfig& c) {
+  Drive d;
+  const float lane = w.params.road_width / 4;
+  for (const RoadSegment& r : w.roads) {
+    const float len = std::fabs(r.x1 - r.x0) + std::fabs(r.y1 - r.y0);
+    const float dx = (r.x1 - r.x0) / len, dy = (r.y1 - r.y0) / len;
+    const double yaw = std::atan2(dy, dx);
+    for (float s = 0.0f; s <= len; s += c.map_spacing) {
+      const float x = r.x0 + s * dx + lane * dy, y = r.y0 + s * dy - lane * dx;  // right-hand lane
+      d.poses.push_back(make_pose(x, y, c.sensor_height, yaw));
+      d.in_zone.push_back(w.in_zone(x, y));
+    }
+  }
+  return d;
+}
+
+Drive query_drive(const World& w, const SimConfig& c) {
+  Drive d;
+  gsf::Rng rng(w.params.seed ^ 0xABCDEF12345ULL);
+  const float lane = w.params.road_width / 4;
+  const double deg = M_PI / 180.0;
+  int segment = 0;
+  for (const RoadSegment& r : w.roads) {
+    const float len = std::fabs(r.x1 - r.x0) + std::fabs(r.y1 - r.y0);
+    const float dx = (r.x1 - r.x0) / len, dy = (r.y1 - r.y0) / len;
+    // Alternate: opposite direction in the other lane, or the same direction in the other lane.
+    const bool reverse = (segment++ % 2) == 0 || r.in_zone;
+    const float spacing = r.in_zone ? c.query_spacing / 2 : c.query_spacing;
+    for (float s = spacing * 0.37f; s <= len; s += spacing) {
+      // Reverse: the left lane of the mapping direction. Same direction: the road centre line, half a
+      // lane from the mapping lane.
+      const float side = reverse ? lane : 0.0f;
+      float x = r.x0 + s * dx - side * dy, y = r.y0 + s * dy + side * dx;
+      x += c.pose_noise_xy * (2 * rng.uniform01() - 1) * std::fabs(dy);
+      y += c.pose_noise_xy * (2 * rng.uniform01() - 1) * std::fabs(dx);
+      const double yaw = std::atan2(reverse ? -dy : dy, reverse ? -dx : dx) + c.pose_noise_yaw_deg * deg * (2 * rng.uniform01() - 1);
+      const double roll = c.pose_noise_tilt_deg * deg * (2 * rng.uniform01() - 1);
+      const double pitch = c.pose_noise_tilt_deg * deg * (2 * rng.uniform01() - 1);
+      d.poses.push_back(make_pose(x, y, c.sensor_height, yaw, roll, pitch));
+      d.in_zone.push_back(w.in_zone(x, y));
+    }
+  }
+  return d;
+}
+
+Status run_simulation(const SimConfig& c, const std::string& root, SimSummary* summary, const SimProgress& progress) {
+  SimSummary sum;
+  const World world = generate_world(c.world);
+  const World later = apply_time_gap(world, c.time_gap);
+  const Drive map = mapping_drive(world, c);
+  const Drive queries = query_drive(world, c);
+  sum.road_length_m = world.road_length();
+  const Raycaster cast_map(world), cast_query(later);
+  SimScan scan;
+  const Drive* drives[2] = {&map, &queries};
+  const Raycaster* casters[2] = {&cast_map, &cast_query};
+  for (int seq = 0; seq < 2; ++seq) {
+    gsf::port::SemanticKittiWriter writer;
+    Status s = writer.open(root, seq == 0 ? "00" : "01");
+    if (s != Status::Ok) return s;
+    const Drive& d = *drives[seq];
+    for (uint32_t f = 0; f < d.poses.size(); ++f) {
+      casters[seq]->scan(d.poses[f], c.lidar, scan_seed(c.world.seed, seq, f), &scan);
+      s = writer.write_scan(f, scan.xyzi.data(), scan.labels.data(), nullptr, scan.size());
+      if (s != Status::Ok) return s;
+      sum.points += scan.size();
+      if (progress) progress(seq == 0 ? "mapping drive" : "query drive", f + 1, static_cast<uint32_t>(d.poses.size()));
+    }
+    s = writer.write_poses(d.poses);
+    if (s != Status::Ok) return s;
+  }
+  sum.map_scans = static_cast<uint32_t>(map.poses.size());
+  sum.queries = static_cast<uint32_t>(queries.poses.size());
+  for (bool z : queries.in_zone) sum.zone_queries += z ? 1u : 0u;
+  // meta.json
+  std::ofstream meta(std::filesystem::path(root) / "meta.json", std::ios::trunc);
+  meta << "{\n  \"generator\": \"gsf simulate\",\n  \"seed\": " << c.world.seed << ",\n";
+  meta << "  \"world\": {\"blocks_x\": " << c.world.blocks_x << ", \"blocks_y\": " << c.world.blocks_y
+       << ", \"block_size\": " << c.world.block_size << ", \"road_width\": " << c.world.road_width
+       << ", \"repetitive_zone\": " << (c.world.repetitive_zone ? "true" : "false") << ", \"zone_length\": "
+       << c.world.zone_length << ", \"zone_period\": " << c.world.zone_period << "},\n";
+  meta << "  \"lidar\": {\"beams\": " << c.lidar.beams << ", \"elevation_min_deg\": " << c.lidar.elevation_min_deg
+       << ", \"elevation_max_deg\": " << c.lidar.elevation_max_deg << ", \"azimuth_step_deg\": " << c.lidar.azimuth_step_deg
+       << ", \"max_range\": " << c.lidar.max_range << ", \"range_noise\": " << c.lidar.range_noise
+       << ", \"dropout\": " << c.lidar.dropout << "},\n";
+  meta << "  \"time_gap\": {\"seed\": " << c.time_gap.seed << ", \"cars_removed\": " << c.time_gap.cars_removed
+       << ", \"cars_moved\": " << c.time_gap.cars_moved << ", \"vegetation_change\": " << c.time_gap.vegetation_change
+       << ", \"bushes_cut\": " << c.time_gap.bushes_cut << "},\n";
+  meta << "  \"road_length_m\": " << sum.road_length_m << ",\n  \"map_sequence\": \"00\",\n  \"query_sequence\": \"01\",\n";
+  meta << "  \"map_scans\": " << sum.map_scans << ",\n  \"queries\": " << sum.queries << ",\n";
+  meta << "  \"query_in_repetitive_zone\": [";
+  for (size_t i = 0; i < queries.in_zone.size(); ++i) meta << (i ? "," : "") << (queries.in_zone[i] ? 1 : 0);
+  meta << "]\n}\n";
+  if (!meta) return Status::IoError;
+  if (summary) *summary = sum;
+  return Status::Ok;
+}
+
+}  // namespace gsf::sim
