@@ -1,0 +1,88 @@
+// Test fixture: the simulator's tiny world (mapping + query drive), its map built in memory, and the
+// query scans with synthetic logits. Built once per test process.
+#pragma once
+#include <cstdint>
+#include <vector>
+
+#include "gsf/config.h"
+#include "gsf/map_format.h"
+#include "gsf/port/logit_synthesis.h"
+#include "mapping/map_builder.h"
+#include "sim/simulation.h"
+
+namespace gsf_test {
+
+struct QueryScan {
+  std::vector<float> xyzi;
+  std::vector<uint32_t> labels;
+  std::vector<float> logits;
+  Eigen::Isometry3d truth;
+  bool in_zone = false;
+  gsf::ScanView view() const {
+    gsf::ScanView v;
+    v.points = xyzi.data();
+    v.labels = labels.data();
+    v.logits = logits.data();
+    v.logit_dim = gsf::kNumClasses;
+    v.count = static_cast<uint32_t>(labels.size());
+    return v;
+  }
+};
+
+struct TinyWorld {
+  gsf::LocalizerConfig config;
+  std::vector<uint64_t> blob;
+  size_t bytes = 0;
+  gsf::MapView map;
+  std::vector<QueryScan> queries;
+};
+
+inline void make_scan(const gsf::sim::Raycaster& rc, const gsf::sim::SimConfig& sc, const Eigen::Isometry3d& pose,
+                      uint64_t seed, uint64_t scan_id, QueryScan* out) {
+  gsf::sim::SimScan s;
+  rc.scan(pose, sc.lidar, seed, &s);
+  out->xyzi = s.xyzi;
+  out->labels = s.labels;
+  out->logits.assign(s.labels.size() * gsf::kNumClasses, 0.0f);
+  gsf::port::LogitModel model;
+  gsf::port::synthesize_logits(model, scan_id, out->labels.data(), s.size(), out->logits.data(), out->labels.data());
+  out->truth = pose;
+}
+
+inline const TinyWorld& tiny_world() {
+  static TinyWorld* w = [] {
+    auto* t = new TinyWorld();
+    t->config.max_scan_points = 262144;
+    const gsf::sim::SimConfig sc = gsf::sim::SimConfig::tiny();
+    const gsf::sim::World world = gsf::sim::generate_world(sc.world);
+    const gsf::sim::World later = gsf::sim::apply_time_gap(world, sc.time_gap);
+    const gsf::sim::Raycaster map_rc(world), query_rc(later);
+    const gsf::sim::Drive md = gsf::sim::mapping_drive(world, sc);
+    const gsf::sim::Drive qd = gsf::sim::query_drive(world, sc);
+    gsf::mapping::MapBuilder builder(t->config);
+    for (uint32_t f = 0; f < md.poses.size(); ++f) {
+      QueryScan s;
+      make_scan(map_rc, sc, md.poses[f], gsf::sim::scan_seed(sc.world.seed, 0, f), 1000000u + f, &s);
+      builder.add_scan(s.view(), md.poses[f]);
+    }
+    builder.set_road_length(world.road_length());
+    gsf::mapping::MapBuildStats st;
+    builder.build(&t->blob, &t->bytes, &st);
+    gsf::load_map(t->blob.data(), t->bytes, &t->map);
+    for (uint32_t f = 0; f < qd.poses.size(); ++f) {
+      QueryScan s;
+      make_scan(query_rc, sc, qd.poses[f], gsf::sim::scan_seed(sc.world.seed, 1, f), 2000000u + f, &s);
+      s.in_zone = qd.in_zone[f];
+      t->queries.push_back(std::move(s));
+    }
+    return t;
+  }();
+  return *w;
+}
+
+inline bool pose_ok(const Eigen::Isometry3d& est, const Eigen::Isometry3d& truth) {
+  const Eigen::Isometry3d d = est.inverse() * truth;
+  return d.translation().norm() < 5.0 && Eigen::AngleAxisd(d.rotation()).angle() < 10.0 * M_PI / 180.0;
+}
+
+}  // namespace gsf_test

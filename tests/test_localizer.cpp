@@ -1,0 +1,188 @@
+// End to end on the simulator's tiny world: success rates against ground truth, GSF vs instance-only in
+// the repetitive zone, invariance to a rigid transform of the scan, determinism, hostile input.
+#include <catch2/catch.hpp>
+
+#include <cmath>
+#include <cstring>
+#include <limits>
+
+#include "gsf/localizer.h"
+#include "tiny_world.h"
+
+using namespace gsf;
+using gsf_test::tiny_world;
+
+namespace {
+struct Workspace {
+  std::vector<uint64_t> words;
+  explicit Workspace(const LocalizerConfig& c) : words(Localizer::required_bytes(c) / 8 + 2) {}
+  void* data() { return words.data(); }
+  size_t bytes() const { return words.size() * 8; }
+};
+}  // namespace
+
+TEST_CASE("The tiny world's map loads and holds instances, fields and triangles") {
+  const auto& w = tiny_world();
+  REQUIRE(w.map.counts.instances > 50);
+  CHECK(w.map.counts.triangles > 500);
+  CHECK(w.map.counts.road_length_m > 500);
+  CHECK(w.queries.size() >= 20);
+}
+
+TEST_CASE("GSF localizes most queries and beats instance-only in the repetitive zone") {
+  const auto& w = tiny_world();
+  LocalizerConfig cfg = w.config;
+  Workspace ws(cfg);
+  Localizer loc;
+  REQUIRE(loc.init(cfg, w.map, ws.data(), ws.bytes()) == Status::Ok);
+  int ok_gsf = 0, ok_inst = 0, zone = 0, zone_gsf = 0, zone_inst = 0, confident = 0, confident_right = 0;
+  for (const auto& q : w.queries) {
+    LocalizeResult r;
+    loc.set_use_gsf(true);
+    loc.localize(q.view(), &r);
+    const bool g = r.status == Status::Ok && gsf_test::pose_ok(r.map_T_scan, q.truth);
+    if (r.status == Status::Ok && r.ambiguity <= 0.5) {  // the evaluation's default answering threshold
+      ++confident;
+      confident_right += g;
+    }
+    loc.set_use_gsf(false);
+    loc.localize(q.view(), &r);
+    const bool i = r.status == Status::Ok && gsf_test::pose_ok(r.map_T_scan, q.truth);
+    ok_gsf += g;
+    ok_inst += i;
+    if (q.in_zone) {
+      ++zone;
+      zone_gsf += g;
+      zone_inst += i;
+    }
+  }
+  const int n = static_cast<int>(w.queries.size());
+  INFO("GSF " << ok_gsf << "/" << n << " (zone " << zone_gsf << "/" << zone << "), instance-only " << ok_inst << "/" << n
+              << " (zone " << zone_inst << "/" << zone << ")");
+  CHECK(ok_gsf >= n * 6 / 10);
+  CHECK(zone >= 4);
+  CHECK(zone_gsf >= zone * 3 / 4);
+  CHECK(zone_gsf > zone_inst);
+  CHECK(ok_gsf > ok_inst);
+  // Declining works: answers below the ambiguity threshold are right at least 90% of the time.
+  CHECK(confident >= n / 3);
+  CHECK(confident_right * 10 >= confident * 9);
+}
+
+TEST_CASE("A rigidly transformed scan gives the correspondingly transformed pose") {
+  const auto& w = tiny_world();
+  Workspace ws(w.config);
+  Localizer loc;
+  REQUIRE(loc.init(w.config, w.map, ws.data(), ws.bytes()) == Status::Ok);
+  int checked = 0;
+  for (size_t k = 0; k < w.queries.size() && checked < 3; ++k) {
+    const auto& q = w.queries[k];
+    LocalizeResult r1;
+    // Well-constrained queries only: with few inliers an unrefined pose carries degrees of error.
+    if (loc.localize(q.view(), &r1) != Status::Ok || !gsf_test::pose_ok(r1.map_T_scan, q.truth) || r1.inliers < 7) continue;
+    // Points p' = S p: the same place seen by a sensor moved by S^-1, so the pose becomes T S^-1.
+    Eigen::Isometry3d S = Eigen::Isometry3d::Identity();
+    S.linear() = Eigen::AngleAxisd(0.8, Eigen::Vector3d::UnitZ()).toRotationMatrix();
+    S.translation() = Eigen::Vector3d(3.0, -2.0, 0.0);
+    gsf_test::QueryScan moved = q;
+    for (size_t i = 0; i < q.labels.size(); ++i) {
+      const Eigen::Vector3d p = S * Eigen::Vector3d(q.xyzi[4 * i], q.xyzi[4 * i + 1], q.xyzi[4 * i + 2]);
+      for (int d = 0; d < 3; ++d) moved.xyzi[4 * i + d] = static_cast<float>(p[d]);
+    }
+    LocalizeResult r2;
+    REQUIRE(loc.localize(moved.view(), &r2) == Status::Ok);
+    const Eigen::Isometry3d expected = r1.map_T_scan * S.inverse();
+    INFO("query " << k << " inliers " << r1.inliers << " / " << r2.inliers);
+    CHECK((r2.map_T_scan.translation() - expected.translation()).norm() < 1.5);
+    CHECK(Eigen::AngleAxisd(r2.map_T_scan.rotation().transpose() * expected.rotation()).angle() < 5.0 * M_PI / 180.0);
+    CHECK(gsf_test::pose_ok(r2.map_T_scan, q.truth * S.inverse()));
+    ++checked;
+  }
+  CHECK(checked == 3);
+}
+
+TEST_CASE("Same scan and map give bit-identical results") {
+  const auto& w = tiny_world();
+  Workspace a(w.config), b(w.config);
+  Localizer la, lb;
+  REQUIRE(la.init(w.config, w.map, a.data(), a.bytes()) == Status::Ok);
+  REQUIRE(lb.init(w.config, w.map, b.data(), b.bytes()) == Status::Ok);
+  for (size_t k = 0; k < w.queries.size(); k += 3) {
+    LocalizeResult r1, r2, r3;
+    la.localize(w.queries[k].view(), &r1);
+    lb.localize(w.queries[k].view(), &r2);
+    la.localize(w.queries[k].view(), &r3);  // again, after other work on the same localizer
+    CHECK(r1.status == r2.status);
+    CHECK(std::memcmp(r1.map_T_scan.data(), r2.map_T_scan.data(), sizeof(double) * 16) == 0);
+    CHECK(std::memcmp(r1.map_T_scan.data(), r3.map_T_scan.data(), sizeof(double) * 16) == 0);
+    CHECK(r1.inliers == r3.inliers);
+    CHECK(r1.ambiguity == r3.ambiguity);
+  }
+}
+
+TEST_CASE("Hostile input gets a status and the localizer stays usable") {
+  const auto& w = tiny_world();
+  LocalizerConfig cfg = w.config;
+  cfg.max_scan_points = 50000;
+  Workspace ws(cfg);
+  Localizer loc;
+  LocalizeResult r;
+  CHECK(loc.localize(w.queries[0].view(), &r) == Status::NotInitialized);
+  REQUIRE(loc.init(cfg, w.map, ws.data(), ws.bytes()) == Status::Ok);
+  ScanView empty;
+  CHECK(loc.localize(empty, &r) == Status::InvalidInput);
+  gsf_test::QueryScan nan_scan = w.queries[0];
+  for (float& x : nan_scan.xyzi) x = std::numeric_limits<float>::quiet_NaN();
+  CHECK(loc.localize(nan_scan.view(), &r) == Status::InvalidInput);
+  gsf_test::QueryScan huge = w.queries[0];
+  for (float& x : huge.xyzi) x = 1e30f;
+  CHECK(loc.localize(huge.view(), &r) == Status::InvalidInput);
+  gsf_test::QueryScan one_voxel = w.queries[0];
+  for (size_t i = 0; i < one_voxel.labels.size(); ++i) {
+    one_voxel.xyzi[4 * i] = 5.0f; one_voxel.xyzi[4 * i + 1] = 5.0f; one_voxel.xyzi[4 * i + 2] = 0.1f;
+    one_voxel.labels[i] = 80;
+  }
+  CHECK(loc.localize(one_voxel.view(), &r) == Status::NoSolution);
+  gsf_test::QueryScan unknown = w.queries[0];
+  for (auto& l : unknown.labels) l = 777;
+  CHECK(loc.localize(unknown.view(), &r) == Status::InvalidInput);
+  gsf_test::QueryScan big;
+  big.xyzi.assign(60000 * 4, 1.0f);
+  big.labels.assign(60000, 40);
+  big.logits.assign(60000 * kNumClasses, 0.0f);
+  CHECK(loc.localize(big.view(), &r) == Status::CapacityExceeded);
+  ScanView bad_logits = w.queries[0].view();
+  bad_logits.logit_dim = 7;
+  CHECK(loc.localize(bad_logits, &r) == Status::InvalidArgument);
+  // Still works afterwards.
+  int good = 0;
+  for (size_t k = 0; k < 6; ++k)
+    good += loc.localize(w.queries[k].view(), &r) == Status::Ok && gsf_test::pose_ok(r.map_T_scan, w.queries[k].truth);
+  CHECK(good >= 3);
+}
+
+TEST_CASE("Init rejects a small buffer, a mismatched map and a bad config") {
+  const auto& w = tiny_world();
+  Workspace ws(w.config);
+  Localizer loc;
+  CHECK(loc.init(w.config, w.map, ws.data(), Localizer::required_bytes(w.config) - 1) == Status::BufferTooSmall);
+  CHECK_FALSE(loc.initialized());
+  LocalizerConfig other = w.config;
+  other.field.length_scale *= 2;
+  Workspace ws2(other);
+  CHECK(loc.init(other, w.map, ws2.data(), ws2.bytes()) == Status::ConfigMismatch);
+  LocalizerConfig bad = w.config;
+  bad.match.max_correspondences = 1;
+  CHECK(loc.init(bad, w.map, ws.data(), ws.bytes()) == Status::InvalidArgument);
+  CHECK(Localizer::required_bytes(bad) == 0);
+  // A map with zero instances: init fine, every scan NoSolution.
+  MapView empty_map = w.map;
+  empty_map.counts.instances = 0;
+  empty_map.counts.triangles = 0;
+  empty_map.counts.index_keys = 0;
+  static const uint32_t zero_offsets[1] = {0};
+  empty_map.index_offsets = zero_offsets;
+  REQUIRE(loc.init(w.config, empty_map, ws.data(), ws.bytes()) == Status::Ok);
+  LocalizeResult r;
+  CHECK(loc.localize(w.queries[0].view(), &r) == Status::NoSolution);
+}
