@@ -10,6 +10,7 @@
 #include "gsf/instance_clustering.h"
 #include "gsf/max_clique.h"
 #include "gsf/pose_solver.h"
+#include "gsf/refine.h"
 #include "gsf/triangle.h"
 #include "gsf/triangle_index.h"
 #include "gsf/voxel_layer.h"
@@ -36,6 +37,7 @@ struct Localizer::Impl {
   FixedVector<Triangle> triangles;
   FixedVector<TriangleMatch> matches;
   MaxCliqueSolver clique_solver;
+  Refiner refiner;
   ConsistencyGraph graph;
   FixedVector<uint32_t> clique;
   BoundedHashMap<uint32_t> probe_slot;   // (query instance, yaw bin) -> cache slot
@@ -120,8 +122,51 @@ static Status bind_workspace(Arena& ar, const LocalizerConfig& config, Localizer
   im.tls_weights = ar.allocate<float>(C);
   im.mask = ar.allocate<uint8_t>(C);
   im.in_clique = ar.allocate<uint8_t>(C);
+  if (config.refine.enabled && im.refiner.bind(ar, config.refine) != Status::Ok) return Status::InvalidArgument;
   if (ar.overflowed()) return Status::BufferTooSmall;
   return Status::Ok;
+}
+
+Localizer::Budget Localizer::budget(const LocalizerConfig& c) {
+  Budget b{};
+  if (validate(c) != Status::Ok) return b;
+  const uint32_t I = c.cluster.max_instances, M = c.field.inducing_points, G = grid_points(c.field);
+  const uint32_t C = c.match.max_correspondences, P = c.match.max_field_points;
+  const uint32_t corr_cap = c.match.max_triangle_matches < 65536 ? c.match.max_triangle_matches : 65536;
+  auto bytes = [](auto&& bind) { Arena a; bind(a); return a.used(); };
+  b.voxel = VoxelLayer::required_bytes(c.voxel);
+  b.cluster = InstanceClustering::required_bytes(c.cluster, c.voxel.max_voxels);
+  b.field = FieldSolver::required_bytes(c.field, P) + bytes([&](Arena& a) {
+    a.allocate<float>(size_t(I) * M * 3); a.allocate<float>(size_t(I) * M * kNumClasses);
+    a.allocate<float>(size_t(I) * M * M); a.allocate<uint32_t>(I); a.allocate<uint32_t>(P);
+    a.allocate<float>(size_t(P) * 3); a.allocate<float>(size_t(P) * kNumClasses); a.allocate<uint8_t>(P);
+  });
+  b.triangle = TriangleBuilder::required_bytes(c.triangle, I) + bytes([&](Arena& a) {
+    FixedVector<Triangle> t; t.bind(a, c.triangle.max_triangles);
+    a.allocate<float>(size_t(I) * 3); a.allocate<uint8_t>(I);
+  });
+  b.match = bytes([&](Arena& a) { FixedVector<TriangleMatch> m; m.bind(a, c.match.max_triangle_matches); });
+  b.gsf_cache = bytes([&](Arena& a) {
+    BoundedHashMap<uint32_t> p; p.bind(a, c.match.probe_cache_slots);
+    BoundedHashMap<float> s; s.bind(a, c.match.similarity_cache_slots);
+    a.allocate<float>(size_t(G) * 3);
+    a.allocate<float>(size_t(c.match.probe_cache_slots + 1) * G * kNumClasses);
+    a.allocate<float>(size_t(c.match.probe_cache_slots + 1) * G);
+  });
+  b.correspondence = bytes([&](Arena& a) {
+    BoundedHashMap<uint32_t> h; h.bind(a, corr_cap);
+    a.allocate<CorrespondenceAcc>(corr_cap); a.allocate<uint32_t>(corr_cap);
+    for (int k = 0; k < 4; ++k) a.allocate<float>(size_t(C) * 3);
+    for (int k = 0; k < 3; ++k) a.allocate<float>(C);
+    a.allocate<uint8_t>(C); a.allocate<uint8_t>(C);
+  });
+  b.clique = MaxCliqueSolver::required_bytes(C) + ConsistencyGraph::required_bytes(C) +
+             bytes([&](Arena& a) { FixedVector<uint32_t> v; v.bind(a, C); });
+  b.refine = c.refine.enabled ? Refiner::required_bytes(c.refine) : 0;
+  b.total = required_bytes(c);
+  const size_t parts = b.voxel + b.cluster + b.field + b.triangle + b.match + b.gsf_cache + b.correspondence + b.clique + b.refine;
+  b.other = b.total > parts ? b.total - parts : 0;  // Impl object and alignment padding
+  return b;
 }
 
 size_t Localizer::required_bytes(const LocalizerConfig& config) {
@@ -152,6 +197,11 @@ Status Localizer::init(const LocalizerConfig& config, const MapView& map, void* 
   Impl& im = *new (mem) Impl();
   s = bind_workspace(arena_, config, im);
   if (s != Status::Ok) return s;
+  if (config.refine.enabled) {
+    if (map.counts.refine_points > config.refine.max_map_points) return Status::CapacityExceeded;
+    s = im.refiner.set_map(map.refine_points, map.counts.refine_points);
+    if (s != Status::Ok) return s;
+  }
   stability_weights(im.weights);
   im.index.keys = map.index_keys;
   im.index.offsets = map.index_offsets;
@@ -344,6 +394,8 @@ Status Localizer::localize(const ScanView& scan, LocalizeResult* out_ptr) {
     }
   }
   out.gsf_survivors = survivors;
+  out.field_probes = im.probe_used;
+  out.field_comparisons = im.similarity.size();
   lap(&out.times.gsf);
 
   // 7. Keep the best-supported correspondences (votes x weight) up to the clique capacity.
@@ -421,6 +473,17 @@ Status Localizer::localize(const ScanView& scan, LocalizeResult* out_ptr) {
   }
   out.ambiguity = best_score > 0 ? std::min(1.0, second / best_score) : 1.0;
   lap(&out.times.pose);
+
+  // 11. Optional refinement against the map's point layer.
+  if (cfg.refine.enabled && map_.counts.refine_points > 0) {
+    Eigen::Isometry3d refined;
+    RefineStats rs;
+    if (im.refiner.refine(im.voxels, out.map_T_scan, &refined, &rs) == Status::Ok && rs.accepted) {
+      out.map_T_scan = refined;
+      out.refined = true;
+    }
+    lap(&out.times.refine);
+  }
   return finish(Status::Ok);
 }
 

@@ -70,11 +70,11 @@ int cmd_demo(int argc, char** argv) {
   std::printf("      %u instances, %u triangles, %zu bytes (%.2f MB/km)  [%.0f s]\n", st.instances, st.triangles, bytes,
               bytes / 1e6 / (sum.road_length_m / 1000.0), elapsed());
 
-  std::printf("[3/3] evaluating sequence 01: instance-only (GSF off, Outram), GSF on, Scan Context peer\n");
+  std::printf("[3/3] evaluating sequence 01: instance-only (GSF off, Outram), GSF on, GSF + refinement, Scan Context peer\n");
   EvalOptions o;
   o.map_path = map_path;
   o.dataset = dataset;
-  o.modes = {"instance", "gsf", "scan-context"};
+  o.modes = {"instance", "gsf", "gsf+refine", "scan-context"};
   o.json_out = out + "/results.json";
   o.svg_dir = out;
   o.progress = !quiet;

@@ -14,8 +14,8 @@ bool parse_modes(const std::string& s, std::vector<std::string>* modes) {
   std::string m;
   while (std::getline(ss, m, ',')) {
     if (m == "all") {
-      for (const char* x : {"instance", "gsf", "scan-context"}) modes->push_back(x);
-    } else if (m == "instance" || m == "gsf" || m == "scan-context") {
+      for (const char* x : {"instance", "gsf", "gsf+refine", "scan-context"}) modes->push_back(x);
+    } else if (m == "instance" || m == "gsf" || m == "gsf+refine" || m == "scan-context") {
       modes->push_back(m);
     } else {
       return false;
@@ -30,7 +30,7 @@ int cmd_evaluate(int argc, char** argv) {
       {"dataset", "dataset root with the query sequence", "", false, true},
       {"sequence", "query sequence", "01"},
       {"map-sequence", "mapping sequence (Scan Context peer database)", "00"},
-      {"mode", "comma list of instance (GSF off, Outram), gsf, scan-context, or all", "all"},
+      {"mode", "comma list of instance (GSF off, Outram), gsf, gsf+refine, scan-context, or all", "all"},
       {"json", "write per-mode summaries and per-query results here", ""},
       {"svg", "directory for the pictures (map + trajectory, correspondences)", ""},
       {"logits", "synthetic or none (see build-map)", "synthetic"},

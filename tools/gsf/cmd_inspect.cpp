@@ -4,7 +4,9 @@
 
 #include "args.h"
 #include "commands.h"
+#include "gsf/localizer.h"
 #include "gsf/map_format.h"
+#include "pipeline.h"
 #include "gsf/semantic_classes.h"
 #include "json_writer.h"
 
@@ -77,6 +79,21 @@ int cmd_inspect(int argc, char** argv) {
               map.params.field_radius);
   std::printf("  triangles       K=%u, sides [%.1f, %.1f] m, bin %.2f m\n", map.params.triangle_neighbours,
               map.params.min_side, map.params.max_side, map.params.side_bin);
+  // Workspace budget of a localizer with the default config (refinement on and off).
+  LocalizerConfig cfg = default_config();
+  cfg.refine.enabled = true;
+  const Localizer::Budget b = Localizer::budget(cfg);
+  const Status fits = check_map_params(cfg, map.params);
+  std::printf("localizer workspace with the default config (%s for this map):\n", fits == Status::Ok ? "matches" : "DOES NOT match");
+  const struct { const char* name; size_t bytes; } rows[] = {
+      {"voxel layer", b.voxel}, {"instances", b.cluster}, {"query fields", b.field}, {"triangles", b.triangle},
+      {"index matches", b.match}, {"GSF probe cache", b.gsf_cache}, {"correspondences", b.correspondence},
+      {"max clique", b.clique}, {"refinement", b.refine}, {"other", b.other}};
+  for (const auto& r : rows) std::printf("    %-18s %10.2f MB\n", r.name, r.bytes / 1e6);
+  std::printf("    %-18s %10.2f MB  (%.2f MB without refinement)\n", "total", b.total / 1e6, (b.total - b.refine) / 1e6);
+  if (map.counts.refine_points > cfg.refine.max_map_points)
+    std::printf("    note: the map's %u refine points exceed refine.max_map_points %u\n", map.counts.refine_points,
+                cfg.refine.max_map_points);
   return 0;
 }
 

@@ -73,6 +73,7 @@ void write_json(const std::string& path, const EvalOptions& o, const MapView& ma
     j.field("gsf", s.median_stage.gsf);
     j.field("clique", s.median_stage.clique);
     j.field("pose", s.median_stage.pose);
+    j.field("refine", s.median_stage.refine);
     j.end_object();
     j.field("ambiguity_threshold", s.default_threshold);
     j.field("precision_at_threshold", s.precision_at_default);
@@ -198,14 +199,15 @@ int run_evaluation(const EvalOptions& o) {
   for (const std::string& mode : o.modes) {
     ModeRun run;
     run.mode = mode;
-    if (mode == "instance" || mode == "gsf") {
+    if (mode == "instance" || mode == "gsf" || mode == "gsf+refine") {
       LocalizerConfig cfg = default_config();
       std::string oerr;
       if (!apply_overrides(&cfg, o.overrides, &oerr)) {
         std::fprintf(stderr, "gsf evaluate: %s\n", oerr.c_str());
         return 2;
       }
-      cfg.match.use_gsf = mode == "gsf";
+      cfg.match.use_gsf = mode != "instance";
+      cfg.refine.enabled = mode == "gsf+refine";
       const size_t need = Localizer::required_bytes(cfg);
       std::vector<uint64_t> workspace(need / 8 + 2);
       Localizer loc;
@@ -236,7 +238,7 @@ int run_evaluation(const EvalOptions& o) {
         r.inliers = res.inliers;
         r.time_ms = ms(res.times.total);
         r.stages = StageMs{ms(res.times.voxel), ms(res.times.cluster), ms(res.times.field), ms(res.times.triangle),
-                           ms(res.times.match), ms(res.times.gsf), ms(res.times.clique), ms(res.times.pose), 0};
+                           ms(res.times.match), ms(res.times.gsf), ms(res.times.clique), ms(res.times.pose), ms(res.times.refine)};
         if (r.answered) {
           r.error = pose_error(r.estimate, r.truth);
           r.success = r.error.translation_m < kSuccessTranslation && r.error.rotation_deg < kSuccessRotationDeg;
@@ -318,9 +320,9 @@ int run_evaluation(const EvalOptions& o) {
   for (const auto& x : sums)
     if (x.mode != "scan-context")
       std::printf("  %s median stage ms: voxel %.1f  cluster %.1f  field %.1f  triangle %.1f  match %.1f  gsf %.1f  "
-                  "clique %.1f  pose %.1f\n", x.mode.c_str(), x.median_stage.voxel, x.median_stage.cluster,
+                  "clique %.1f  pose %.1f  refine %.1f\n", x.mode.c_str(), x.median_stage.voxel, x.median_stage.cluster,
                   x.median_stage.field, x.median_stage.triangle, x.median_stage.match, x.median_stage.gsf,
-                  x.median_stage.clique, x.median_stage.pose);
+                  x.median_stage.clique, x.median_stage.pose, x.median_stage.refine);
   std::printf("  (prec@thr / answered: precision and share answered when declining queries with ambiguity > %.2f)\n",
               o.threshold);
   if (!o.json_out.empty()) write_json(o.json_out, o, map, runs, sums);

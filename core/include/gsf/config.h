@@ -7,6 +7,7 @@
 #include "gsf/gaussian_field.h"
 #include "gsf/instance_clustering.h"
 #include "gsf/map_format.h"
+#include "gsf/refine.h"
 #include "gsf/status.h"
 #include "gsf/triangle.h"
 #include "gsf/voxel_layer.h"
@@ -54,6 +55,7 @@ struct LocalizerConfig {
   MatchConfig match;
   CliqueConfig clique;
   PoseConfig pose;
+  RefineConfig refine;  // off by default (the "gsf+refine" evaluation row turns it on)
 };
 
 Status validate(const LocalizerConfig& config);

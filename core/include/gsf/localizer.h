@@ -18,7 +18,7 @@
 namespace gsf {
 
 struct StageTimes {  // nanoseconds from the Clock given at init (all zero without one)
-  uint64_t voxel = 0, cluster = 0, field = 0, triangle = 0, match = 0, gsf = 0, clique = 0, pose = 0, total = 0;
+  uint64_t voxel = 0, cluster = 0, field = 0, triangle = 0, match = 0, gsf = 0, clique = 0, pose = 0, refine = 0, total = 0;
 };
 
 struct LocalizeResult {
@@ -32,6 +32,9 @@ struct LocalizeResult {
   double ambiguity = 1.0;
   uint32_t query_instances = 0, query_triangles = 0, triangle_matches = 0, gsf_survivors = 0, correspondences = 0;
   uint64_t clique_nodes = 0;
+  uint32_t field_probes = 0;       // query-field probes computed by the GSF filter (cost driver)
+  uint32_t field_comparisons = 0;  // (query instance, map instance, yaw bin) similarities computed
+  bool refined = false;            // refinement ran and its result was accepted
   bool budget_exhausted = false;   // max clique ran out of nodes; the best clique found is used
   bool capacity_truncated = false; // some stage hit a Config capacity and kept a deterministic subset
   StageTimes times;
@@ -41,6 +44,12 @@ class Localizer {
  public:
   // Bytes of the caller buffer init() needs for this config (independent of the map).
   static size_t required_bytes(const LocalizerConfig& config);
+
+  // The same total broken down by stage (for memory budgets; sums to required_bytes).
+  struct Budget {
+    size_t voxel, cluster, field, triangle, match, gsf_cache, correspondence, clique, refine, other, total;
+  };
+  static Budget budget(const LocalizerConfig& config);
 
   // `map` must stay valid (and its blob unchanged) for the Localizer's lifetime. The map's build
   // parameters must agree with config (field, grid, triangles): otherwise ConfigMismatch.

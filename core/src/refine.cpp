@@ -1,0 +1,171 @@
+#include "gsf/refine.h"
+
+#include <cmath>
+
+#include <Eigen/Cholesky>
+#include <Eigen/Eigenvalues>
+
+#include "gsf/semantic_classes.h"
+
+namespace gsf {
+
+size_t Refiner::required_bytes(const RefineConfig& config) {
+  Arena counting;
+  Refiner r;
+  r.bind(counting, config);
+  return counting.used();
+}
+
+Status Refiner::bind(Arena& arena, const RefineConfig& c) {
+  bound_ = false;
+  if (c.max_points == 0 || c.max_map_points == 0 || c.iterations == 0 || !(c.cell > 0) || !(c.radius_end > 0) ||
+      !(c.radius_start >= c.radius_end) || c.radius_start > c.cell * 1.5f)
+    return Status::InvalidArgument;
+  config_ = c;
+  const bool ok = cells_.bind(arena, c.max_map_points);
+  order_ = arena.allocate<uint32_t>(c.max_map_points);
+  points_ = arena.allocate<float>(size_t(c.max_map_points) * 3);
+  normals_ = arena.allocate<float>(size_t(c.max_map_points) * 3);
+  query_ = arena.allocate<float>(size_t(c.max_points) * 3);
+  n_ = 0;
+  if (arena.counting()) return Status::Ok;
+  if (!ok || !order_ || !points_ || !normals_ || !query_) return Status::BufferTooSmall;
+  bound_ = true;
+  return Status::Ok;
+}
+
+uint64_t Refiner::cell_key(float x, float y, float z) const {
+  const float inv = 1.0f / config_.cell;
+  const int64_t cx = static_cast<int64_t>(std::floor(x * inv)) + (1 << 20);
+  const int64_t cy = static_cast<int64_t>(std::floor(y * inv)) + (1 << 20);
+  const int64_t cz = static_cast<int64_t>(std::floor(z * inv)) + (1 << 20);
+  return (uint64_t(cx & 0x1FFFFF) << 42) | (uint64_t(cy & 0x1FFFFF) << 21) | uint64_t(cz & 0x1FFFFF);
+}
+
+Status Refiner::set_map(const float* pts, uint32_t n) {
+  if (!bound_) return Status::NotInitialized;
+  if (n > config_.max_map_points) return Status::InvalidArgument;
+  n_ = n;
+  cells_.clear();
+  for (uint32_t i = 0; i < n; ++i) {
+    for (int k = 0; k < 3; ++k) points_[3 * i + k] = pts[4 * i + k];
+    Cell* c = cells_.find_or_insert(cell_key(pts[4 * i], pts[4 * i + 1], pts[4 * i + 2]));
+    if (!c) return Status::CapacityExceeded;
+    c->count++;
+  }
+  uint32_t run = 0;
+  cells_.for_each([&](uint64_t, Cell& c) { c.begin = run; run += c.count; c.count = 0; });
+  for (uint32_t i = 0; i < n; ++i) {
+    Cell* c = cells_.find(cell_key(points_[3 * i], points_[3 * i + 1], points_[3 * i + 2]));
+    order_[c->begin + c->count++] = i;
+  }
+  // Normals: PCA of the points in the 27 surrounding cells (smallest eigenvector), if planar enough.
+  for (uint32_t i = 0; i < n; ++i) {
+    const float* p = points_ + 3 * i;
+    Eigen::Vector3d mean = Eigen::Vector3d::Zero();
+    Eigen::Matrix3d cov = Eigen::Matrix3d::Zero();
+    uint32_t m = 0;
+    for (int dx = -1; dx <= 1; ++dx)
+      for (int dy = -1; dy <= 1; ++dy)
+        for (int dz = -1; dz <= 1; ++dz) {
+          const Cell* c = cells_.find(cell_key(p[0] + dx * config_.cell, p[1] + dy * config_.cell, p[2] + dz * config_.cell));
+          if (!c) continue;
+          for (uint32_t k = 0; k < c->count; ++k) {
+            const float* q = points_ + 3 * order_[c->begin + k];
+            const Eigen::Vector3d v(q[0], q[1], q[2]);
+            mean += v;
+            cov += v * v.transpose();
+            ++m;
+          }
+        }
+    normals_[3 * i] = normals_[3 * i + 1] = normals_[3 * i + 2] = 0.0f;
+    if (m < 5) continue;
+    mean /= m;
+    cov = cov / m - mean * mean.transpose();
+    Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig(cov);
+    const Eigen::Vector3d ev = eig.eigenvalues();
+    if (!(ev(0) < 0.3 * ev(1))) continue;  // not planar: no normal, not used
+    const Eigen::Vector3d nrm = eig.eigenvectors().col(0);
+    for (int k = 0; k < 3; ++k) normals_[3 * i + k] = static_cast<float>(nrm[k]);
+  }
+  return Status::Ok;
+}
+
+Status Refiner::refine(const VoxelLayer& layer, const Eigen::Isometry3d& initial, Eigen::Isometry3d* out, RefineStats* st_out) {
+  RefineStats st;
+  *out = initial;
+  if (!bound_) return Status::NotInitialized;
+  if (n_ == 0) return Status::Unsupported;
+  // Query points: long-term voxels, deterministic stride subsample.
+  uint32_t eligible = 0;
+  for (uint32_t i = 0; i < layer.size(); ++i) eligible += stability_weight(layer.voxel(i).label) >= 1.0f;
+  const uint32_t stride = eligible > config_.max_points ? (eligible + config_.max_points - 1) / config_.max_points : 1;
+  uint32_t q = 0, seen = 0;
+  for (uint32_t i = 0; i < layer.size() && q < config_.max_points; ++i) {
+    const Voxel& v = layer.voxel(i);
+    if (stability_weight(v.label) < 1.0f) continue;
+    if (seen++ % stride) continue;
+    for (int k = 0; k < 3; ++k) query_[3 * q + k] = v.centroid[k];
+    ++q;
+  }
+  st.query_points = q;
+  Eigen::Isometry3d t = initial;
+  for (uint32_t it = 0; it < config_.iterations; ++it) {
+    const float frac = config_.iterations > 1 ? float(it) / float(config_.iterations - 1) : 1.0f;
+    const float radius = config_.radius_start + (config_.radius_end - config_.radius_start) * frac;
+    const float r2 = radius * radius;
+    Eigen::Matrix<double, 6, 6> H = Eigen::Matrix<double, 6, 6>::Zero();
+    Eigen::Matrix<double, 6, 1> g = Eigen::Matrix<double, 6, 1>::Zero();
+    uint32_t inl = 0;
+    double err = 0;
+    for (uint32_t i = 0; i < q; ++i) {
+      const Eigen::Vector3d p = t * Eigen::Vector3d(query_[3 * i], query_[3 * i + 1], query_[3 * i + 2]);
+      float best = r2;
+      int32_t nn = -1;
+      for (int dx = -1; dx <= 1; ++dx)
+        for (int dy = -1; dy <= 1; ++dy)
+          for (int dz = -1; dz <= 1; ++dz) {
+            const Cell* c = cells_.find(cell_key(float(p.x()) + dx * config_.cell, float(p.y()) + dy * config_.cell,
+                                                 float(p.z()) + dz * config_.cell));
+            if (!c) continue;
+            for (uint32_t k = 0; k < c->count; ++k) {
+              const uint32_t id = order_[c->begin + k];
+              const float ex = points_[3 * id] - float(p.x()), ey = points_[3 * id + 1] - float(p.y()),
+                          ez = points_[3 * id + 2] - float(p.z());
+              const float d2 = ex * ex + ey * ey + ez * ez;
+              if (d2 < best) { best = d2; nn = static_cast<int32_t>(id); }
+            }
+          }
+      if (nn < 0) continue;
+      const Eigen::Vector3d nrm(normals_[3 * nn], normals_[3 * nn + 1], normals_[3 * nn + 2]);
+      if (nrm.squaredNorm() < 0.5) continue;
+      const Eigen::Vector3d m(points_[3 * nn], points_[3 * nn + 1], points_[3 * nn + 2]);
+      const double r = nrm.dot(p - m);  // point-to-plane residual
+      Eigen::Matrix<double, 6, 1> J;
+      J.head<3>() = p.cross(nrm);      // d r / d (small rotation)
+      J.tail<3>() = nrm;               // d r / d translation
+      H += J * J.transpose();
+      g += J * r;
+      err += r * r;
+      ++inl;
+    }
+    st.iterations = it + 1;
+    st.inliers = inl;
+    st.rmse = inl ? std::sqrt(err / inl) : 0;
+    if (inl < 6) break;
+    const Eigen::Matrix<double, 6, 1> dx = H.ldlt().solve(-g);
+    if (!dx.allFinite()) break;
+    Eigen::Isometry3d step = Eigen::Isometry3d::Identity();
+    const double angle = dx.head<3>().norm();
+    if (angle > 1e-12) step.linear() = Eigen::AngleAxisd(angle, dx.head<3>() / angle).toRotationMatrix();
+    step.translation() = dx.tail<3>();
+    t = step * t;
+  }
+  st.accepted = st.inliers >= config_.min_inliers &&
+                (t.translation() - initial.translation()).norm() <= config_.max_correction;
+  if (st.accepted) *out = t;
+  if (st_out) *st_out = st;
+  return Status::Ok;
+}
+
+}  // namespace gsf
