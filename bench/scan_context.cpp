@@ -25,10 +25,10 @@ ScanContext make_scan_context(const ScanContextConfig& cfg, const float* points,
     cell = std::max(cell, std::max(0.0f, p[2] + cfg.height_offset));
   }
   sc.ring_key.assign(cfg.rings, 0.0f);
-  for (int r = 0; r < cfg.rings; ++r) {
-    int occupied = 0;
-    for (int s = 0; s < cfg.sectors; ++s) occupied += sc.cells[static_cast<size_t>(r) * cfg.sectors + s] > 0;
-    sc.ring_key[r] = static_cast<float>(occupied) / cfg.sectors;
+  for (int r = 0; r < cfg.rings; ++r) {  // ring key: mean cell value of each ring, as in the original
+    float sum = 0.0f;
+    for (int s = 0; s < cfg.sectors; ++s) sum += sc.cells[static_cast<size_t>(r) * cfg.sectors + s];
+    sc.ring_key[r] = sum / cfg.sectors;
   }
   return sc;
 }

@@ -1,7 +1,7 @@
 // Scan Context (G. Kim, A. Kim, IROS 2018) as the place-recognition peer baseline: the LCD family row
 // of the paper's Table II. Written from the published description:
 //   - egocentric polar grid, N_r rings x N_s sectors up to max_range; cell = max point height (+offset),
-//   - ring key = per-ring occupancy ratio (rotation invariant) for candidate retrieval (k nearest),
+//   - ring key = per-ring mean cell value (rotation invariant) for candidate retrieval (k nearest),
 //   - column-shifted cosine distance between descriptors picks the best candidate and its yaw.
 // A query's pose estimate is the retrieved map scan's pose rotated by the recovered yaw, so its
 // translation error is at least the distance between the two scans (as for every LCD method).

@@ -359,15 +359,22 @@ Status Localizer::localize(const ScanView& scan, LocalizeResult* out_ptr) {
     const Triangle& mt = map_.triangles[im.matches[k].map];
     float omega[3] = {1.0f, 1.0f, 1.0f};
     if (cfg.match.use_gsf) {
-      float qa[9], mb[9];
+      // Yaw hypothesis of the match: closed-form 2-D Procrustes over the three centred vertex pairs
+      // (the vehicle is near level; the full 3-D pose comes later from the clique).
+      float qc[2] = {0, 0}, mc[2] = {0, 0};
       for (int v = 0; v < 3; ++v)
-        for (int d = 0; d < 3; ++d) {
-          qa[3 * v + d] = im.centroids[3 * qt.v[v] + d];
-          mb[3 * v + d] = map_.instances[mt.v[v]].centroid[d];
+        for (int d = 0; d < 2; ++d) {
+          qc[d] += im.centroids[3 * qt.v[v] + d] / 3.0f;
+          mc[d] += map_.instances[mt.v[v]].centroid[d] / 3.0f;
         }
-      Eigen::Isometry3d hyp;
-      if (kabsch(qa, mb, nullptr, 3, &hyp) != Status::Ok) continue;
-      const double yaw = std::atan2(hyp.linear()(1, 0), hyp.linear()(0, 0));
+      float dot = 0.0f, cross = 0.0f;
+      for (int v = 0; v < 3; ++v) {
+        const float ax = im.centroids[3 * qt.v[v]] - qc[0], ay = im.centroids[3 * qt.v[v] + 1] - qc[1];
+        const float bx = map_.instances[mt.v[v]].centroid[0] - mc[0], by = map_.instances[mt.v[v]].centroid[1] - mc[1];
+        dot += ax * bx + ay * by;
+        cross += ax * by - ay * bx;
+      }
+      const double yaw = std::atan2(static_cast<double>(cross), static_cast<double>(dot));
       const uint32_t bins = cfg.match.yaw_bins;
       int64_t bin = static_cast<int64_t>(std::llround(yaw / kTwoPi * bins));
       bin = ((bin % bins) + bins) % bins;
@@ -471,7 +478,10 @@ Status Localizer::localize(const ScanView& scan, LocalizeResult* out_ptr) {
     im.clique_solver.solve(im.graph, cfg.clique.second_budget, im.clique, &cs);
     for (uint32_t i = 0; i < im.clique.size(); ++i) second += std::max(im.sub_w[im.clique[i]], 1e-6f);
   }
-  out.ambiguity = best_score > 0 ? std::min(1.0, second / best_score) : 1.0;
+  // Weak support is ambiguity too: an answer resting on k inliers is at least min_inliers / k ambiguous
+  // (a bare-minimum clique with nothing competing is still a guess).
+  const double support = double(cfg.pose.min_inliers) / double(tls.inliers);
+  out.ambiguity = best_score > 0 ? std::min(1.0, std::max(second / best_score, support)) : 1.0;
   lap(&out.times.pose);
 
   // 11. Optional refinement against the map's point layer.

@@ -14,6 +14,7 @@ int cmd_build_map(int argc, char** argv) {
       {"sequence", "mapping sequence", "00"},
       {"out", "map file to write", "", false, true},
       {"logits", "synthetic: confusion-model logits and predicted labels; none: ground-truth labels", "synthetic"},
+      {"set", "config overrides name=value[,...] (must match at evaluate/localize time)", ""},
       {"quiet", "no progress on stderr", "", true},
   };
   if (wants_help(argc, argv)) {
@@ -37,7 +38,9 @@ int cmd_build_map(int argc, char** argv) {
   std::vector<uint64_t> blob;
   size_t bytes = 0;
   mapping::MapBuildStats st;
-  s = build_map(*src, default_config(), logits, road, &blob, &bytes, &st, !args.flag("quiet"));
+  LocalizerConfig cfg = default_config();
+  if (!apply_overrides(&cfg, args.get("set"), &err)) return usage_error("build-map", err);
+  s = build_map(*src, cfg, logits, road, &blob, &bytes, &st, !args.flag("quiet"));
   if (s != Status::Ok) {
     std::fprintf(stderr, "gsf build-map: failed: %s\n", to_string(s));
     return 1;

@@ -18,7 +18,7 @@ struct MatchConfig {
   bool use_gsf = true;                    // false: instance-only Outram behaviour (ablation)
   uint32_t max_matches_per_triangle = 64; // map triangles accepted per query triangle
   uint32_t max_triangle_matches = 24000;  // total per query (capacity)
-  uint32_t yaw_bins = 72;                 // rotation hypotheses are binned for probe caching (5 deg)
+  uint32_t yaw_bins = 36;                 // rotation hypotheses are binned for probe caching (10 deg)
   uint32_t probe_cache_slots = 1024;      // cached query-field probes (instance, yaw bin)
   uint32_t similarity_cache_slots = 8192; // cached omega per (query instance, map instance, yaw bin)
   float observed_variance = 0.6f;         // grid points where the query field's variance exceeds this

@@ -28,7 +28,8 @@ struct LocalizeResult {
   uint32_t clique_size = 0;
   double score = 0.0;            // sum of inlier weights
   // Best / second-best hypothesis: score of the largest clique that disagrees with the answer, divided by
-  // the answer's score. 0 = unambiguous, 1 = a different pose is as well supported (decline to answer).
+  // the answer's score, and at least min_inliers / inliers (weak support). 0 = unambiguous, 1 = a
+  // different pose is as well supported, or the answer rests on the bare minimum (decline to answer).
   double ambiguity = 1.0;
   uint32_t query_instances = 0, query_triangles = 0, triangle_matches = 0, gsf_survivors = 0, correspondences = 0;
   uint64_t clique_nodes = 0;
