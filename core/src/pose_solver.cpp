@@ -60,7 +60,6 @@ Status solve_tls(const float* a, const float* b, const float* w, uint32_t n, dou
   double mu = rmax2 > c2 ? c2 / (2.0 * rmax2 - c2) : 1e6;
   uint32_t it = 0;
   for (; it < max_iterations && mu < 1e6; ++it) {
-    double prev_cost = 0.0;
     for (uint32_t i = 0; i < n; ++i) {
       const double r2 = residual2(t, a, b, i);
       double g;
@@ -68,7 +67,6 @@ Status solve_tls(const float* a, const float* b, const float* w, uint32_t n, dou
       else if (r2 >= (mu + 1.0) / mu * c2) g = 0.0;
       else g = c * std::sqrt(mu * (mu + 1.0) / r2) - mu;
       gw[i] = static_cast<float>(g * (w ? w[i] : 1.0));
-      prev_cost += (w ? w[i] : 1.0) * std::fmin(r2, c2);
     }
     Eigen::Isometry3d next;
     if (kabsch(a, b, gw, n, &next) != Status::Ok) break;  // too few weighted points: keep the last pose

@@ -79,15 +79,27 @@ Status SemanticKittiSource::open(const std::string& root, const std::string& seq
     tr = from_3x4(nums.data());
   }
   std::ifstream poses(fs::path(dir_) / "poses.txt");
+  std::stringstream text;
+  text << poses.rdbuf();
+  const Status ps = parse_poses(text.str(), tr, &poses_);
+  if (ps != Status::Ok) return ps;
+  has_pose_.assign(poses_.size(), true);
+  return Status::Ok;
+}
+
+Status parse_poses(const std::string& text, const Eigen::Isometry3d& tr, std::vector<Eigen::Isometry3d>* out) {
+  out->clear();
+  std::istringstream in(text);
+  std::string line;
+  std::vector<double> nums;
   const Eigen::Isometry3d tr_inv = tr.inverse();
-  while (poses && std::getline(poses, line)) {
+  while (std::getline(in, line)) {
     if (line.find_first_not_of(" \t\r") == std::string::npos) continue;
     if (!parse_numbers(line, nums) || (nums.size() != 12 && nums.size() != 13)) return Status::CorruptData;
     const double* m = nums.data() + (nums.size() == 13 ? 1 : 0);
     for (int k = 0; k < 12; ++k)
       if (!std::isfinite(m[k])) return Status::CorruptData;
-    poses_.push_back(tr_inv * from_3x4(m) * tr);
-    has_pose_.push_back(true);
+    out->push_back(tr_inv * from_3x4(m) * tr);
   }
   return Status::Ok;
 }
@@ -100,41 +112,39 @@ Status SemanticKittiSource::pose(uint32_t index, Eigen::Isometry3d* out) const {
   return Status::Ok;
 }
 
-Status SemanticKittiSource::read(uint32_t index, ScanBuffer& out) {
+Status parse_scan(const void* bin, size_t bin_bytes, const void* labels, size_t label_bytes, const void* logits_file,
+                  size_t logit_bytes, const KittiReadOptions& options, ScanBuffer& out) {
   out.count = 0;
   out.has_logits = false;
-  if (index >= frames_.size()) return Status::NotFound;
-  const uint32_t frame = frames_[index];
-  if (!read_file((fs::path(dir_) / "velodyne" / frame_name(frame, ".bin")).string(), bytes_)) return Status::IoError;
-  if (bytes_.size() % 16 != 0) return Status::CorruptData;
-  const uint32_t n = static_cast<uint32_t>(bytes_.size() / 16);
-  if (n > out.capacity) return Status::CapacityExceeded;
-  std::memcpy(out.points, bytes_.data(), bytes_.size());
-  std::vector<char> lab;
-  const bool have_labels = read_file((fs::path(dir_) / "labels" / frame_name(frame, ".label")).string(), lab);
-  if (!have_labels) {
-    if (options_.require_labels) return Status::IoError;
-    for (uint32_t i = 0; i < n; ++i) out.labels[i] = 0;
-  } else {
-    if (lab.size() != size_t(n) * 4) return Status::CorruptData;
-    std::memcpy(out.labels, lab.data(), lab.size());
+  if (bin_bytes % 16 != 0) return Status::CorruptData;
+  const uint64_t n64 = bin_bytes / 16;
+  if (n64 > out.capacity) return Status::CapacityExceeded;
+  const uint32_t n = static_cast<uint32_t>(n64);
+  if (labels == nullptr) {
+    if (options.require_labels) return Status::IoError;
+  } else if (label_bytes != size_t(n) * 4) {
+    return Status::CorruptData;
   }
   bool logits = false;
-  if (has_logits_ && out.logits) {
-    std::vector<char> lg;
-    if (read_file((fs::path(dir_) / "logits" / frame_name(frame, ".bin")).string(), lg)) {
-      if (lg.size() < 12 || std::memcmp(lg.data(), kLogitsMagic, 4) != 0) return Status::CorruptData;
-      uint16_t version, d;
-      uint32_t count;
-      std::memcpy(&version, lg.data() + 4, 2);
-      std::memcpy(&d, lg.data() + 6, 2);
-      std::memcpy(&count, lg.data() + 8, 4);
-      if (version != 1 || d != kNumClasses || count != n || lg.size() != 12 + size_t(n) * kNumClasses * 4)
-        return Status::CorruptData;
-      std::memcpy(out.logits, lg.data() + 12, size_t(n) * kNumClasses * 4);
-      logits = true;
-    }
+  if (logits_file != nullptr && out.logits != nullptr) {
+    const char* lg = static_cast<const char*>(logits_file);
+    if (logit_bytes < 12 || std::memcmp(lg, kLogitsMagic, 4) != 0) return Status::CorruptData;
+    uint16_t version, d;
+    uint32_t count;
+    std::memcpy(&version, lg + 4, 2);
+    std::memcpy(&d, lg + 6, 2);
+    std::memcpy(&count, lg + 8, 4);
+    if (version != 1 || d != kNumClasses || count != n || logit_bytes != 12 + size_t(n) * kNumClasses * 4)
+      return Status::CorruptData;
+    logits = true;
   }
+  if (n) std::memcpy(out.points, bin, size_t(n) * 16);
+  if (labels) {
+    if (n) std::memcpy(out.labels, labels, size_t(n) * 4);
+  } else {
+    for (uint32_t i = 0; i < n; ++i) out.labels[i] = 0;
+  }
+  if (logits && n) std::memcpy(out.logits, static_cast<const char*>(logits_file) + 12, size_t(n) * kNumClasses * 4);
   // Finite check (and optional compaction keeping labels/logits aligned).
   uint32_t w = 0;
   for (uint32_t i = 0; i < n; ++i) {
@@ -143,7 +153,7 @@ Status SemanticKittiSource::read(uint32_t index, ScanBuffer& out) {
     if (logits)
       for (int k = 0; k < kNumClasses && finite; ++k) finite = std::isfinite(out.logits[size_t(i) * kNumClasses + k]);
     if (!finite) {
-      if (!options_.drop_non_finite) return Status::InvalidInput;
+      if (!options.drop_non_finite) return Status::InvalidInput;
       continue;
     }
     if (w != i) {
@@ -156,6 +166,19 @@ Status SemanticKittiSource::read(uint32_t index, ScanBuffer& out) {
   out.count = w;
   out.has_logits = logits;
   return Status::Ok;
+}
+
+Status SemanticKittiSource::read(uint32_t index, ScanBuffer& out) {
+  out.count = 0;
+  out.has_logits = false;
+  if (index >= frames_.size()) return Status::NotFound;
+  const uint32_t frame = frames_[index];
+  if (!read_file((fs::path(dir_) / "velodyne" / frame_name(frame, ".bin")).string(), bytes_)) return Status::IoError;
+  std::vector<char> lab, lg;
+  const bool have_labels = read_file((fs::path(dir_) / "labels" / frame_name(frame, ".label")).string(), lab);
+  const bool have_logits = has_logits_ && out.logits && read_file((fs::path(dir_) / "logits" / frame_name(frame, ".bin")).string(), lg);
+  return parse_scan(bytes_.data(), bytes_.size(), have_labels ? lab.data() : nullptr, lab.size(),
+                    have_logits ? lg.data() : nullptr, lg.size(), options_, out);
 }
 
 Status SemanticKittiWriter::open(const std::string& root, const std::string& seq) {

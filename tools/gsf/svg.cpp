@@ -9,7 +9,7 @@
 namespace gsf::cli {
 
 SvgCanvas::SvgCanvas(double min_x, double min_y, double max_x, double max_y, double width_px)
-    : min_x_(min_x), min_y_(min_y), max_x_(max_x), max_y_(max_y) {
+    : min_x_(min_x), max_y_(max_y) {
   const double w = std::max(max_x - min_x, 1e-6), h = std::max(max_y - min_y, 1e-6);
   scale_ = (width_px - 2 * margin_) / w;
   width_ = width_px;

@@ -23,7 +23,7 @@ class SvgCanvas {
  private:
   double px(double x) const { return (x - min_x_) * scale_ + margin_; }
   double py(double y) const { return (max_y_ - y) * scale_ + margin_; }
-  double min_x_, min_y_, max_x_, max_y_, scale_, width_, height_, margin_ = 20;
+  double min_x_, max_y_, scale_, width_, height_, margin_ = 20;
   std::string body_;
 };
 

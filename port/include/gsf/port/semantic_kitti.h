@@ -19,6 +19,14 @@ struct KittiReadOptions {
   bool drop_non_finite = false;   // false: a NaN/Inf point rejects the scan with InvalidInput
 };
 
+// Parses one scan from memory (what read() does after loading the files): .bin bytes, .label bytes
+// (nullptr when absent), logits file bytes (nullptr when absent). Same statuses as read().
+Status parse_scan(const void* bin, size_t bin_bytes, const void* labels, size_t label_bytes, const void* logits,
+                  size_t logit_bytes, const KittiReadOptions& options, ScanBuffer& out);
+
+// Parses poses.txt text (12 or 13 numbers per line) into LiDAR poses with calibration Tr.
+Status parse_poses(const std::string& text, const Eigen::Isometry3d& tr, std::vector<Eigen::Isometry3d>* poses);
+
 class SemanticKittiSource final : public ScanSource {
  public:
   Status open(const std::string& dataset_root, const std::string& sequence, const KittiReadOptions& options = {});
