@@ -1,21 +1,50 @@
 #include "gsf/wasserstein.h"
 
 #include <cmath>
-#include <new>
-
-#include <Eigen/Eigenvalues>
 
 #include "gsf/gaussian_field.h"
 #include "gsf/semantic_classes.h"
 
 namespace gsf {
 
-using MaxGridMatrix = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, 0, kMaxGridPoints, kMaxGridPoints>;
-// Max-size storage lives inline in the arena: the eigen-solve allocates nothing.
-struct W2Exact::Solver {
-  MaxGridMatrix c;
-  Eigen::SelfAdjointEigenSolver<MaxGridMatrix> eig;
-};
+namespace {
+
+// Eigenvalues of a symmetric n x n matrix (row-major, destroyed) by cyclic Jacobi rotations, written
+// to the diagonal. Chosen over Eigen's SelfAdjointEigenSolver because that one's max-size
+// instantiation puts a 656 KB temporary on the stack (scripts/stack-usage.sh); Jacobi works in place,
+// is deterministic and accurate for the symmetric PSD matrices here. Bounded: at most 30 sweeps.
+bool jacobi_eigenvalues(double* a, uint32_t n) {
+  for (int sweep = 0; sweep < 30; ++sweep) {
+    double off = 0.0, diag = 0.0;
+    for (uint32_t i = 0; i < n; ++i) {
+      diag += a[i * n + i] * a[i * n + i];
+      for (uint32_t j = i + 1; j < n; ++j) off += a[i * n + j] * a[i * n + j];
+    }
+    if (off <= 1e-24 * (diag + 1e-300)) return true;
+    for (uint32_t p = 0; p < n; ++p)
+      for (uint32_t q = p + 1; q < n; ++q) {
+        const double apq = a[p * n + q];
+        if (std::fabs(apq) < 1e-300) continue;
+        const double theta = (a[q * n + q] - a[p * n + p]) / (2.0 * apq);
+        const double t = (theta >= 0 ? 1.0 : -1.0) / (std::fabs(theta) + std::sqrt(theta * theta + 1.0));
+        const double c = 1.0 / std::sqrt(t * t + 1.0), s = t * c;
+        for (uint32_t k = 0; k < n; ++k) {  // rows p, q
+          const double akp = a[p * n + k], akq = a[q * n + k];
+          a[p * n + k] = c * akp - s * akq;
+          a[q * n + k] = s * akp + c * akq;
+        }
+        for (uint32_t k = 0; k < n; ++k) {  // columns p, q
+          const double akp = a[k * n + p], akq = a[k * n + q];
+          a[k * n + p] = c * akp - s * akq;
+          a[k * n + q] = s * akp + c * akq;
+        }
+      }
+  }
+  return false;
+}
+
+}  // namespace
+
 
 void stability_weights(float* out) {
   for (int c = 0; c < kNumClasses; ++c) out[c] = stability_weight(c);
@@ -85,17 +114,16 @@ Status W2Exact::bind(Arena& arena, uint32_t max_grid) {
   max_grid_ = max_grid;
   l1_ = arena.allocate<double>(size_t(max_grid) * max_grid);
   tmp_ = arena.allocate<double>(size_t(max_grid) * max_grid);
-  void* mem = arena.allocate_bytes(sizeof(Solver), alignof(Solver) < 16 ? 16 : alignof(Solver));
+  c_ = arena.allocate<double>(size_t(max_grid) * max_grid);
   if (arena.counting()) return Status::Ok;
-  if (!l1_ || !tmp_ || !mem) return Status::BufferTooSmall;
-  solver_ = new (mem) Solver();
+  if (!l1_ || !tmp_ || !c_) return Status::BufferTooSmall;
   return Status::Ok;
 }
 
 Status W2Exact::w2_squared(const float* m1, const float* s1, const float* m2, const float* s2, uint32_t g,
                            const float* w, double* out) {
   *out = 0.0;
-  if (!solver_) return Status::NotInitialized;
+  if (!c_) return Status::NotInitialized;
   if (g == 0 || g > max_grid_) return Status::InvalidArgument;
   // L1: Cholesky of S1 + jitter (S1 is PSD; the jitter keeps a rank-deficient posterior factorable).
   double tr1 = 0.0, tr2 = 0.0;
@@ -121,19 +149,17 @@ Status W2Exact::w2_squared(const float* m1, const float* s1, const float* m2, co
       for (uint32_t k = j; k < g; ++k) acc += double(s2[i * g + k]) * l1_[k * g + j];
       tmp_[i * g + j] = acc;
     }
-  solver_->c.resize(g, g);
   for (uint32_t i = 0; i < g; ++i)
     for (uint32_t j = 0; j <= i; ++j) {
       double acc = 0.0;
       for (uint32_t k = i; k < g; ++k) acc += l1_[k * g + i] * tmp_[k * g + j];
-      solver_->c(i, j) = acc;
-      solver_->c(j, i) = acc;
+      c_[i * g + j] = acc;
+      c_[j * g + i] = acc;
     }
-  solver_->eig.compute(solver_->c, Eigen::EigenvaluesOnly);
-  if (solver_->eig.info() != Eigen::Success) return Status::InvalidInput;
+  if (!jacobi_eigenvalues(c_, g)) return Status::InvalidInput;
   double cross = 0.0;
   for (uint32_t i = 0; i < g; ++i) {
-    const double l = solver_->eig.eigenvalues()(i);
+    const double l = c_[i * g + i];
     cross += l > 0.0 ? std::sqrt(l) : 0.0;
   }
   double cov_term = tr1 + tr2 - 2.0 * cross;

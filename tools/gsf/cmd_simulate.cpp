@@ -13,6 +13,8 @@ int cmd_simulate(int argc, char** argv) {
       {"preset", "world size: demo (a few km) or tiny (tests)", "demo"},
       {"seed", "world seed (overrides the preset's)", ""},
       {"beams", "LiDAR beams (e.g. 32 or 64)", ""},
+      {"blocks-x", "city blocks along x (overrides the preset)", ""},
+      {"blocks-y", "city blocks along y (overrides the preset)", ""},
       {"quiet", "no progress on stderr", "", true},
   };
   if (wants_help(argc, argv)) {
@@ -35,6 +37,14 @@ int cmd_simulate(int argc, char** argv) {
   if (args.has("beams")) {
     if (!args.get_int("beams", &v, &err) || v < 2 || v > 256) return usage_error("simulate", "--beams must be 2..256");
     cfg.lidar.beams = static_cast<int>(v);
+  }
+  if (args.has("blocks-x")) {
+    if (!args.get_int("blocks-x", &v, &err) || v < 1 || v > 64) return usage_error("simulate", "--blocks-x must be 1..64");
+    cfg.world.blocks_x = static_cast<int>(v);
+  }
+  if (args.has("blocks-y")) {
+    if (!args.get_int("blocks-y", &v, &err) || v < 1 || v > 64) return usage_error("simulate", "--blocks-y must be 1..64");
+    cfg.world.blocks_y = static_cast<int>(v);
   }
   const bool quiet = args.flag("quiet");
   sim::SimSummary sum;

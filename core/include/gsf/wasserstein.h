@@ -4,7 +4,7 @@
 // the stability weights W = diag(w_c) applied as y -> W^1/2 y (paper Table III),
 //   W2^2 = sum_s (mu1(s)-mu2(s))^T W (mu1(s)-mu2(s)) + tr(W) [tr S1 + tr S2 - 2 tr((S1^1/2 S2 S1^1/2)^1/2)]
 // Exact path: tr((S1^1/2 S2 S1^1/2)^1/2) = sum_i sqrt(lambda_i(L1^T S2 L1)) with S1 = L1 L1^T: one
-// Cholesky and one symmetric eigen-solve, in double; O(G^3) (about 2.6 MFLOP at G = 64).
+// Cholesky and one symmetric eigen-solve (cyclic Jacobi, in the arena), in double; O(G^3) per sweep.
 // Fast path: treat grid points as independent (diagonal S): O(G D); exact whenever S1, S2 are diagonal.
 // The observed-only variant compares only grid points the query field actually saw (its variance below
 // a threshold): a single scan sees part of a neighbourhood the map saw whole, and unobserved points
@@ -47,11 +47,10 @@ class W2Exact {
                     const float* weights, double* out);
 
  private:
-  struct Solver;
   uint32_t max_grid_ = 0;
   double* l1_ = nullptr;   // g x g
   double* tmp_ = nullptr;  // g x g
-  Solver* solver_ = nullptr;
+  double* c_ = nullptr;    // g x g, eigen-solved in place
 };
 
 }  // namespace gsf
