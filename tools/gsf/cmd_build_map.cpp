@@ -26,6 +26,8 @@ int cmd_build_map(int argc, char** argv) {
   if (!args.parse(argc, argv, 2, specs, &err)) return usage_error("build-map", err);
   LogitMode logits;
   if (!parse_logit_mode(args.get("logits"), &logits)) return usage_error("build-map", "--logits must be synthetic or none");
+  LocalizerConfig cfg = default_config();
+  if (!apply_overrides(&cfg, args.get("set"), &err)) return usage_error("build-map", err);
   Status s;
   auto src = open_source(args.get("dataset"), args.get("sequence"), &s);
   if (s != Status::Ok || src->size() == 0) {
@@ -38,8 +40,6 @@ int cmd_build_map(int argc, char** argv) {
   std::vector<uint64_t> blob;
   size_t bytes = 0;
   mapping::MapBuildStats st;
-  LocalizerConfig cfg = default_config();
-  if (!apply_overrides(&cfg, args.get("set"), &err)) return usage_error("build-map", err);
   s = build_map(*src, cfg, logits, road, &blob, &bytes, &st, !args.flag("quiet"));
   if (s != Status::Ok) {
     std::fprintf(stderr, "gsf build-map: failed: %s\n", to_string(s));

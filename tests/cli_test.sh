@@ -1,0 +1,67 @@
+#!/usr/bin/env bash
+# CLI contract test (host builds): usage errors exit 2 with a message, runtime errors exit 1, and the
+# documented pipeline simulate -> build-map -> evaluate --json works on the tiny world with the
+# expected success counts (ground truth known) and a JSON file holding the documented fields.
+set -u
+gsf=$1
+tmp=$(mktemp -d)
+trap 'rm -rf "$tmp"' EXIT
+fail() { echo "FAIL: $*"; exit 1; }
+expect() {  # expect CODE PATTERN -- command...
+  local code=$1 pat=$2; shift 3
+  out=$("$@" 2>&1); rc=$?
+  [ "$rc" = "$code" ] || fail "'$*' exited $rc, expected $code: $out"
+  echo "$out" | grep -q -- "$pat" || fail "'$*' output lacks '$pat': $out"
+}
+expect 2 "usage: gsf" -- "$gsf"
+expect 2 "unknown command" -- "$gsf" frobnicate
+expect 0 "evaluate" -- "$gsf" --help
+expect 0 "--dataset" -- "$gsf" evaluate --help
+expect 2 "unknown option '--bogus'" -- "$gsf" evaluate --bogus 1
+expect 2 "missing required option '--map'" -- "$gsf" evaluate --dataset x
+expect 2 "bad --mode" -- "$gsf" evaluate --map m --dataset d --mode teleport
+expect 2 "expects an integer" -- "$gsf" evaluate --map m --dataset d --limit ten
+expect 2 "unknown config name" -- "$gsf" build-map --dataset d --out m --set match.nonsense=1
+expect 1 "cannot open map file" -- "$gsf" evaluate --map "$tmp/none.gsfmap" --dataset "$tmp"
+expect 1 "cannot open sequence" -- "$gsf" build-map --dataset "$tmp/nothing" --out "$tmp/m.gsfmap"
+printf 'not a map' > "$tmp/bad.gsfmap"
+expect 1 "not a valid map" -- "$gsf" inspect --map "$tmp/bad.gsfmap"
+
+"$gsf" simulate --preset tiny --out "$tmp/ds" --quiet >/dev/null || fail "simulate"
+"$gsf" build-map --dataset "$tmp/ds" --sequence 00 --out "$tmp/map.gsfmap" --quiet >/dev/null || fail "build-map"
+"$gsf" inspect --map "$tmp/map.gsfmap" --json > "$tmp/inspect.json" || fail "inspect"
+"$gsf" evaluate --map "$tmp/map.gsfmap" --dataset "$tmp/ds" --sequence 01 --json "$tmp/out.json" --mode all \
+  --svg "$tmp/svg" --quiet >/dev/null || fail "evaluate"
+"$gsf" localize --map "$tmp/map.gsfmap" --dataset "$tmp/ds" --sequence 01 --frame 3 > "$tmp/one.json" || fail "localize"
+python3 - "$tmp" <<'PY' || exit 1
+import json, sys, os
+t = sys.argv[1]
+r = json.load(open(f"{t}/out.json"))
+for k in ["map", "map_bytes", "map_bytes_per_km", "road_length_m", "modes"]:
+    assert k in r, k
+modes = r["modes"]
+assert set(modes) == {"instance", "gsf", "gsf+refine", "scan-context"}, modes.keys()
+for name, m in modes.items():
+    s = m["summary"]
+    for k in ["success_rate", "zone_success_rate", "ate_m", "are_deg", "median_ms", "p95_ms", "workspace_bytes",
+              "precision_curve", "median_stage_ms", "time_ratio_to_instance"]:
+        assert k in s, (name, k)
+    assert len(m["queries"]) == s["queries"] == 31, (name, len(m["queries"]))
+    for q in m["queries"]:
+        for k in ["index", "frame", "success", "translation_error_m", "rotation_error_deg", "time_ms", "status"]:
+            assert k in q, (name, k)
+g, i = modes["gsf"]["summary"], modes["instance"]["summary"]
+# Known answers from the simulator's ground truth (tiny world, 31 queries, 6 in the zone).
+assert g["zone_queries"] == 6, g["zone_queries"]
+assert g["successes"] >= 20, g["successes"]
+assert g["zone_success_rate"] >= 5 / 6, g["zone_success_rate"]
+assert i["zone_success_rate"] <= 1 / 6, i["zone_success_rate"]
+assert modes["gsf+refine"]["summary"]["ate_m"] < g["ate_m"]
+assert json.load(open(f"{t}/inspect.json"))["instances"] > 50
+one = json.loads(open(f"{t}/one.json").read().splitlines()[0])
+assert one["frame"] == 3 and len(one["pose"]) == 12
+for f in ["map_trajectory.svg", "correspondences_instance.svg", "correspondences_gsf.svg"]:
+    assert open(f"{t}/svg/{f}").read().startswith("<svg"), f
+print("cli ok:", g["successes"], "GSF successes,", i["successes"], "instance-only")
+PY
+echo "1 passed, 0 failed"
