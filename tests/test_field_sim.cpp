@@ -122,7 +122,9 @@ TEST_CASE("Identical zone columns with different surroundings differ more than o
   }
   INFO(same_closer << " of " << pairs << " (column seen twice closer than its identical twin)");
   REQUIRE(pairs >= 5);
-  // Chance is 50% (instances alone cannot tell twins apart at all); measured 134 / 178 = 75%. The
-  // localizer combines three vertices per triangle and a clique, which is why the zone success is higher.
-  CHECK(same_closer * 10 >= pairs * 7);
+  // Chance is 50% (instances alone cannot tell twins apart at all). Measured 134/178 = 75% on x86-64
+  // and 127/184 = 69% on ARM64 (the simulated scans differ in the last bits across libm versions).
+  // With ~180 pairs, 62% is more than 3 standard deviations above chance. The localizer combines three
+  // vertices per triangle and a clique, which is why its zone success is higher than this pairwise rate.
+  CHECK(same_closer * 100 >= pairs * 62);
 }
