@@ -18,17 +18,14 @@
 #include "gsf/sparsify.h"
 #include "gsf/voxel_layer.h"
 #include "gsf/wasserstein.h"
+#include "arena_buffer.h"
 #include "field_ablation.h"
 #include "tiny_world.h"
 
 using namespace gsf;
 
 namespace {
-struct Buffer {
-  std::vector<uint64_t> words;
-  Arena arena;
-  explicit Buffer(size_t bytes) : words(bytes / 8 + 2), arena(words.data(), words.size() * 8) {}
-};
+using Buffer = gsf_test::ArenaBuffer;
 }  // namespace
 
 int main() {
@@ -62,14 +59,8 @@ int main() {
     clusters.build(layer, nullptr);
     for (uint32_t i = 0; i < clusters.size(); ++i) {
       const float* c = clusters.instance(i).centroid;
-      const uint32_t n = layer.gather_within(c, cfg.field.radius, true, ids.data(), P);
+      const uint32_t n = collect_field_points(layer, cfg.field, c, static_cast<uint32_t>(ids.size()), ids.data(), xyz.data(), tgt.data(), lab.data());
       if (n < 80) continue;
-      for (uint32_t k = 0; k < n; ++k) {
-        const Voxel& v = layer.voxel(ids[k]);
-        for (int d = 0; d < 3; ++d) xyz[3 * k + d] = v.centroid[d] - c[d];
-        for (int d = 0; d < kNumClasses; ++d) tgt[k * kNumClasses + d] = v.prob[d];
-        lab[k] = v.label;
-      }
       ++neighbourhoods;
       for (int mi = 0; mi < 4; ++mi)
         for (int semantic = 0; semantic < 2; ++semantic)
@@ -106,13 +97,7 @@ int main() {
         if (d < 60.0) cands.push_back(k);
       }
       if (truth < 0 || cands.size() < 3) continue;
-      const uint32_t n = layer.gather_within(qi.centroid, cfg.field.radius, true, ids.data(), P);
-      for (uint32_t k = 0; k < n; ++k) {
-        const Voxel& v = layer.voxel(ids[k]);
-        for (int d = 0; d < 3; ++d) xyz[3 * k + d] = v.centroid[d] - qi.centroid[d];
-        for (int d = 0; d < kNumClasses; ++d) tgt[k * kNumClasses + d] = v.prob[d];
-        lab[k] = v.label;
-      }
+      const uint32_t n = collect_field_points(layer, cfg.field, qi.centroid, static_cast<uint32_t>(ids.size()), ids.data(), xyz.data(), tgt.data(), lab.data());
       uint32_t used = 0;
       if (solver.fit(xyz.data(), tgt.data(), lab.data(), n, in.data(), al.data(), ch.data(), &used) != Status::Ok) continue;
       solver.probe(FieldView{in.data(), al.data(), used}, ch.data(), grid.data(), G, qm.data(), qv.data(), qc.data());

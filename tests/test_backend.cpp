@@ -11,15 +11,12 @@
 #include "gsf/pose_solver.h"
 #include "gsf/triangle.h"
 #include "gsf/triangle_index.h"
+#include "arena_buffer.h"
 
 using namespace gsf;
 
 namespace {
-struct Buffer {
-  std::vector<uint64_t> words;
-  Arena arena;
-  explicit Buffer(size_t bytes) : words(bytes / 8 + 2), arena(words.data(), words.size() * 8) {}
-};
+using Buffer = gsf_test::ArenaBuffer;
 
 std::vector<float> random_points(int n, uint32_t seed, float extent = 40.0f) {
   std::mt19937 rng(seed);

@@ -8,15 +8,12 @@
 #include "gsf/gaussian_field.h"
 #include "gsf/sparsify.h"
 #include "gsf/wasserstein.h"
+#include "arena_buffer.h"
 
 using namespace gsf;
 
 namespace {
-struct Buffer {
-  std::vector<uint64_t> words;
-  Arena arena;
-  explicit Buffer(size_t bytes) : words(bytes / 8 + 2), arena(words.data(), words.size() * 8) {}
-};
+using Buffer = gsf_test::ArenaBuffer;
 }  // namespace
 
 TEST_CASE("Matern-3/2 closed form") {

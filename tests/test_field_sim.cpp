@@ -8,16 +8,13 @@
 #include "gsf/instance_clustering.h"
 #include "gsf/voxel_layer.h"
 #include "gsf/wasserstein.h"
+#include "arena_buffer.h"
 #include "tiny_world.h"
 
 using namespace gsf;
 
 namespace {
-struct Buffer {
-  std::vector<uint64_t> words;
-  Arena arena;
-  explicit Buffer(size_t bytes) : words(bytes / 8 + 2), arena(words.data(), words.size() * 8) {}
-};
+using Buffer = gsf_test::ArenaBuffer;
 }  // namespace
 
 TEST_CASE("Fig. 4 on simulated scans: semantic sparsification reconstructs at least as well as random") {
@@ -37,14 +34,8 @@ TEST_CASE("Fig. 4 on simulated scans: semantic sparsification reconstructs at le
     clusters.build(layer, nullptr);
     for (uint32_t i = 0; i < clusters.size() && count < 40; ++i) {
       const float* c = clusters.instance(i).centroid;
-      const uint32_t n = layer.gather_within(c, w.config.field.radius, true, ids.data(), 4096);
+      const uint32_t n = collect_field_points(layer, w.config.field, c, static_cast<uint32_t>(ids.size()), ids.data(), xyz.data(), tgt.data(), lab.data());
       if (n < 80) continue;
-      for (uint32_t k = 0; k < n; ++k) {
-        const Voxel& v = layer.voxel(ids[k]);
-        for (int d = 0; d < 3; ++d) xyz[3 * k + d] = v.centroid[d] - c[d];
-        for (int d = 0; d < kNumClasses; ++d) tgt[k * kNumClasses + d] = v.prob[d];
-        lab[k] = v.label;
-      }
       for (uint32_t m : {8u, 16u, 32u}) {
         semantic += gsf_test::reconstruction_miou(w.config.field, xyz.data(), tgt.data(), lab.data(), n, m, true, 3 + q);
         random += gsf_test::reconstruction_miou(w.config.field, xyz.data(), tgt.data(), lab.data(), n, m, false, 3 + q);
@@ -97,13 +88,7 @@ TEST_CASE("Identical zone columns with different surroundings differ more than o
         else if (std::fabs(dy) < 0.7 && std::fabs(std::fabs(dx) - 10.0) < 0.7) twins.push_back(static_cast<int>(k));
       }
       if (self < 0 || twins.empty()) continue;
-      const uint32_t n = layer.gather_within(qi.centroid, cfg.field.radius, true, ids.data(), 4096);
-      for (uint32_t k = 0; k < n; ++k) {
-        const Voxel& v = layer.voxel(ids[k]);
-        for (int d = 0; d < 3; ++d) xyz[3 * k + d] = v.centroid[d] - qi.centroid[d];
-        for (int d = 0; d < kNumClasses; ++d) tgt[k * kNumClasses + d] = v.prob[d];
-        lab[k] = v.label;
-      }
+      const uint32_t n = collect_field_points(layer, w.config.field, qi.centroid, static_cast<uint32_t>(ids.size()), ids.data(), xyz.data(), tgt.data(), lab.data());
       uint32_t used = 0;
       REQUIRE(solver.fit(xyz.data(), tgt.data(), lab.data(), n, in.data(), al.data(), ch.data(), &used) == Status::Ok);
       REQUIRE(solver.probe(FieldView{in.data(), al.data(), used}, ch.data(), grid.data(), G, qm.data(), qv.data(), nullptr) == Status::Ok);

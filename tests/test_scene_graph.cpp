@@ -12,6 +12,7 @@
 
 #include "gsf/instance_clustering.h"
 #include "gsf/voxel_layer.h"
+#include "arena_buffer.h"
 
 using namespace gsf;
 
@@ -52,11 +53,7 @@ Cloud synthetic_scene(float dx = 0, float dy = 0) {
   return c;
 }
 
-struct Buffer {
-  std::vector<uint64_t> words;
-  Arena arena;
-  explicit Buffer(size_t bytes) : words(bytes / 8 + 2), arena(words.data(), words.size() * 8) {}
-};
+using Buffer = gsf_test::ArenaBuffer;
 
 }  // namespace
 

@@ -89,6 +89,18 @@ void make_probe_grid(const FieldConfig& c, float yaw, float* out) {
       }
 }
 
+uint32_t collect_field_points(const VoxelLayer& layer, const FieldConfig& config, const float center[3], uint32_t max,
+                              uint32_t* ids, float* xyz, float* targets, uint8_t* labels, uint32_t* total) {
+  const uint32_t n = layer.gather_within(center, config.radius, config.input_dims == 2, ids, max, total);
+  for (uint32_t k = 0; k < n; ++k) {
+    const Voxel& v = layer.voxel(ids[k]);
+    for (int d = 0; d < 3; ++d) xyz[3 * k + d] = v.centroid[d] - center[d];
+    for (int d = 0; d < kNumClasses; ++d) targets[size_t(k) * kNumClasses + d] = v.prob[d];
+    labels[k] = v.label;
+  }
+  return n;
+}
+
 size_t FieldSolver::required_bytes(const FieldConfig& config, uint32_t max_points) {
   Arena counting;
   FieldSolver s;

@@ -305,20 +305,13 @@ Status Localizer::localize(const ScanView& scan, LocalizeResult* out_ptr) {
 
   // 3. Gaussian semantic fields of the query instances (only needed with the GSF filter).
   const uint32_t M = cfg.field.inducing_points;
-  const bool bev = cfg.field.input_dims == 2;
   for (uint32_t i = 0; i < n; ++i) {
     im.q_m[i] = 0;
     if (!cfg.match.use_gsf) continue;
     uint32_t total = 0;
-    const float* c = im.centroids + 3 * i;
-    const uint32_t got = im.voxels.gather_within(c, cfg.field.radius, bev, im.gather_ids, cfg.match.max_field_points, &total);
+    const uint32_t got = collect_field_points(im.voxels, cfg.field, im.centroids + 3 * i, cfg.match.max_field_points,
+                                              im.gather_ids, im.gather_xyz, im.gather_targets, im.gather_labels, &total);
     if (total > got) out.capacity_truncated = true;
-    for (uint32_t k = 0; k < got; ++k) {
-      const Voxel& v = im.voxels.voxel(im.gather_ids[k]);
-      for (int d = 0; d < 3; ++d) im.gather_xyz[3 * k + d] = v.centroid[d] - c[d];
-      for (int d = 0; d < kNumClasses; ++d) im.gather_targets[size_t(k) * kNumClasses + d] = v.prob[d];
-      im.gather_labels[k] = v.label;
-    }
     uint32_t m = 0;
     if (im.solver.fit(im.gather_xyz, im.gather_targets, im.gather_labels, got, im.q_inputs + size_t(i) * M * 3,
                       im.q_alpha + size_t(i) * M * kNumClasses, im.q_chol + size_t(i) * M * M, &m) == Status::Ok)

@@ -149,13 +149,7 @@ Status MapBuilder::build(std::vector<uint64_t>* blob, size_t* bytes_out, MapBuil
     mi.point_count = in.point_count;
     mi.label = inst_labels[i] = in.label;
     st.instances_by_class[in.label]++;
-    const uint32_t got = layer.gather_within(in.centroid, fc.radius, fc.input_dims == 2, ids.data(), max_pts);
-    for (uint32_t k = 0; k < got; ++k) {
-      const Voxel& v = layer.voxel(ids[k]);
-      for (int d = 0; d < 3; ++d) xyz[3 * k + d] = v.centroid[d] - in.centroid[d];
-      for (uint32_t d = 0; d < D; ++d) targets[size_t(k) * D + d] = v.prob[d];
-      gl[k] = v.label;
-    }
+    const uint32_t got = collect_field_points(layer, fc, in.centroid, max_pts, ids.data(), xyz.data(), targets.data(), gl.data());
     uint32_t m = 0;
     float* in_i = inputs.data() + size_t(i) * M * 3;
     float* al_i = alpha.data() + size_t(i) * M * D;

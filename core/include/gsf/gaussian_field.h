@@ -13,6 +13,7 @@
 #include "gsf/arena.h"
 #include "gsf/semantic_classes.h"
 #include "gsf/status.h"
+#include "gsf/voxel_layer.h"
 
 namespace gsf {
 
@@ -49,6 +50,13 @@ struct FieldView {
 // The probe grid: N_x x N_y (x layers) points centred on the instance, rotated by yaw about z.
 // out_xyz: grid_points(config) x 3.
 void make_probe_grid(const FieldConfig& config, float yaw_radians, float* out_xyz);
+
+// The field's training set: voxels of the metric-semantic layer within config.radius of `center`
+// (horizontal distance for bird's-eye fields), as instance-local xyz (n x 3), class probabilities
+// (n x D) and labels (n). Writes at most `max` (ids is scratch of the same size); *total, if given,
+// is how many matched, so a caller can tell the set was truncated. Returns the count written.
+uint32_t collect_field_points(const VoxelLayer& layer, const FieldConfig& config, const float center[3], uint32_t max,
+                              uint32_t* ids, float* xyz, float* targets, uint8_t* labels, uint32_t* total = nullptr);
 
 // Workspace for fitting and probing; all memory comes from the arena at bind().
 class FieldSolver {
