@@ -382,6 +382,8 @@ Status Localizer::localize(const ScanView& scan, LocalizeResult* out_ptr) {
     for (int v = 0; v < 3; ++v) {
       const uint64_t key = (uint64_t(qt.v[v]) << 32) | mt.v[v];
       bool inserted = false;
+      // corr_index and corr share one capacity, so the index refuses a new key (nullptr) exactly when
+      // the array is full; the second test is a guard that can only fire if that invariant breaks.
       uint32_t* id = im.corr_index.find_or_insert(key, &inserted);
       if (!id || (inserted && im.corr_count >= im.corr_capacity)) { out.capacity_truncated = true; continue; }
       if (inserted) {
