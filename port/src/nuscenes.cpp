@@ -1,14 +1,9 @@
 #include "gsf/port/nuscenes.h"
 
-#include <algorithm>
 #include <cmath>
-#include <cstdio>
 #include <cstring>
-#include <filesystem>
-#include <fstream>
-#include <sstream>
 
-namespace fs = std::filesystem;
+#include "scan_files.h"
 
 namespace gsf::port {
 
@@ -34,33 +29,27 @@ uint16_t nuscenes_to_kitti(uint8_t c) {
   }
 }
 
-Status NuScenesLidarsegSource::open(const std::string& root, const std::string& seq) {
+Status NuScenesLidarsegSource::open(const std::string& root, const std::string& seq, const KittiReadOptions& options) {
   frames_.clear();
   poses_.clear();
-  dir_ = (fs::path(root) / "sequences" / seq).string();
-  std::error_code ec;
-  if (!fs::is_directory(fs::path(dir_) / "velodyne", ec) || !fs::is_directory(fs::path(dir_) / "lidarseg", ec))
+  options_ = options;
+  dir_ = root + "/sequences/" + seq;
+  std::vector<uint32_t> frames, labelled;
+  Status s = detail::list_frames(dir_, "velodyne", ".bin", &frames);
+  if (s != Status::Ok) return s;
+  if (options.require_labels && detail::list_frames(dir_, "lidarseg", ".label", &labelled) != Status::Ok)
     return Status::IoError;
-  for (const auto& e : fs::directory_iterator(fs::path(dir_) / "velodyne", ec)) {
-    const std::string name = e.path().filename().string();
-    if (e.path().extension() != ".bin" || name.size() != 10) continue;
-    frames_.push_back(static_cast<uint32_t>(std::strtoul(name.c_str(), nullptr, 10)));
+  // poses.txt holds LiDAR poses already (calib is the identity); optional, but must parse.
+  std::vector<Eigen::Isometry3d> poses;
+  std::string text;
+  s = detail::read_text(dir_ + "/poses.txt", &text);
+  if (s == Status::IoError) return s;
+  if (s == Status::Ok) {
+    s = parse_poses(text, Eigen::Isometry3d::Identity(), &poses);
+    if (s != Status::Ok) return s;
   }
-  std::sort(frames_.begin(), frames_.end());
-  std::ifstream poses(fs::path(dir_) / "poses.txt");
-  std::string line;
-  while (poses && std::getline(poses, line)) {
-    std::istringstream s(line);
-    double m[12];
-    int k = 0;
-    while (k < 12 && (s >> m[k])) ++k;
-    if (k == 0) continue;
-    if (k != 12) return Status::CorruptData;
-    Eigen::Isometry3d t = Eigen::Isometry3d::Identity();
-    for (int r = 0; r < 3; ++r)
-      for (int c = 0; c < 4; ++c) t.matrix()(r, c) = m[4 * r + c];
-    poses_.push_back(t);
-  }
+  frames_.swap(frames);
+  poses_.swap(poses);
   return Status::Ok;
 }
 
@@ -70,35 +59,44 @@ Status NuScenesLidarsegSource::pose(uint32_t index, Eigen::Isometry3d* out) cons
   return Status::Ok;
 }
 
+// No heap: the files are streamed through a fixed stack chunk and compacted into `out` (ego points
+// dropped), so out.count is only published once the whole scan has passed every check.
 Status NuScenesLidarsegSource::read(uint32_t index, ScanBuffer& out) {
   out.count = 0;
   out.has_logits = false;
   if (index >= frames_.size()) return Status::NotFound;
-  char name[32];
-  std::snprintf(name, sizeof(name), "%06u", frames_[index]);
-  std::ifstream fb(fs::path(dir_) / "velodyne" / (std::string(name) + ".bin"), std::ios::binary | std::ios::ate);
-  std::ifstream fl(fs::path(dir_) / "lidarseg" / (std::string(name) + ".label"), std::ios::binary | std::ios::ate);
-  if (!fb || !fl) return Status::IoError;
-  const std::streamoff nb = fb.tellg(), nl = fl.tellg();
-  if (nb < 0 || nl < 0 || nb % 16 != 0) return Status::CorruptData;
-  const uint64_t n = uint64_t(nb) / 16;
-  if (uint64_t(nl) != n) return Status::CorruptData;
-  std::vector<float> pts(n * 4);
-  std::vector<uint8_t> lab(n);
-  fb.seekg(0);
-  fl.seekg(0);
-  if ((n && !fb.read(reinterpret_cast<char*>(pts.data()), nb)) || (n && !fl.read(reinterpret_cast<char*>(lab.data()), nl)))
-    return Status::IoError;
+  const uint32_t frame = frames_[index];
+  char path[detail::kMaxPathBytes];
+  detail::InputFile bin, labels;
+  if (!detail::frame_path(path, dir_, "velodyne", frame, ".bin") || bin.open(path) != Status::Ok) return Status::IoError;
+  if (!detail::frame_path(path, dir_, "lidarseg", frame, ".label")) return Status::IoError;
+  const Status ls = labels.open(path);
+  if (ls == Status::IoError || (ls == Status::NotFound && options_.require_labels)) return Status::IoError;
+  if (bin.size() % 16 != 0) return Status::CorruptData;
+  const uint64_t n = bin.size() / 16;
+  if (labels.is_open() && labels.size() != n) return Status::CorruptData;
+  constexpr uint32_t kChunk = 256;
+  float pts[kChunk * 4];
+  uint8_t lab[kChunk] = {};  // stays 0 (noise -> unlabeled) when there is no label file
   uint32_t w = 0;
-  for (uint64_t i = 0; i < n; ++i) {
-    if (lab[i] > 31) return Status::CorruptData;
-    if (lab[i] == 31) continue;  // ego vehicle
-    const float* p = pts.data() + 4 * i;
-    if (!std::isfinite(p[0]) || !std::isfinite(p[1]) || !std::isfinite(p[2])) return Status::InvalidInput;
-    if (w >= out.capacity) return Status::CapacityExceeded;
-    std::memcpy(out.points + 4 * size_t(w), p, 16);
-    out.labels[w] = nuscenes_to_kitti(lab[i]);
-    ++w;
+  for (uint64_t done = 0; done < n;) {
+    const uint32_t m = static_cast<uint32_t>(n - done < kChunk ? n - done : kChunk);
+    if (bin.read_exact(pts, size_t(m) * 16) != Status::Ok) return Status::IoError;
+    if (labels.is_open() && labels.read_exact(lab, m) != Status::Ok) return Status::IoError;
+    for (uint32_t i = 0; i < m; ++i) {
+      if (lab[i] > 31) return Status::CorruptData;
+      if (lab[i] == 31) continue;  // ego vehicle
+      const float* p = pts + 4 * i;
+      if (!(std::isfinite(p[0]) && std::isfinite(p[1]) && std::isfinite(p[2]) && std::isfinite(p[3]))) {
+        if (!options_.drop_non_finite) return Status::InvalidInput;
+        continue;
+      }
+      if (w >= out.capacity) return Status::CapacityExceeded;
+      std::memcpy(out.points + 4 * size_t(w), p, 16);
+      out.labels[w] = nuscenes_to_kitti(lab[i]);
+      ++w;
+    }
+    done += m;
   }
   out.count = w;
   return Status::Ok;

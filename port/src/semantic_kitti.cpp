@@ -1,6 +1,5 @@
 #include "gsf/port/semantic_kitti.h"
 
-#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <cstring>
@@ -8,27 +7,16 @@
 #include <fstream>
 #include <sstream>
 
-namespace fs = std::filesystem;
+#include "scan_files.h"
 
 namespace gsf::port {
+
+// The .bin/.label/logits files are little-endian and copied byte for byte into native floats/ints.
+static_assert(__BYTE_ORDER__ == __ORDER_LITTLE_ENDIAN__, "scan files are read as native little-endian");
+
 namespace {
 
-std::string frame_name(uint32_t frame, const char* ext) {
-  char b[32];
-  std::snprintf(b, sizeof(b), "%06u%s", frame, ext);
-  return b;
-}
-
-// Reads a whole file into `buf`; false if missing/unreadable.
-bool read_file(const std::string& path, std::vector<char>& buf) {
-  std::ifstream f(path, std::ios::binary | std::ios::ate);
-  if (!f) return false;
-  const std::streamoff n = f.tellg();
-  if (n < 0) return false;
-  buf.resize(static_cast<size_t>(n));
-  f.seekg(0);
-  return n == 0 || static_cast<bool>(f.read(buf.data(), n));
-}
+constexpr size_t kLogitsHeaderBytes = 12;
 
 bool parse_numbers(const std::string& line, std::vector<double>& out) {
   out.clear();
@@ -47,44 +35,86 @@ Eigen::Isometry3d from_3x4(const double* m) {
   return t;
 }
 
+struct ScanLayout {
+  uint32_t count = 0;
+  bool logits = false;  // logits present, valid, and the buffer can hold them
+};
+
+// Every size/header check of a scan, before anything is copied into `out`. `logits_header` is the
+// file's first min(12, logit_bytes) bytes, or nullptr when there is no logits file.
+Status check_layout(uint64_t bin_bytes, bool have_labels, uint64_t label_bytes, const char* logits_header,
+                    uint64_t logit_bytes, const KittiReadOptions& options, const ScanBuffer& out, ScanLayout* layout) {
+  if (bin_bytes % 16 != 0) return Status::CorruptData;
+  const uint64_t n = bin_bytes / 16;
+  if (n > out.capacity) return Status::CapacityExceeded;
+  if (!have_labels) {
+    if (options.require_labels) return Status::IoError;
+  } else if (label_bytes != n * 4) {
+    return Status::CorruptData;
+  }
+  layout->count = static_cast<uint32_t>(n);
+  layout->logits = false;
+  if (logits_header != nullptr && out.logits != nullptr) {
+    if (logit_bytes < kLogitsHeaderBytes || std::memcmp(logits_header, kLogitsMagic, 4) != 0) return Status::CorruptData;
+    uint16_t version, d;
+    uint32_t count;
+    std::memcpy(&version, logits_header + 4, 2);
+    std::memcpy(&d, logits_header + 6, 2);
+    std::memcpy(&count, logits_header + 8, 4);
+    if (version != 1 || d != kNumClasses || count != n || logit_bytes != kLogitsHeaderBytes + n * kNumClasses * 4)
+      return Status::CorruptData;
+    layout->logits = true;
+  }
+  return Status::Ok;
+}
+
+// After the arrays are filled: zero labels when absent, reject or drop non-finite points (keeping
+// labels/logits aligned), then publish count/has_logits. Until this returns Ok, out.count stays 0.
+Status finish_scan(const ScanLayout& layout, bool have_labels, const KittiReadOptions& options, ScanBuffer& out) {
+  const uint32_t n = layout.count;
+  if (!have_labels)
+    for (uint32_t i = 0; i < n; ++i) out.labels[i] = 0;
+  uint32_t w = 0;
+  for (uint32_t i = 0; i < n; ++i) {
+    const float* p = out.points + 4 * size_t(i);
+    bool finite = std::isfinite(p[0]) && std::isfinite(p[1]) && std::isfinite(p[2]) && std::isfinite(p[3]);
+    if (layout.logits)
+      for (int k = 0; k < kNumClasses && finite; ++k) finite = std::isfinite(out.logits[size_t(i) * kNumClasses + k]);
+    if (!finite) {
+      if (!options.drop_non_finite) return Status::InvalidInput;
+      continue;
+    }
+    if (w != i) {
+      std::memmove(out.points + 4 * size_t(w), p, 16);
+      out.labels[w] = out.labels[i];
+      if (layout.logits)
+        std::memmove(out.logits + size_t(w) * kNumClasses, out.logits + size_t(i) * kNumClasses, kNumClasses * 4);
+    }
+    ++w;
+  }
+  out.count = w;
+  out.has_logits = layout.logits;
+  return Status::Ok;
+}
+
 }  // namespace
 
-Status SemanticKittiSource::open(const std::string& root, const std::string& seq, const KittiReadOptions& options) {
-  frames_.clear();
-  poses_.clear();
-  has_pose_.clear();
-  options_ = options;
-  dir_ = (fs::path(root) / "sequences" / seq).string();
-  std::error_code ec;
-  if (!fs::is_directory(fs::path(dir_) / "velodyne", ec)) return Status::IoError;
-  for (const auto& e : fs::directory_iterator(fs::path(dir_) / "velodyne", ec)) {
-    const std::string name = e.path().filename().string();
-    if (e.path().extension() != ".bin" || name.size() != 10) continue;
-    char* end = nullptr;
-    const unsigned long v = std::strtoul(name.c_str(), &end, 10);
-    if (end != name.c_str() + 6) continue;
-    frames_.push_back(static_cast<uint32_t>(v));
-  }
-  if (ec) return Status::IoError;
-  std::sort(frames_.begin(), frames_.end());
-  has_logits_ = options.load_logits && fs::is_directory(fs::path(dir_) / "logits", ec);
-  // Calibration: Tr maps velodyne into camera 0; identity when absent.
-  Eigen::Isometry3d tr = Eigen::Isometry3d::Identity();
-  std::ifstream calib(fs::path(dir_) / "calib.txt");
-  std::string line;
-  std::vector<double> nums;
-  while (calib && std::getline(calib, line)) {
-    if (line.rfind("Tr:", 0) != 0) continue;
-    if (!parse_numbers(line.substr(3), nums) || nums.size() != 12) return Status::CorruptData;
-    tr = from_3x4(nums.data());
-  }
-  std::ifstream poses(fs::path(dir_) / "poses.txt");
-  std::stringstream text;
-  text << poses.rdbuf();
-  const Status ps = parse_poses(text.str(), tr, &poses_);
-  if (ps != Status::Ok) return ps;
-  has_pose_.assign(poses_.size(), true);
-  return Status::Ok;
+Status parse_scan(const void* bin, size_t bin_bytes, const void* labels, size_t label_bytes, const void* logits_file,
+                  size_t logit_bytes, const KittiReadOptions& options, ScanBuffer& out) {
+  out.count = 0;
+  out.has_logits = false;
+  char header[kLogitsHeaderBytes] = {};
+  if (logits_file) std::memcpy(header, logits_file, logit_bytes < sizeof(header) ? logit_bytes : sizeof(header));
+  ScanLayout layout;
+  const Status s = check_layout(bin_bytes, labels != nullptr, label_bytes, logits_file ? header : nullptr, logit_bytes,
+                                options, out, &layout);
+  if (s != Status::Ok) return s;
+  const size_t n = layout.count;
+  if (n) std::memcpy(out.points, bin, n * 16);
+  if (labels && n) std::memcpy(out.labels, labels, n * 4);
+  if (layout.logits && n)
+    std::memcpy(out.logits, static_cast<const char*>(logits_file) + kLogitsHeaderBytes, n * kNumClasses * 4);
+  return finish_scan(layout, labels != nullptr, options, out);
 }
 
 Status parse_poses(const std::string& text, const Eigen::Isometry3d& tr, std::vector<Eigen::Isometry3d>* out) {
@@ -104,6 +134,45 @@ Status parse_poses(const std::string& text, const Eigen::Isometry3d& tr, std::ve
   return Status::Ok;
 }
 
+Status SemanticKittiSource::open(const std::string& root, const std::string& seq, const KittiReadOptions& options) {
+  frames_.clear();
+  poses_.clear();
+  has_logits_ = false;
+  options_ = options;
+  dir_ = root + "/sequences/" + seq;
+  std::vector<uint32_t> frames;
+  const Status fs = detail::list_frames(dir_, "velodyne", ".bin", &frames);
+  if (fs != Status::Ok) return fs;
+  // Calibration: Tr maps velodyne into camera 0; identity when the file or the line is absent.
+  Eigen::Isometry3d tr = Eigen::Isometry3d::Identity();
+  std::string text;
+  Status s = detail::read_text(dir_ + "/calib.txt", &text);
+  if (s == Status::IoError) return s;
+  if (s == Status::Ok) {
+    std::istringstream calib(text);
+    std::string line;
+    std::vector<double> nums;
+    while (std::getline(calib, line)) {
+      if (line.rfind("Tr:", 0) != 0) continue;
+      if (!parse_numbers(line.substr(3), nums) || nums.size() != 12) return Status::CorruptData;
+      tr = from_3x4(nums.data());
+    }
+  }
+  // Poses: optional (pose() then reports NotFound), but a malformed file fails open().
+  std::vector<Eigen::Isometry3d> poses;
+  s = detail::read_text(dir_ + "/poses.txt", &text);
+  if (s == Status::IoError) return s;
+  if (s == Status::Ok) {
+    s = parse_poses(text, tr, &poses);
+    if (s != Status::Ok) return s;
+  }
+  frames_.swap(frames);
+  poses_.swap(poses);
+  std::error_code ec;
+  has_logits_ = options.load_logits && std::filesystem::is_directory(dir_ + "/logits", ec);
+  return Status::Ok;
+}
+
 Status SemanticKittiSource::pose(uint32_t index, Eigen::Isometry3d* out) const {
   if (index >= frames_.size()) return Status::NotFound;
   const uint32_t f = frames_[index];
@@ -112,122 +181,104 @@ Status SemanticKittiSource::pose(uint32_t index, Eigen::Isometry3d* out) const {
   return Status::Ok;
 }
 
-Status parse_scan(const void* bin, size_t bin_bytes, const void* labels, size_t label_bytes, const void* logits_file,
-                  size_t logit_bytes, const KittiReadOptions& options, ScanBuffer& out) {
-  out.count = 0;
-  out.has_logits = false;
-  if (bin_bytes % 16 != 0) return Status::CorruptData;
-  const uint64_t n64 = bin_bytes / 16;
-  if (n64 > out.capacity) return Status::CapacityExceeded;
-  const uint32_t n = static_cast<uint32_t>(n64);
-  if (labels == nullptr) {
-    if (options.require_labels) return Status::IoError;
-  } else if (label_bytes != size_t(n) * 4) {
-    return Status::CorruptData;
-  }
-  bool logits = false;
-  if (logits_file != nullptr && out.logits != nullptr) {
-    const char* lg = static_cast<const char*>(logits_file);
-    if (logit_bytes < 12 || std::memcmp(lg, kLogitsMagic, 4) != 0) return Status::CorruptData;
-    uint16_t version, d;
-    uint32_t count;
-    std::memcpy(&version, lg + 4, 2);
-    std::memcpy(&d, lg + 6, 2);
-    std::memcpy(&count, lg + 8, 4);
-    if (version != 1 || d != kNumClasses || count != n || logit_bytes != 12 + size_t(n) * kNumClasses * 4)
-      return Status::CorruptData;
-    logits = true;
-  }
-  if (n) std::memcpy(out.points, bin, size_t(n) * 16);
-  if (labels) {
-    if (n) std::memcpy(out.labels, labels, size_t(n) * 4);
-  } else {
-    for (uint32_t i = 0; i < n; ++i) out.labels[i] = 0;
-  }
-  if (logits && n) std::memcpy(out.logits, static_cast<const char*>(logits_file) + 12, size_t(n) * kNumClasses * 4);
-  // Finite check (and optional compaction keeping labels/logits aligned).
-  uint32_t w = 0;
-  for (uint32_t i = 0; i < n; ++i) {
-    const float* p = out.points + 4 * size_t(i);
-    bool finite = std::isfinite(p[0]) && std::isfinite(p[1]) && std::isfinite(p[2]) && std::isfinite(p[3]);
-    if (logits)
-      for (int k = 0; k < kNumClasses && finite; ++k) finite = std::isfinite(out.logits[size_t(i) * kNumClasses + k]);
-    if (!finite) {
-      if (!options.drop_non_finite) return Status::InvalidInput;
-      continue;
-    }
-    if (w != i) {
-      std::memmove(out.points + 4 * size_t(w), p, 16);
-      out.labels[w] = out.labels[i];
-      if (logits) std::memmove(out.logits + size_t(w) * kNumClasses, out.logits + size_t(i) * kNumClasses, kNumClasses * 4);
-    }
-    ++w;
-  }
-  out.count = w;
-  out.has_logits = logits;
-  return Status::Ok;
-}
-
+// No heap: paths in stack buffers, file bytes read straight into the caller's arrays.
 Status SemanticKittiSource::read(uint32_t index, ScanBuffer& out) {
   out.count = 0;
   out.has_logits = false;
   if (index >= frames_.size()) return Status::NotFound;
   const uint32_t frame = frames_[index];
-  if (!read_file((fs::path(dir_) / "velodyne" / frame_name(frame, ".bin")).string(), bytes_)) return Status::IoError;
-  std::vector<char> lab, lg;
-  const bool have_labels = read_file((fs::path(dir_) / "labels" / frame_name(frame, ".label")).string(), lab);
-  const bool have_logits = has_logits_ && out.logits && read_file((fs::path(dir_) / "logits" / frame_name(frame, ".bin")).string(), lg);
-  return parse_scan(bytes_.data(), bytes_.size(), have_labels ? lab.data() : nullptr, lab.size(),
-                    have_logits ? lg.data() : nullptr, lg.size(), options_, out);
+  char path[detail::kMaxPathBytes];
+  detail::InputFile bin, labels, logits;
+  if (!detail::frame_path(path, dir_, "velodyne", frame, ".bin") || bin.open(path) != Status::Ok) return Status::IoError;
+  if (!detail::frame_path(path, dir_, "labels", frame, ".label")) return Status::IoError;
+  const Status ls = labels.open(path);
+  if (ls == Status::IoError) return ls;
+  char header[kLogitsHeaderBytes] = {};
+  if (has_logits_ && out.logits != nullptr) {
+    if (!detail::frame_path(path, dir_, "logits", frame, ".bin")) return Status::IoError;
+    const Status gs = logits.open(path);
+    if (gs == Status::IoError) return gs;
+    if (logits.is_open() && logits.size() >= sizeof(header) && logits.read_exact(header, sizeof(header)) != Status::Ok)
+      return Status::IoError;
+  }
+  ScanLayout layout;
+  const Status s = check_layout(bin.size(), labels.is_open(), labels.size(), logits.is_open() ? header : nullptr,
+                                logits.size(), options_, out, &layout);
+  if (s != Status::Ok) return s;
+  const size_t n = layout.count;
+  if (bin.read_exact(out.points, n * 16) != Status::Ok) return Status::IoError;
+  if (labels.is_open() && labels.read_exact(out.labels, n * 4) != Status::Ok) return Status::IoError;
+  if (layout.logits && logits.read_exact(out.logits, n * kNumClasses * 4) != Status::Ok) return Status::IoError;
+  return finish_scan(layout, labels.is_open(), options_, out);
 }
 
 Status SemanticKittiWriter::open(const std::string& root, const std::string& seq) {
-  dir_ = (fs::path(root) / "sequences" / seq).string();
+  namespace fs = std::filesystem;
+  dir_.clear();
+  const std::string dir = root + "/sequences/" + seq;
   std::error_code ec;
-  fs::create_directories(fs::path(dir_) / "velodyne", ec);
-  fs::create_directories(fs::path(dir_) / "labels", ec);
-  return ec ? Status::IoError : Status::Ok;
+  fs::create_directories(fs::path(dir) / "velodyne", ec);
+  if (!ec) fs::create_directories(fs::path(dir) / "labels", ec);
+  if (ec) return Status::IoError;
+  dir_ = dir;
+  return Status::Ok;
 }
+
+namespace {
+// Writes `parts` to `path` and reports whether every byte reached the file (close included).
+bool write_file(const std::string& path, std::initializer_list<std::pair<const void*, size_t>> parts) {
+  std::ofstream f(path, std::ios::binary | std::ios::trunc);
+  for (const auto& p : parts)
+    if (p.second) f.write(static_cast<const char*>(p.first), static_cast<std::streamsize>(p.second));
+  f.close();
+  return !f.fail();
+}
+}  // namespace
 
 Status SemanticKittiWriter::write_scan(uint32_t frame, const float* xyzi, const uint32_t* labels, const float* logits,
                                        uint32_t count) {
   if (dir_.empty()) return Status::NotInitialized;
-  {
-    std::ofstream f(fs::path(dir_) / "velodyne" / frame_name(frame, ".bin"), std::ios::binary | std::ios::trunc);
-    if (!f.write(reinterpret_cast<const char*>(xyzi), std::streamsize(count) * 16)) return Status::IoError;
-  }
-  {
-    std::ofstream f(fs::path(dir_) / "labels" / frame_name(frame, ".label"), std::ios::binary | std::ios::trunc);
-    if (!f.write(reinterpret_cast<const char*>(labels), std::streamsize(count) * 4)) return Status::IoError;
-  }
+  if (frame > 999999) return Status::InvalidInput;  // file names have six digits
+  if (count > 0 && (xyzi == nullptr || labels == nullptr)) return Status::InvalidInput;
+  char path[detail::kMaxPathBytes];
+  if (!detail::frame_path(path, dir_, "velodyne", frame, ".bin") || !write_file(path, {{xyzi, size_t(count) * 16}}))
+    return Status::IoError;
+  if (!detail::frame_path(path, dir_, "labels", frame, ".label") || !write_file(path, {{labels, size_t(count) * 4}}))
+    return Status::IoError;
   if (logits) {
     std::error_code ec;
-    fs::create_directories(fs::path(dir_) / "logits", ec);
-    std::ofstream f(fs::path(dir_) / "logits" / frame_name(frame, ".bin"), std::ios::binary | std::ios::trunc);
+    std::filesystem::create_directories(dir_ + "/logits", ec);
+    char header[kLogitsHeaderBytes];
     const uint16_t version = 1, d = kNumClasses;
-    f.write(kLogitsMagic, 4);
-    f.write(reinterpret_cast<const char*>(&version), 2);
-    f.write(reinterpret_cast<const char*>(&d), 2);
-    f.write(reinterpret_cast<const char*>(&count), 4);
-    if (!f.write(reinterpret_cast<const char*>(logits), std::streamsize(count) * kNumClasses * 4)) return Status::IoError;
+    std::memcpy(header, kLogitsMagic, 4);
+    std::memcpy(header + 4, &version, 2);
+    std::memcpy(header + 6, &d, 2);
+    std::memcpy(header + 8, &count, 4);
+    if (ec || !detail::frame_path(path, dir_, "logits", frame, ".bin") ||
+        !write_file(path, {{header, sizeof(header)}, {logits, size_t(count) * kNumClasses * 4}}))
+      return Status::IoError;
   }
   return Status::Ok;
 }
 
 Status SemanticKittiWriter::write_poses(const std::vector<Eigen::Isometry3d>& poses) {
   if (dir_.empty()) return Status::NotInitialized;
-  std::ofstream f(fs::path(dir_) / "poses.txt", std::ios::trunc);
+  std::string text;
   char b[64];
   for (const auto& p : poses) {
     for (int r = 0; r < 3; ++r)
       for (int c = 0; c < 4; ++c) {
-        std::snprintf(b, sizeof(b), "%.17g", p.matrix()(r, c));
-        f << b << ((r == 2 && c == 3) ? "\n" : " ");
+        const double v = p.matrix()(r, c);
+        if (!std::isfinite(v)) return Status::InvalidInput;
+        std::snprintf(b, sizeof(b), "%.17g%c", v, (r == 2 && c == 3) ? '\n' : ' ');  // %.17g: exact round trip
+        text += b;
       }
   }
-  std::ofstream cal(fs::path(dir_) / "calib.txt", std::ios::trunc);
-  cal << "Tr: 1 0 0 0 0 1 0 0 0 0 1 0\n";
-  return (f && cal) ? Status::Ok : Status::IoError;
+  static const char kIdentityTr[] = "Tr: 1 0 0 0 0 1 0 0 0 0 1 0\n";
+  return write_file(dir_ + "/poses.txt", {{text.data(), text.size()}}) &&
+                 write_file(dir_ + "/calib.txt", {{kIdentityTr, sizeof(kIdentityTr) - 1}})
+             ? Status::Ok
+             : Status::IoError;
 }
 
 }  // namespace gsf::port

@@ -1,13 +1,15 @@
 // nuScenes-lidarseg scenes in the KITTI-like layout of ../shared/data/nuscenes-lidarseg-samples:
 //   sequences/<scene>/velodyne/NNNNNN.bin (float32 x,y,z,intensity), lidarseg/NNNNNN.label (uint8 class
-//   0-31), poses.txt (LiDAR poses in the global frame), calib.txt (identity Tr).
+//   0-31), poses.txt (LiDAR poses in the global frame), calib.txt (identity Tr, not read).
 // Labels are mapped to SemanticKITTI ids (the mapping in that folder's README); ego-vehicle returns
-// (class 31) are dropped; a class > 31 makes the scan CorruptData.
+// (class 31) are dropped; a class > 31 makes the scan CorruptData. read() does not allocate; the
+// buffer's capacity bounds the points kept after the ego points are dropped.
 #pragma once
 #include <string>
 #include <vector>
 
 #include "gsf/port/scan_source.h"
+#include "gsf/port/semantic_kitti.h"  // KittiReadOptions
 
 namespace gsf::port {
 
@@ -15,7 +17,9 @@ uint16_t nuscenes_to_kitti(uint8_t nuscenes_class);
 
 class NuScenesLidarsegSource final : public ScanSource {
  public:
-  Status open(const std::string& dataset_root, const std::string& sequence);
+  // options.require_labels: a missing lidarseg file is IoError (else the scan is read with label 0 and
+  // nothing dropped); options.drop_non_finite as for SemanticKITTI; load_logits is unused (no logits).
+  Status open(const std::string& dataset_root, const std::string& sequence, const KittiReadOptions& options = {});
   uint32_t size() const override { return static_cast<uint32_t>(frames_.size()); }
   uint32_t frame_id(uint32_t index) const override { return index < frames_.size() ? frames_[index] : 0; }
   Status read(uint32_t index, ScanBuffer& out) override;
@@ -23,6 +27,7 @@ class NuScenesLidarsegSource final : public ScanSource {
 
  private:
   std::string dir_;
+  KittiReadOptions options_;
   std::vector<uint32_t> frames_;
   std::vector<Eigen::Isometry3d> poses_;
 };

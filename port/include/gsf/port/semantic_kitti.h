@@ -27,6 +27,9 @@ Status parse_scan(const void* bin, size_t bin_bytes, const void* labels, size_t 
 // Parses poses.txt text (12 or 13 numbers per line) into LiDAR poses with calibration Tr.
 Status parse_poses(const std::string& text, const Eigen::Isometry3d& tr, std::vector<Eigen::Isometry3d>* poses);
 
+// open() reads the folder listing, calib.txt and poses.txt (allocates); read() does not allocate.
+// A missing poses.txt is allowed (pose() -> NotFound); a malformed one fails open() with CorruptData.
+// With logits/ present, a frame without its logits file is read without logits (has_logits false).
 class SemanticKittiSource final : public ScanSource {
  public:
   Status open(const std::string& dataset_root, const std::string& sequence, const KittiReadOptions& options = {});
@@ -41,10 +44,8 @@ class SemanticKittiSource final : public ScanSource {
   std::string dir_;
   KittiReadOptions options_;
   std::vector<uint32_t> frames_;
-  std::vector<Eigen::Isometry3d> poses_;  // by frame number; identity rows for missing are flagged
-  std::vector<bool> has_pose_;
+  std::vector<Eigen::Isometry3d> poses_;  // by frame number (poses.txt line i = frame i)
   bool has_logits_ = false;
-  std::vector<char> bytes_;  // reused file buffer
 };
 
 class SemanticKittiWriter {

@@ -1,0 +1,96 @@
+#include "scan_files.h"
+
+#include <fcntl.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <cerrno>
+#include <cstdio>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+
+namespace gsf::port::detail {
+
+bool frame_path(char (&out)[kMaxPathBytes], const std::string& dir, const char* sub, uint32_t frame, const char* ext) {
+  const int n = std::snprintf(out, sizeof(out), "%s/%s/%06u%s", dir.c_str(), sub, frame, ext);
+  return n > 0 && static_cast<size_t>(n) < sizeof(out);
+}
+
+bool parse_frame_name(const std::string& name, const char* ext, uint32_t* frame) {
+  const size_t ext_len = std::strlen(ext);
+  if (name.size() != 6 + ext_len || name.compare(6, ext_len, ext) != 0) return false;
+  uint32_t v = 0;
+  for (size_t i = 0; i < 6; ++i) {
+    if (name[i] < '0' || name[i] > '9') return false;
+    v = v * 10 + static_cast<uint32_t>(name[i] - '0');
+  }
+  *frame = v;
+  return true;
+}
+
+Status list_frames(const std::string& dir, const char* sub, const char* ext, std::vector<uint32_t>* frames) {
+  namespace fs = std::filesystem;
+  frames->clear();
+  std::error_code ec;
+  const fs::path folder = fs::path(dir) / sub;
+  if (!fs::is_directory(folder, ec)) return Status::IoError;
+  fs::directory_iterator it(folder, ec);
+  for (; !ec && it != fs::directory_iterator(); it.increment(ec)) {
+    uint32_t f;
+    if (parse_frame_name(it->path().filename().string(), ext, &f)) frames->push_back(f);
+  }
+  if (ec) {
+    frames->clear();
+    return Status::IoError;
+  }
+  std::sort(frames->begin(), frames->end());
+  return Status::Ok;
+}
+
+Status read_text(const std::string& path, std::string* text) {
+  std::ifstream f(path);
+  if (!f) return Status::NotFound;
+  std::stringstream s;
+  s << f.rdbuf();
+  *text = s.str();
+  return f.bad() ? Status::IoError : Status::Ok;
+}
+
+InputFile::~InputFile() {
+  if (fd_ >= 0) ::close(fd_);
+}
+
+Status InputFile::open(const char* path) {
+  if (fd_ >= 0) ::close(fd_);
+  fd_ = -1;
+  size_ = 0;
+  const int fd = ::open(path, O_RDONLY | O_CLOEXEC);
+  if (fd < 0) return errno == ENOENT ? Status::NotFound : Status::IoError;
+  struct stat st;
+  if (::fstat(fd, &st) != 0 || !S_ISREG(st.st_mode) || st.st_size < 0) {
+    ::close(fd);
+    return Status::IoError;
+  }
+  fd_ = fd;
+  size_ = static_cast<uint64_t>(st.st_size);
+  return Status::Ok;
+}
+
+Status InputFile::read_exact(void* dst, size_t bytes) {
+  if (fd_ < 0) return Status::IoError;
+  char* p = static_cast<char*>(dst);
+  size_t done = 0;
+  // Bounded: each pass either makes progress, retries an interrupted call, or returns.
+  while (done < bytes) {
+    const ssize_t r = ::read(fd_, p + done, bytes - done);
+    if (r < 0 && errno == EINTR) continue;
+    if (r <= 0) return Status::IoError;
+    done += static_cast<size_t>(r);
+  }
+  return Status::Ok;
+}
+
+}  // namespace gsf::port::detail
