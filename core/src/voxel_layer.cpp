@@ -205,7 +205,7 @@ uint32_t VoxelLayer::build_columns() {
 uint32_t VoxelLayer::gather_within(const float center[3], float radius, bool horizontal_only, uint32_t* out,
                                    uint32_t max_out, uint32_t* total) const {
   uint32_t written = 0, matched = 0;
-  if (bound_ && count_ > 0 && radius > 0.0f && std::isfinite(radius) && std::isfinite(center[0]) &&
+  if (bound_ && count_ > 0 && radius > 0.0f && std::isfinite(center[0]) &&
       std::isfinite(center[1]) && std::isfinite(center[2]) && column_lo_[0] <= column_hi_[0]) {
     const float inv = 1.0f / config_.column_size;
     const float r2 = radius * radius;

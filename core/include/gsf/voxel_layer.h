@@ -65,7 +65,7 @@ class VoxelLayer {
   // the number written (<= max_out; the first max_out of that order); *total (if given) is the number
   // that matched, so a caller can tell it was truncated. Cost: the column cells of the query square,
   // clipped to the occupied columns' bounding box (so a huge radius stays bounded), plus their members.
-  // A non-finite centre or radius <= 0 matches nothing.
+  // A non-finite centre, a NaN radius or radius <= 0 matches nothing; radius = +inf matches every indexed voxel.
   uint32_t gather_within(const float center[3], float radius, bool horizontal_only, uint32_t* out,
                          uint32_t max_out, uint32_t* total = nullptr) const;
   // Index of the voxel containing point p, or UINT32_MAX.
