@@ -34,6 +34,7 @@ Status InstanceClustering::bind(Arena& arena, const ClusterConfig& config, uint3
 
 Status InstanceClustering::build(const VoxelLayer& layer, ClusterStats* stats_out) {
   ClusterStats stats;
+  if (stats_out) *stats_out = stats;  // early returns report zeros
   count_ = 0;
   if (!bound_) return Status::NotInitialized;
   const uint32_t n = layer.size();

@@ -82,14 +82,14 @@ uint64_t VoxelLayer::column_key(float x, float y) const {
 
 Status VoxelLayer::build(const ScanView& scan, VoxelStats* stats_out) {
   VoxelStats stats;
+  if (stats_out) *stats_out = stats;  // early returns report zeros, never a previous scan's numbers
   count_ = 0;
+  column_lo_[0] = column_lo_[1] = 0;
+  column_hi_[0] = column_hi_[1] = -1;
+  if (!bound_) return Status::NotInitialized;
   index_.clear();
   columns_.clear();
-  if (!bound_) return Status::NotInitialized;
-  if (scan.count == 0) {
-    if (stats_out) *stats_out = stats;
-    return Status::InvalidInput;
-  }
+  if (scan.count == 0) return Status::InvalidInput;
   if (scan.points == nullptr || scan.labels == nullptr || scan.stride < 3) return Status::InvalidArgument;
   const bool use_logits = scan.logits != nullptr;
   if (use_logits && scan.logit_dim != static_cast<uint32_t>(kNumClasses)) return Status::InvalidArgument;
@@ -156,19 +156,35 @@ Status VoxelLayer::build(const ScanView& scan, VoxelStats* stats_out) {
     }
     v.label = static_cast<uint8_t>(best);
   }
-  build_columns();
+  stats.unindexed_voxels = build_columns();
   stats.voxels = count_;
   if (stats_out) *stats_out = stats;
   if (count_ == 0) return Status::InvalidInput;
-  return stats.dropped_points ? Status::CapacityExceeded : Status::Ok;
+  return stats.dropped_points || stats.unindexed_voxels ? Status::CapacityExceeded : Status::Ok;
 }
 
-void VoxelLayer::build_columns() {
+uint32_t VoxelLayer::build_columns() {
   // Counting sort of voxels into 2-D columns: count, prefix-sum (slot order), fill in voxel order.
+  // Voxel centroids lie inside representable cells and column_size >= voxel_size, so every centroid has
+  // a column coordinate.
+  const float inv = 1.0f / config_.column_size;
+  uint32_t unindexed = 0;
   for (uint32_t i = 0; i < count_; ++i) {
     const Voxel& v = voxels_[i];
     ColumnCell* cell = columns_.find_or_insert(column_key(v.centroid[0], v.centroid[1]));
-    if (cell) cell->count += 1;
+    if (cell) {
+      cell->count += 1;
+      int32_t c[2];
+      if (cell_coord(v.centroid[0], inv, &c[0]) && cell_coord(v.centroid[1], inv, &c[1])) {
+        const bool first = column_lo_[0] > column_hi_[0];
+        for (int k = 0; k < 2; ++k) {
+          column_lo_[k] = first || c[k] < column_lo_[k] ? c[k] : column_lo_[k];
+          column_hi_[k] = first || c[k] > column_hi_[k] ? c[k] : column_hi_[k];
+        }
+      }
+    } else {
+      ++unindexed;
+    }
     column_of_[i] = cell ? 1u : 0u;  // 0: not indexed (column capacity exhausted)
   }
   uint32_t running = 0;
@@ -183,18 +199,26 @@ void VoxelLayer::build_columns() {
     ColumnCell* cell = columns_.find(column_key(v.centroid[0], v.centroid[1]));
     column_members_[cell->begin + cell->count++] = i;
   }
+  return unindexed;
 }
 
 uint32_t VoxelLayer::gather_within(const float center[3], float radius, bool horizontal_only, uint32_t* out,
                                    uint32_t max_out, uint32_t* total) const {
   uint32_t written = 0, matched = 0;
-  if (bound_ && count_ > 0 && radius > 0.0f && std::isfinite(center[0]) && std::isfinite(center[1]) &&
-      std::isfinite(center[2])) {
+  if (bound_ && count_ > 0 && radius > 0.0f && std::isfinite(center[0]) &&
+      std::isfinite(center[1]) && std::isfinite(center[2]) && column_lo_[0] <= column_hi_[0]) {
     const float inv = 1.0f / config_.column_size;
     const float r2 = radius * radius;
-    int32_t x0, x1, y0, y1;
-    if (cell_coord(center[0] - radius, inv, &x0) && cell_coord(center[0] + radius, inv, &x1) &&
-        cell_coord(center[1] - radius, inv, &y0) && cell_coord(center[1] + radius, inv, &y1)) {
+    // The query square in column coordinates, clipped to the occupied columns' bounding box (in float,
+    // so a radius beyond the representable range clips instead of overflowing).
+    const float fx0 = std::floor((center[0] - radius) * inv), fx1 = std::floor((center[0] + radius) * inv);
+    const float fy0 = std::floor((center[1] - radius) * inv), fy1 = std::floor((center[1] + radius) * inv);
+    if (fx1 >= float(column_lo_[0]) && fx0 <= float(column_hi_[0]) && fy1 >= float(column_lo_[1]) &&
+        fy0 <= float(column_hi_[1])) {
+      const int32_t x0 = fx0 <= float(column_lo_[0]) ? column_lo_[0] : static_cast<int32_t>(fx0);
+      const int32_t x1 = fx1 >= float(column_hi_[0]) ? column_hi_[0] : static_cast<int32_t>(fx1);
+      const int32_t y0 = fy0 <= float(column_lo_[1]) ? column_lo_[1] : static_cast<int32_t>(fy0);
+      const int32_t y1 = fy1 >= float(column_hi_[1]) ? column_hi_[1] : static_cast<int32_t>(fy1);
       for (int32_t cx = x0; cx <= x1; ++cx)
         for (int32_t cy = y0; cy <= y1; ++cy) {
           const ColumnCell* cell = columns_.find(pack3(cx, cy, 0));

@@ -5,9 +5,16 @@
 // Per point: non-finite -> counted and skipped; range outside [min_range, max_range] -> skipped;
 // label -> class_from_kitti: ignored classes skipped, unknown ids counted and skipped; probability =
 // softmax(logits) when the scan carries logits, else one-hot of the label.
+// Voxels are stored densely in order of first insertion (scan point order), so the layer is deterministic.
 // Capacity: when max_voxels is reached, points that fall into existing voxels still accumulate and
-// points needing a new voxel are dropped (counted). The layer stays fully usable; build() then returns
+// points needing a new voxel are dropped (counted). When the 2-D gather index runs out of columns
+// (max_columns), the voxels of the missing columns stay in the layer but gather_within() cannot see them
+// (counted as unindexed_voxels). In both cases the layer stays fully usable and build() returns
 // Status::CapacityExceeded as a warning (the voxels are valid).
+// Other statuses: NotInitialized before a successful bind(); InvalidArgument for a malformed view
+// (null points/labels with count > 0, stride < 3, logit_dim != kNumClasses); InvalidInput for an empty
+// scan or one without a single usable point. On every non-Ok status except CapacityExceeded the layer
+// is empty (size() == 0), never stale from a previous scan.
 #pragma once
 #include <cstdint>
 
@@ -39,6 +46,7 @@ struct Voxel {
 struct VoxelStats {
   uint32_t points_in = 0, non_finite = 0, out_of_range = 0, ignored = 0, unknown_label = 0;
   uint32_t voxels = 0, dropped_points = 0;
+  uint32_t unindexed_voxels = 0;  // voxels left out of the gather index (column capacity)
 };
 
 class VoxelLayer {
@@ -53,8 +61,11 @@ class VoxelLayer {
   const VoxelConfig& config() const { return config_; }
 
   // Indices of voxels whose centroid lies within `radius` of `center` (horizontal distance only when
-  // horizontal_only), in a deterministic order (column by column, ascending within a column). Returns the number written (<= max_out); *total (if
-  // given) is the number that matched, so a caller can tell it was truncated.
+  // horizontal_only), in a deterministic order (column by column, ascending within a column). Returns
+  // the number written (<= max_out; the first max_out of that order); *total (if given) is the number
+  // that matched, so a caller can tell it was truncated. Cost: the column cells of the query square,
+  // clipped to the occupied columns' bounding box (so a huge radius stays bounded), plus their members.
+  // A non-finite centre, a NaN radius or radius <= 0 matches nothing; radius = +inf matches every indexed voxel.
   uint32_t gather_within(const float center[3], float radius, bool horizontal_only, uint32_t* out,
                          uint32_t max_out, uint32_t* total = nullptr) const;
   // Index of the voxel containing point p, or UINT32_MAX.
@@ -68,7 +79,7 @@ class VoxelLayer {
  private:
   struct ColumnCell { uint32_t begin, count; };
   uint64_t column_key(float x, float y) const;
-  void build_columns();
+  uint32_t build_columns();  // returns the number of voxels left unindexed
 
   VoxelConfig config_{};
   Voxel* voxels_ = nullptr;
@@ -77,6 +88,7 @@ class VoxelLayer {
   uint32_t* column_members_ = nullptr; // voxel ids grouped by column
   uint32_t* column_of_ = nullptr;      // scratch: per voxel its column slot order
   uint32_t count_ = 0;
+  int32_t column_lo_[2] = {0, 0}, column_hi_[2] = {-1, -1};  // occupied column bbox (empty: lo > hi)
   bool bound_ = false;
 };
 
