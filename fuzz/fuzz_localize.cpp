@@ -9,14 +9,30 @@
 #include "gsf/localizer.h"
 #include "tiny_world.h"
 
+namespace {
+const gsf_test::TinyWorld* g_world = nullptr;
+std::vector<uint64_t> g_workspace;
+gsf::Localizer g_loc;
+gsf::LocalizeResult g_reference;
+gsf::Status g_ref_status = gsf::Status::NotInitialized;
+}  // namespace
+
+// Building the world and its map takes seconds under the sanitizers: do it once here, before fuzzing
+// starts, so it never counts against libFuzzer's per-input timeout.
+extern "C" int LLVMFuzzerInitialize(int*, char***) {
+  g_world = &gsf_test::tiny_world();
+  g_workspace.assign(gsf::Localizer::required_bytes(g_world->config) / 8 + 2, 0);
+  if (g_loc.init(g_world->config, g_world->map, g_workspace.data(), g_workspace.size() * 8) != gsf::Status::Ok)
+    __builtin_trap();
+  g_ref_status = g_loc.localize(g_world->queries[0].view(), &g_reference);
+  return 0;
+}
+
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
-  static const gsf_test::TinyWorld& world = gsf_test::tiny_world();
-  static std::vector<uint64_t> ws(gsf::Localizer::required_bytes(world.config) / 8 + 2);
-  static gsf::Localizer loc;
-  static gsf::Status init = loc.init(world.config, world.map, ws.data(), ws.size() * 8);
-  static gsf::LocalizeResult reference;
-  static gsf::Status ref_status = loc.localize(world.queries[0].view(), &reference);
-  if (init != gsf::Status::Ok) __builtin_trap();
+  const gsf_test::TinyWorld& world = *g_world;
+  gsf::Localizer& loc = g_loc;
+  const gsf::LocalizeResult& reference = g_reference;
+  const gsf::Status ref_status = g_ref_status;
   if (size < 2) return 0;
   const bool with_logits = data[0] & 1;
   loc.set_use_gsf(data[0] & 2);
