@@ -12,27 +12,14 @@
 
 #include "gsf/instance_clustering.h"
 #include "gsf/voxel_layer.h"
+#include "test_cloud.h"
 #include "arena_buffer.h"
 
 using namespace gsf;
 
 namespace {
 
-struct Cloud {
-  std::vector<float> pts;
-  std::vector<uint32_t> labels;
-  void add(float x, float y, float z, uint32_t label) {
-    pts.insert(pts.end(), {x, y, z, 0.0f});
-    labels.push_back(label);
-  }
-  ScanView view() const {
-    ScanView v;
-    v.points = pts.data();
-    v.labels = labels.data();
-    v.count = static_cast<uint32_t>(labels.size());
-    return v;
-  }
-};
+using Cloud = gsf_test::Cloud;
 
 // Ground (road / terrain), a pole at (10, 0), a trunk at (0, 12), a car box at (-10, -5).
 Cloud synthetic_scene(float dx = 0, float dy = 0) {

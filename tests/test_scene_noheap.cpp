@@ -13,30 +13,13 @@
 #include "arena_buffer.h"
 #include "gsf/instance_clustering.h"
 #include "gsf/voxel_layer.h"
+#include "test_cloud.h"
 
 using namespace gsf;
 
 namespace {
 
-struct Scan {
-  std::vector<float> pts, logits;
-  std::vector<uint32_t> labels;
-  void add(float x, float y, float z, uint32_t label) {
-    pts.insert(pts.end(), {x, y, z, 0.0f});
-    labels.push_back(label);
-  }
-  ScanView view() const {
-    ScanView v;
-    v.points = pts.data();
-    v.labels = labels.data();
-    v.count = static_cast<uint32_t>(labels.size());
-    if (!logits.empty()) {
-      v.logits = logits.data();
-      v.logit_dim = kNumClasses;
-    }
-    return v;
-  }
-};
+using Scan = gsf_test::Cloud;
 
 Scan street(uint32_t seed, bool with_logits, bool with_bad_points) {
   Scan s;

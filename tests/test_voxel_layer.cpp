@@ -11,32 +11,14 @@
 
 #include "arena_buffer.h"
 #include "gsf/voxel_layer.h"
+#include "test_cloud.h"
 
 using namespace gsf;
 using gsf_test::ArenaBuffer;
 
 namespace {
 
-struct Cloud {
-  std::vector<float> pts;
-  std::vector<uint32_t> labels;
-  std::vector<float> logits;  // empty, or count x kNumClasses
-  void add(float x, float y, float z, uint32_t label) {
-    pts.insert(pts.end(), {x, y, z, 0.0f});
-    labels.push_back(label);
-  }
-  ScanView view() const {
-    ScanView v;
-    v.points = pts.data();
-    v.labels = labels.data();
-    v.count = static_cast<uint32_t>(labels.size());
-    if (!logits.empty()) {
-      v.logits = logits.data();
-      v.logit_dim = kNumClasses;
-    }
-    return v;
-  }
-};
+using Cloud = gsf_test::Cloud;
 
 // A cluttered street: ground, poles, a wall, random clutter; mixed labels.
 Cloud street(uint32_t seed) {

@@ -19,6 +19,9 @@ PoseError pose_error(const Eigen::Isometry3d& estimate, const Eigen::Isometry3d&
 
 constexpr double kSuccessTranslation = 5.0;
 constexpr double kSuccessRotationDeg = 10.0;
+inline bool is_success(const PoseError& e) {
+  return e.translation_m < kSuccessTranslation && e.rotation_deg < kSuccessRotationDeg;
+}
 
 struct StageMs {  // per-stage wall time of one query, milliseconds
   double voxel = 0, cluster = 0, field = 0, triangle = 0, match = 0, gsf = 0, clique = 0, pose = 0, refine = 0;

@@ -263,7 +263,7 @@ int run_evaluation(const EvalOptions& o) {
                          ms(res.times.match), ms(res.times.gsf), ms(res.times.clique), ms(res.times.pose), ms(res.times.refine)};
       if (r.answered) {
         r.error = pose_error(r.estimate, r.truth);
-        r.success = r.error.translation_m < kSuccessTranslation && r.error.rotation_deg < kSuccessRotationDeg;
+        r.success = is_success(r.error);
       }
       const uint32_t nc = lm.loc->last_correspondences(corr.data(), static_cast<uint32_t>(corr.size()));
       runs[lm.run].corr.emplace_back(corr.begin(), corr.begin() + std::min<size_t>(nc, corr.size()));
@@ -306,7 +306,7 @@ int run_evaluation(const EvalOptions& o) {
           r.status = m.found ? "Ok" : "NoSolution";
           if (r.answered) {
             r.error = pose_error(r.estimate, r.truth);
-            r.success = r.error.translation_m < kSuccessTranslation && r.error.rotation_deg < kSuccessRotationDeg;
+            r.success = is_success(r.error);
           }
         } else {
           r.status = "IoError";
