@@ -118,8 +118,8 @@ int main() {
         const double mean_term = w2_mean_term(qm.data(), mm.data(), G, weights);
         const ObservedW2 fast = w2_squared_diag_observed(qm.data(), qv.data(), map.grid_mean + size_t(k) * G * kNumClasses,
                                                          map.grid_var + size_t(k) * G, G, weights,
-                                                         cfg.match.observed_variance * cfg.field.signal_variance,
-                                                         cfg.match.normalize_mass, cfg.match.covariance_weight);
+                                                         cfg.gsf.observed_variance * cfg.field.signal_variance,
+                                                         cfg.gsf.normalize_mass, cfg.gsf.covariance_weight);
         const double v[3] = {e, mean_term, fast.used ? fast.w2 / fast.used : 1e300};
         for (int p = 0; p < 3; ++p)
           if (v[p] < best[p]) { best[p] = v[p]; arg[p] = static_cast<int>(k); }

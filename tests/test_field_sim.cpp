@@ -95,7 +95,7 @@ TEST_CASE("Identical zone columns with different surroundings differ more than o
       auto dist = [&](int k) {
         const ObservedW2 r = w2_squared_diag_observed(qm.data(), qv.data(), map.grid_mean + size_t(k) * G * kNumClasses,
                                                       map.grid_var + size_t(k) * G, G, weights,
-                                                      cfg.match.observed_variance * cfg.field.signal_variance);
+                                                      cfg.gsf.observed_variance * cfg.field.signal_variance);
         return r.used ? r.w2 / r.used : 1e9;
       };
       const double d_self = dist(self);

@@ -61,9 +61,10 @@ void lattice_scan(float ox, float oy, std::vector<float>* pts, std::vector<uint3
 
 TEST_CASE("A lattice where every triangle collides in the hash: matches, correspondences and clique stay capped") {
   LocalizerConfig cfg;
-  cfg.match.max_triangle_matches = 5000;
+  cfg.match.max_candidates = 5000;
   cfg.match.max_matches_per_triangle = 32;
-  cfg.clique.node_budget = 50000;
+  cfg.hypotheses.first_budget = 50000;
+  cfg.hypotheses.next_budget = 5000;
   mapping::MapBuilder builder(cfg);
   std::vector<float> pts;
   std::vector<uint32_t> labels;
@@ -99,10 +100,15 @@ TEST_CASE("A lattice where every triangle collides in the hash: matches, corresp
     loc.localize(q, &r);
     INFO("gsf " << gsf << ": " << r.query_triangles << " triangles, " << r.triangle_matches << " matches, "
                 << r.correspondences << " correspondences, " << r.clique_nodes << " clique nodes");
-    CHECK(r.triangle_matches <= cfg.match.max_triangle_matches);
     CHECK(r.triangle_matches <= r.query_triangles * cfg.match.max_matches_per_triangle);
+    CHECK(r.match_dropped == r.match_candidates - r.triangle_matches);  // every drop is counted
+    CHECK(r.match_dropped > 0);
+    CHECK(r.candidate_pairs <= cfg.match.max_candidates);
     CHECK(r.correspondences <= cfg.match.max_correspondences);
-    CHECK(r.clique_nodes <= cfg.clique.node_budget);
+    CHECK(r.hypotheses <= cfg.hypotheses.max_hypotheses);
+    // Each of at most 2K searches stays within its budget (+1 node for the root of each search).
+    CHECK(r.clique_nodes <= cfg.hypotheses.first_budget + 2 * cfg.hypotheses.max_hypotheses *
+                                                              (cfg.hypotheses.next_budget + 1));
     CHECK(r.capacity_truncated);  // the caps were hit and reported
     CHECK(loc.workspace_bytes() <= need);
   }

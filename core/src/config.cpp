@@ -11,13 +11,21 @@ Status validate(const LocalizerConfig& c) {
   s = validate(c.triangle);
   if (s != Status::Ok) return s;
   const MatchConfig& m = c.match;
-  if (m.max_matches_per_triangle == 0 || m.max_triangle_matches == 0 || m.yaw_bins < 4 || m.yaw_bins > 4096 ||
-      m.probe_cache_slots == 0 || m.similarity_cache_slots == 0 || !(m.tau > 0) || !(m.min_similarity >= 0) ||
-      m.max_correspondences < 3 || m.max_correspondences > 4096 || m.max_field_points == 0 ||
-      !(m.observed_variance > 0))
+  if (m.max_matches_per_triangle == 0 || m.max_matches_per_triangle > (1u << 20) || !(m.min_similarity >= 0) ||
+      !(m.vertex_tie_tolerance >= 0 && m.vertex_tie_tolerance < 1) || m.max_candidates < 3 ||
+      m.max_candidates > (1u << 22) || m.max_correspondences < 3 || m.max_correspondences > 4096 ||
+      m.max_field_points == 0)
     return Status::InvalidArgument;
-  if (!(c.clique.consistency_eps > 0) || c.clique.node_budget == 0) return Status::InvalidArgument;
-  if (!(c.pose.tls_threshold > 0) || c.pose.min_inliers < 3) return Status::InvalidArgument;
+  const GsfFilterConfig& g = c.gsf;
+  if (g.yaw_bins < 4 || g.yaw_bins > 4096 || g.probe_cache_slots == 0 || g.similarity_cache_slots == 0 ||
+      !(g.tau > 0) || !(g.observed_variance > 0) || !(g.covariance_weight >= 0) || !(g.normalize_mass >= 0))
+    return Status::InvalidArgument;
+  const HypothesisConfig& h = c.hypotheses;
+  if (h.max_hypotheses == 0 || h.max_hypotheses > 64 || h.first_budget == 0 || h.next_budget == 0 ||
+      !(h.consistency_eps > 0) || !(h.tls_threshold > 0) || h.min_inliers < 3 || h.max_iterations == 0 ||
+      !(h.same_pose_m >= 0) || !(h.same_pose_deg >= 0))
+    return Status::InvalidArgument;
+  if (c.verify.max_points == 0 || !(c.verify.margin_scale > 0)) return Status::InvalidArgument;
   if (c.cluster.max_instances == 0 || c.cluster.max_instances >= (1u << 16)) return Status::InvalidArgument;
   return Status::Ok;
 }
@@ -54,7 +62,8 @@ Status check_map_params(const LocalizerConfig& c, const MapParams& p) {
       p.grid_ny != w.grid_ny || p.grid_layers != w.grid_layers || p.grid_spacing != w.grid_spacing ||
       p.layer_spacing != w.layer_spacing || p.grid_z0 != w.grid_z0 || p.length_scale != w.length_scale ||
       p.signal_variance != w.signal_variance || p.noise_variance != w.noise_variance || p.field_radius != w.field_radius ||
-      p.voxel_size != w.voxel_size || p.side_bin != w.side_bin)
+      p.voxel_size != w.voxel_size || p.side_bin != w.side_bin || p.triangle_neighbours != w.triangle_neighbours ||
+      p.min_side != w.min_side || p.max_side != w.max_side)
     return Status::ConfigMismatch;
   return Status::Ok;
 }

@@ -7,25 +7,27 @@
 #include "gsf/bounded_hash_map.h"
 #include "gsf/fixed_vector.h"
 #include "gsf/gaussian_field.h"
+#include "gsf/gsf_filter.h"
 #include "gsf/instance_clustering.h"
-#include "gsf/max_clique.h"
-#include "gsf/pose_solver.h"
+#include "gsf/pose_hypotheses.h"
 #include "gsf/refine.h"
+#include "gsf/semantic_grid.h"
 #include "gsf/triangle.h"
 #include "gsf/triangle_index.h"
+#include "gsf/triangle_matcher.h"
 #include "gsf/voxel_layer.h"
 #include "gsf/wasserstein.h"
 
 namespace gsf {
 namespace {
 
-constexpr double kTwoPi = 6.283185307179586;
-
 struct CorrespondenceAcc {
   uint32_t query, map;
   float weight;   // best GSF similarity seen for this pair (1 without GSF)
   uint32_t votes; // surviving triangle matches that produced it
 };
+
+constexpr double kRadToDeg = 57.29577951308232;
 
 }  // namespace
 
@@ -35,15 +37,13 @@ struct Localizer::Impl {
   FieldSolver solver;
   TriangleBuilder triangle_builder;
   FixedVector<Triangle> triangles;
-  FixedVector<TriangleMatch> matches;
-  MaxCliqueSolver clique_solver;
+  TriangleMatcher matcher;
+  GsfFilter gsf;
+  BoundedHashMap<uint32_t> corr_index;  // (query instance, map instance) -> correspondence id
+  PoseHypotheses hypotheses;
   Refiner refiner;
-  ConsistencyGraph graph;
-  FixedVector<uint32_t> clique;
-  BoundedHashMap<uint32_t> probe_slot;   // (query instance, yaw bin) -> cache slot
-  BoundedHashMap<float> similarity;      // (query instance, map instance, yaw bin) -> omega
-  BoundedHashMap<uint32_t> corr_index;   // (query instance, map instance) -> correspondence id
   TriangleIndexView index;
+  SemanticGridView semantic;
 
   // Query instances and their fields.
   float* centroids = nullptr;   // I x 3
@@ -57,11 +57,6 @@ struct Localizer::Impl {
   float* gather_xyz = nullptr;
   float* gather_targets = nullptr;
   uint8_t* gather_labels = nullptr;
-  // Probe cache.
-  float* grid = nullptr;        // G x 3
-  float* probe_mean = nullptr;  // (slots + 1) x G x D; the last slot is scratch when the cache is full
-  float* probe_var = nullptr;   // (slots + 1) x G
-  uint32_t probe_used = 0;
   float weights[kNumClasses];
   // Correspondences.
   CorrespondenceAcc* corr = nullptr;  // candidates (capacity corr_capacity)
@@ -71,34 +66,27 @@ struct Localizer::Impl {
   float* a = nullptr;                 // C x 3 query positions
   float* b = nullptr;                 // C x 3 map positions
   float* w = nullptr;                 // C weights
-  float* sub_a = nullptr;             // C x 3 (clique / disagreeing subsets)
-  float* sub_b = nullptr;
-  float* sub_w = nullptr;
-  float* tls_weights = nullptr;       // C
-  uint8_t* mask = nullptr;            // C
-  uint8_t* in_clique = nullptr;       // C: membership in the answer's clique
-  uint32_t selected = 0;              // correspondences given to the clique in the last call
+  uint32_t selected = 0;              // correspondences given to the hypothesis stage in the last call
+  uint32_t chosen = 0;                // the answer's hypothesis in the last call (UINT32_MAX: none)
 };
 
-// The one layout of the workspace: run on a counting arena by required_bytes and on the caller's
-// buffer by init, so the two can never disagree.
-static Status bind_workspace(Arena& ar, const LocalizerConfig& config, Localizer::Impl& im) {
-  const uint32_t I = config.cluster.max_instances, M = config.field.inducing_points, G = grid_points(config.field);
+// The one layout of the workspace: run on a counting arena by required_bytes and budget, and on the
+// caller's buffer by init, so sizes can never disagree. Each stage's bytes are recorded as it binds.
+Status Localizer::bind_workspace(Arena& ar, const LocalizerConfig& config, Impl& im, Budget* parts) {
+  const uint32_t I = config.cluster.max_instances, M = config.field.inducing_points;
   const uint32_t C = config.match.max_correspondences, P = config.match.max_field_points;
-  const uint32_t corr_cap = config.match.max_triangle_matches < 65536 ? config.match.max_triangle_matches : 65536;
+  const uint32_t corr_cap = config.match.max_candidates;
+  Budget b{};
+  size_t mark = ar.used();
+  auto record = [&](size_t* field) {
+    *field += ar.used() - mark;
+    mark = ar.used();
+  };
   if (im.voxels.bind(ar, config.voxel) != Status::Ok) return Status::InvalidArgument;
+  record(&b.voxel);
   if (im.clusters.bind(ar, config.cluster, config.voxel.max_voxels) != Status::Ok) return Status::InvalidArgument;
+  record(&b.cluster);
   if (im.solver.bind(ar, config.field, P) != Status::Ok) return Status::InvalidArgument;
-  if (im.triangle_builder.bind(ar, config.triangle, I) != Status::Ok) return Status::InvalidArgument;
-  im.triangles.bind(ar, config.triangle.max_triangles);
-  im.matches.bind(ar, config.match.max_triangle_matches);
-  if (im.clique_solver.bind(ar, C) != Status::Ok || im.graph.bind(ar, C) != Status::Ok) return Status::InvalidArgument;
-  im.clique.bind(ar, C);
-  im.probe_slot.bind(ar, config.match.probe_cache_slots);
-  im.similarity.bind(ar, config.match.similarity_cache_slots);
-  im.corr_index.bind(ar, corr_cap);
-  im.centroids = ar.allocate<float>(size_t(I) * 3);
-  im.labels = ar.allocate<uint8_t>(I);
   im.q_inputs = ar.allocate<float>(size_t(I) * M * 3);
   im.q_alpha = ar.allocate<float>(size_t(I) * M * kNumClasses);
   im.q_chol = ar.allocate<float>(size_t(I) * M * M);
@@ -107,74 +95,56 @@ static Status bind_workspace(Arena& ar, const LocalizerConfig& config, Localizer
   im.gather_xyz = ar.allocate<float>(size_t(P) * 3);
   im.gather_targets = ar.allocate<float>(size_t(P) * kNumClasses);
   im.gather_labels = ar.allocate<uint8_t>(P);
-  im.grid = ar.allocate<float>(size_t(G) * 3);
-  im.probe_mean = ar.allocate<float>(size_t(config.match.probe_cache_slots + 1) * G * kNumClasses);
-  im.probe_var = ar.allocate<float>(size_t(config.match.probe_cache_slots + 1) * G);
+  record(&b.field);
+  if (im.triangle_builder.bind(ar, config.triangle, I) != Status::Ok) return Status::InvalidArgument;
+  im.triangles.bind(ar, config.triangle.max_triangles);
+  im.centroids = ar.allocate<float>(size_t(I) * 3);
+  im.labels = ar.allocate<uint8_t>(I);
+  record(&b.triangle);
+  if (im.matcher.bind(ar, config.match.max_matches_per_triangle) != Status::Ok) return Status::InvalidArgument;
+  record(&b.match);
+  if (im.gsf.bind(ar, config.gsf, config.field, &im.solver) != Status::Ok && !ar.counting()) return Status::InvalidArgument;
+  record(&b.gsf_cache);
+  im.corr_index.bind(ar, corr_cap);
   im.corr = ar.allocate<CorrespondenceAcc>(corr_cap);
   im.corr_capacity = corr_cap;
   im.order = ar.allocate<uint32_t>(corr_cap);
   im.a = ar.allocate<float>(size_t(C) * 3);
   im.b = ar.allocate<float>(size_t(C) * 3);
-  im.sub_a = ar.allocate<float>(size_t(C) * 3);
-  im.sub_b = ar.allocate<float>(size_t(C) * 3);
   im.w = ar.allocate<float>(C);
-  im.sub_w = ar.allocate<float>(C);
-  im.tls_weights = ar.allocate<float>(C);
-  im.mask = ar.allocate<uint8_t>(C);
-  im.in_clique = ar.allocate<uint8_t>(C);
+  record(&b.correspondence);
+  if (im.hypotheses.bind(ar, C, config.hypotheses.max_hypotheses) != Status::Ok) return Status::InvalidArgument;
+  record(&b.clique);
   if (config.refine.enabled && im.refiner.bind(ar, config.refine) != Status::Ok) return Status::InvalidArgument;
+  record(&b.refine);
   if (ar.overflowed()) return Status::BufferTooSmall;
+  if (parts) *parts = b;
   return Status::Ok;
 }
+
+namespace {
+constexpr size_t kImplAlign = alignof(std::max_align_t) < 16 ? 16 : alignof(std::max_align_t);
+}  // namespace
 
 Localizer::Budget Localizer::budget(const LocalizerConfig& c) {
   Budget b{};
   if (validate(c) != Status::Ok) return b;
-  const uint32_t I = c.cluster.max_instances, M = c.field.inducing_points, G = grid_points(c.field);
-  const uint32_t C = c.match.max_correspondences, P = c.match.max_field_points;
-  const uint32_t corr_cap = c.match.max_triangle_matches < 65536 ? c.match.max_triangle_matches : 65536;
-  auto bytes = [](auto&& bind) { Arena a; bind(a); return a.used(); };
-  b.voxel = VoxelLayer::required_bytes(c.voxel);
-  b.cluster = InstanceClustering::required_bytes(c.cluster, c.voxel.max_voxels);
-  b.field = FieldSolver::required_bytes(c.field, P) + bytes([&](Arena& a) {
-    a.allocate<float>(size_t(I) * M * 3); a.allocate<float>(size_t(I) * M * kNumClasses);
-    a.allocate<float>(size_t(I) * M * M); a.allocate<uint32_t>(I); a.allocate<uint32_t>(P);
-    a.allocate<float>(size_t(P) * 3); a.allocate<float>(size_t(P) * kNumClasses); a.allocate<uint8_t>(P);
-  });
-  b.triangle = TriangleBuilder::required_bytes(c.triangle, I) + bytes([&](Arena& a) {
-    FixedVector<Triangle> t; t.bind(a, c.triangle.max_triangles);
-    a.allocate<float>(size_t(I) * 3); a.allocate<uint8_t>(I);
-  });
-  b.match = bytes([&](Arena& a) { FixedVector<TriangleMatch> m; m.bind(a, c.match.max_triangle_matches); });
-  b.gsf_cache = bytes([&](Arena& a) {
-    BoundedHashMap<uint32_t> p; p.bind(a, c.match.probe_cache_slots);
-    BoundedHashMap<float> s; s.bind(a, c.match.similarity_cache_slots);
-    a.allocate<float>(size_t(G) * 3);
-    a.allocate<float>(size_t(c.match.probe_cache_slots + 1) * G * kNumClasses);
-    a.allocate<float>(size_t(c.match.probe_cache_slots + 1) * G);
-  });
-  b.correspondence = bytes([&](Arena& a) {
-    BoundedHashMap<uint32_t> h; h.bind(a, corr_cap);
-    a.allocate<CorrespondenceAcc>(corr_cap); a.allocate<uint32_t>(corr_cap);
-    for (int k = 0; k < 4; ++k) a.allocate<float>(size_t(C) * 3);
-    for (int k = 0; k < 3; ++k) a.allocate<float>(C);
-    a.allocate<uint8_t>(C); a.allocate<uint8_t>(C);
-  });
-  b.clique = MaxCliqueSolver::required_bytes(C) + ConsistencyGraph::required_bytes(C) +
-             bytes([&](Arena& a) { FixedVector<uint32_t> v; v.bind(a, C); });
-  b.refine = c.refine.enabled ? Refiner::required_bytes(c.refine) : 0;
-  b.total = required_bytes(c);
+  Arena counting;
+  counting.allocate_bytes(sizeof(Impl), kImplAlign);
+  Impl scratch;
+  if (bind_workspace(counting, c, scratch, &b) != Status::Ok) return Budget{};
+  b.total = counting.used();
   const size_t parts = b.voxel + b.cluster + b.field + b.triangle + b.match + b.gsf_cache + b.correspondence + b.clique + b.refine;
-  b.other = b.total > parts ? b.total - parts : 0;  // Impl object and alignment padding
+  b.other = b.total - parts;  // the Impl object and its alignment
   return b;
 }
 
 size_t Localizer::required_bytes(const LocalizerConfig& config) {
   if (validate(config) != Status::Ok) return 0;
   Arena counting;
-  counting.allocate_bytes(sizeof(Impl), alignof(Impl) < 16 ? 16 : alignof(Impl));
+  counting.allocate_bytes(sizeof(Impl), kImplAlign);
   Impl scratch;
-  if (bind_workspace(counting, config, scratch) != Status::Ok) return 0;
+  if (bind_workspace(counting, config, scratch, nullptr) != Status::Ok) return 0;
   return counting.used();
 }
 
@@ -186,16 +156,16 @@ Status Localizer::init(const LocalizerConfig& config, const MapView& map, void* 
   s = check_map_params(config, map.params);
   if (s != Status::Ok) return s;
   if ((map.instances == nullptr && map.counts.instances > 0) || map.index_offsets == nullptr) return Status::InvalidArgument;
-  if (buffer == nullptr) return Status::InvalidArgument;
+  if (buffer == nullptr || (reinterpret_cast<uintptr_t>(buffer) % 16) != 0) return Status::InvalidArgument;
   if (bytes < required_bytes(config)) return Status::BufferTooSmall;
   config_ = config;
   map_ = map;
   clock_ = clock;
   arena_ = Arena(buffer, bytes);
-  void* mem = arena_.allocate_bytes(sizeof(Impl), alignof(Impl) < 16 ? 16 : alignof(Impl));
+  void* mem = arena_.allocate_bytes(sizeof(Impl), kImplAlign);
   if (!mem) return Status::BufferTooSmall;
   Impl& im = *new (mem) Impl();
-  s = bind_workspace(arena_, config, im);
+  s = bind_workspace(arena_, config, im, nullptr);
   if (s != Status::Ok) return s;
   if (config.refine.enabled) {
     if (map.counts.refine_points > config.refine.max_map_points) return Status::CapacityExceeded;
@@ -208,6 +178,8 @@ Status Localizer::init(const LocalizerConfig& config, const MapView& map, void* 
   im.index.entries = map.index_entries;
   im.index.key_count = map.counts.index_keys;
   im.index.entry_count = map.counts.triangles;
+  im.semantic = map.semantic_grid();
+  im.chosen = UINT32_MAX;
   impl_ = &im;
   initialized_ = true;
   return Status::Ok;
@@ -216,49 +188,6 @@ Status Localizer::init(const LocalizerConfig& config, const MapView& map, void* 
 namespace {
 
 uint64_t now(Clock* c) { return c ? c->now_ns() : 0; }
-
-// GSF similarity omega in [0, 1] between query instance qi (probed on the map's canonical grid rotated
-// into the query frame by the yaw hypothesis) and map instance mi, cached per (qi, mi, yaw bin).
-float field_similarity(Localizer::Impl& im, const LocalizerConfig& cfg, const MapView& map, uint32_t qi, uint32_t mi,
-                       uint32_t yaw_bin) {
-  const uint64_t skey = (uint64_t(qi) << 44) | (uint64_t(yaw_bin) << 32) | mi;
-  if (const float* cached = im.similarity.find(skey)) return *cached;
-  float omega = 0.0f;
-  if (im.q_m[qi] > 0) {
-    const uint32_t G = grid_points(cfg.field), M = cfg.field.inducing_points;
-    const uint64_t pkey = (uint64_t(qi) << 32) | yaw_bin;
-    uint32_t slot;
-    bool fresh = false;
-    uint32_t* ps = im.probe_slot.find(pkey);
-    if (ps) {
-      slot = *ps;
-    } else {
-      ps = im.probe_slot.find_or_insert(pkey);
-      slot = ps ? im.probe_used++ : cfg.match.probe_cache_slots;  // full cache: compute into scratch
-      if (ps) *ps = slot;
-      fresh = true;
-    }
-    float* mean = im.probe_mean + size_t(slot) * G * kNumClasses;
-    float* var = im.probe_var + size_t(slot) * G;
-    if (fresh) {
-      // Map grid offsets g (map frame) are R^T g = Rz(-yaw) g in the query frame.
-      const float yaw = static_cast<float>(kTwoPi * yaw_bin / cfg.match.yaw_bins);
-      make_probe_grid(cfg.field, -yaw, im.grid);
-      FieldView f;
-      f.inputs = im.q_inputs + size_t(qi) * M * 3;
-      f.alpha = im.q_alpha + size_t(qi) * M * kNumClasses;
-      f.m = im.q_m[qi];
-      im.solver.probe(f, im.q_chol + size_t(qi) * M * M, im.grid, G, mean, var, nullptr);
-    }
-    const ObservedW2 r = w2_squared_diag_observed(mean, var, map.grid_mean + size_t(mi) * G * kNumClasses,
-                                                  map.grid_var + size_t(mi) * G, G, im.weights,
-                                                  cfg.match.observed_variance * cfg.field.signal_variance,
-                                                  cfg.match.normalize_mass, cfg.match.covariance_weight);
-    if (r.used >= 4) omega = static_cast<float>(std::exp(-(r.w2 / r.used) / cfg.match.tau));
-  }
-  if (float* slot = im.similarity.find_or_insert(skey)) *slot = omega;
-  return omega;
-}
 
 }  // namespace
 
@@ -269,6 +198,8 @@ Status Localizer::localize(const ScanView& scan, LocalizeResult* out_ptr) {
   if (!initialized_) return out.status = Status::NotInitialized;
   Impl& im = *impl_;
   const LocalizerConfig& cfg = config_;
+  im.selected = 0;
+  im.chosen = UINT32_MAX;
   const uint64_t t_start = now(clock_);
   uint64_t t = t_start;
   auto lap = [&](uint64_t* field) {
@@ -326,91 +257,86 @@ Status Localizer::localize(const ScanView& scan, LocalizeResult* out_ptr) {
   out.query_triangles = im.triangles.size();
   lap(&out.times.triangle);
 
-  // 5. Coarse matching through the map's hash index.
-  im.matches.clear();
-  for (uint32_t q = 0; q < im.triangles.size(); ++q) {
-    s = match_triangle(im.triangles[q], q, im.index, map_.triangles, cfg.triangle, cfg.match.max_matches_per_triangle,
-                       im.matches);
-    if (s == Status::CapacityExceeded) {
-      out.capacity_truncated = true;
-      if (im.matches.full()) break;
-    }
-  }
-  out.triangle_matches = im.matches.size();
-  lap(&out.times.match);
-
-  // 6. GSF fine filter -> weighted, deduplicated vertex correspondences.
-  im.probe_slot.clear();
-  im.similarity.clear();
+  // 5 + 6. Per query triangle: ranked index matches, then the GSF filter, accumulating weighted,
+  // deduplicated vertex correspondences. Nothing is stored per triangle match, so no global cap on
+  // matches exists that could cut in storage order.
+  im.gsf.reset();
   im.corr_index.clear();
-  im.probe_used = 0;
   im.corr_count = 0;
-  im.selected = 0;
+  const QueryFields qf{im.q_inputs, im.q_alpha, im.q_chol, im.q_m, M};
+  uint64_t t_match = 0, t_gsf = 0;
   uint32_t survivors = 0;
-  for (uint32_t k = 0; k < im.matches.size(); ++k) {
-    const Triangle& qt = im.triangles[im.matches[k].query];
-    const Triangle& mt = map_.triangles[im.matches[k].map];
-    float omega[3] = {1.0f, 1.0f, 1.0f};
-    if (cfg.match.use_gsf) {
-      // Yaw hypothesis of the match: closed-form 2-D Procrustes over the three centred vertex pairs
-      // (the vehicle is near level; the full 3-D pose comes later from the clique).
-      float qc[2] = {0, 0}, mc[2] = {0, 0};
-      for (int v = 0; v < 3; ++v)
-        for (int d = 0; d < 2; ++d) {
-          qc[d] += im.centroids[3 * qt.v[v] + d] / 3.0f;
-          mc[d] += map_.instances[mt.v[v]].centroid[d] / 3.0f;
+  for (uint32_t qt_id = 0; qt_id < im.triangles.size(); ++qt_id) {
+    const Triangle& qt = im.triangles[qt_id];
+    const uint64_t t0 = now(clock_);
+    const TriangleMatchStats ms = im.matcher.match(qt, im.index, map_.triangles, cfg.triangle, cfg.match.vertex_tie_tolerance);
+    const uint64_t t1 = now(clock_);
+    t_match += t1 - t0;
+    out.match_candidates += ms.accepted;
+    out.match_dropped += ms.dropped();
+    out.triangle_matches += ms.kept;
+    if (ms.orders > 1) ++out.tie_ordered_triangles;
+    for (uint32_t k = 0; k < im.matcher.size(); ++k) {
+      const RankedTriangleMatch& rm = im.matcher.match_at(k);
+      const Triangle& mt = map_.triangles[rm.map];
+      uint32_t qv[3];
+      for (int v = 0; v < 3; ++v) qv[v] = TriangleMatcher::query_vertex(qt, rm.order, v);
+      float omega[3] = {1.0f, 1.0f, 1.0f};
+      if (cfg.match.use_gsf) {
+        const float* qp[3] = {im.centroids + 3 * qv[0], im.centroids + 3 * qv[1], im.centroids + 3 * qv[2]};
+        const float* mp[3] = {map_.instances[mt.v[0]].centroid, map_.instances[mt.v[1]].centroid,
+                              map_.instances[mt.v[2]].centroid};
+        const uint32_t bin = triangle_yaw_bin(qp, mp, cfg.gsf.yaw_bins);
+        bool keep = true;
+        for (int v = 0; v < 3 && keep; ++v) {
+          omega[v] = im.gsf.similarity(qf, qv[v], map_, mt.v[v], bin);
+          keep = omega[v] >= cfg.match.min_similarity;
         }
-      float dot = 0.0f, cross = 0.0f;
+        if (!keep) continue;
+      }
+      ++survivors;
       for (int v = 0; v < 3; ++v) {
-        const float ax = im.centroids[3 * qt.v[v]] - qc[0], ay = im.centroids[3 * qt.v[v] + 1] - qc[1];
-        const float bx = map_.instances[mt.v[v]].centroid[0] - mc[0], by = map_.instances[mt.v[v]].centroid[1] - mc[1];
-        dot += ax * bx + ay * by;
-        cross += ax * by - ay * bx;
+        const uint64_t key = (uint64_t(qv[v]) << 32) | mt.v[v];
+        bool inserted = false;
+        // corr_index and corr share one capacity, so the index refuses a new key (nullptr) exactly when
+        // the array is full; the second test is a guard that can only fire if that invariant breaks.
+        uint32_t* id = im.corr_index.find_or_insert(key, &inserted);
+        if (!id || (inserted && im.corr_count >= im.corr_capacity)) { ++out.candidate_pairs_dropped; continue; }
+        if (inserted) {
+          *id = im.corr_count;
+          im.corr[im.corr_count++] = CorrespondenceAcc{qv[v], mt.v[v], 0.0f, 0};
+        }
+        CorrespondenceAcc& c = im.corr[*id];
+        c.weight = std::max(c.weight, omega[v]);
+        c.votes += 1;
       }
-      const double yaw = std::atan2(static_cast<double>(cross), static_cast<double>(dot));
-      const uint32_t bins = cfg.match.yaw_bins;
-      int64_t bin = static_cast<int64_t>(std::llround(yaw / kTwoPi * bins));
-      bin = ((bin % bins) + bins) % bins;
-      bool keep = true;
-      for (int v = 0; v < 3 && keep; ++v) {
-        omega[v] = field_similarity(im, cfg, map_, qt.v[v], mt.v[v], static_cast<uint32_t>(bin));
-        keep = omega[v] >= cfg.match.min_similarity;
-      }
-      if (!keep) continue;
     }
-    ++survivors;
-    for (int v = 0; v < 3; ++v) {
-      const uint64_t key = (uint64_t(qt.v[v]) << 32) | mt.v[v];
-      bool inserted = false;
-      // corr_index and corr share one capacity, so the index refuses a new key (nullptr) exactly when
-      // the array is full; the second test is a guard that can only fire if that invariant breaks.
-      uint32_t* id = im.corr_index.find_or_insert(key, &inserted);
-      if (!id || (inserted && im.corr_count >= im.corr_capacity)) { out.capacity_truncated = true; continue; }
-      if (inserted) {
-        *id = im.corr_count;
-        im.corr[im.corr_count++] = CorrespondenceAcc{qt.v[v], mt.v[v], 0.0f, 0};
-      }
-      CorrespondenceAcc& c = im.corr[*id];
-      c.weight = std::max(c.weight, omega[v]);
-      c.votes += 1;
-    }
+    t_gsf += now(clock_) - t1;
   }
+  out.times.match = t_match;
+  out.times.gsf = t_gsf;
+  t = now(clock_);
   out.gsf_survivors = survivors;
-  out.field_probes = im.probe_used;
-  out.field_comparisons = im.similarity.size();
-  lap(&out.times.gsf);
+  out.field_probes = im.gsf.probes();
+  out.field_comparisons = im.gsf.comparisons();
+  out.candidate_pairs = im.corr_count;
+  if (out.match_dropped > 0 || out.candidate_pairs_dropped > 0) out.capacity_truncated = true;
 
-  // 7. Keep the best-supported correspondences (votes x weight) up to the clique capacity.
+  // 7. Keep the best-supported correspondences (votes x weight) up to the clique capacity; equal
+  // support is broken by a hash of the pair, never by instance id (map ids follow map x order).
   const uint32_t total = im.corr_count;
   for (uint32_t i = 0; i < total; ++i) im.order[i] = i;
   const CorrespondenceAcc* corr = im.corr;
   std::sort(im.order, im.order + total, [corr](uint32_t x, uint32_t y) {
     const float sx = corr[x].weight * float(corr[x].votes), sy = corr[y].weight * float(corr[y].votes);
     if (sx != sy) return sx > sy;
-    if (corr[x].query != corr[y].query) return corr[x].query < corr[y].query;
-    return corr[x].map < corr[y].map;
+    const uint64_t hx = mix64((uint64_t(corr[x].query) << 32) | corr[x].map);
+    const uint64_t hy = mix64((uint64_t(corr[y].query) << 32) | corr[y].map);
+    if (hx != hy) return hx < hy;
+    return x < y;
   });
   const uint32_t C = std::min(total, cfg.match.max_correspondences);
+  out.correspondences_dropped = total - C;
   if (total > C) out.capacity_truncated = true;
   for (uint32_t i = 0; i < C; ++i) {
     const CorrespondenceAcc& c = im.corr[im.order[i]];
@@ -422,64 +348,74 @@ Status Localizer::localize(const ScanView& scan, LocalizeResult* out_ptr) {
   }
   out.correspondences = C;
   im.selected = C;
-  for (uint32_t i = 0; i < C; ++i) im.in_clique[i] = 0;
-  if (C < cfg.pose.min_inliers) return finish(Status::NoSolution);
+  if (C < cfg.hypotheses.min_inliers) return finish(Status::NoSolution);
 
-  // 8. Maximum clique of the consistency graph.
-  im.graph.build(im.a, im.b, C, cfg.clique.consistency_eps);
-  CliqueStats cs;
-  s = im.clique_solver.solve(im.graph, cfg.clique.node_budget, im.clique, &cs);
-  out.clique_nodes = cs.nodes;
-  out.budget_exhausted = s == Status::BudgetExhausted;
-  out.clique_size = im.clique.size();
+  // 8. Pose hypotheses: peeled maximum cliques, each with its weighted TLS pose.
+  HypothesisStats hs;
+  s = im.hypotheses.generate(im.a, im.b, im.w, C, cfg.hypotheses, &hs);
+  out.clique_nodes = hs.nodes;
+  out.clique_searches = hs.searches;
+  out.budget_exhausted = hs.budget_exhausted;
+  out.hypotheses = im.hypotheses.size();
   lap(&out.times.clique);
-  if (im.clique.size() < cfg.pose.min_inliers) return finish(Status::NoSolution);
+  if (s != Status::Ok) return finish(Status::NoSolution);
 
-  // 9. Weighted TLS pose on the clique.
-  const uint32_t q = im.clique.size();
-  for (uint32_t i = 0; i < q; ++i) im.in_clique[im.clique[i]] = 1;
-  for (uint32_t i = 0; i < q; ++i) {
-    const uint32_t id = im.clique[i];
-    for (int d = 0; d < 3; ++d) { im.sub_a[3 * i + d] = im.a[3 * id + d]; im.sub_b[3 * i + d] = im.b[3 * id + d]; }
-    im.sub_w[i] = im.w[id] > 1e-6f ? im.w[id] : 1e-6f;
+  // 9. Whole-scan verification against the map's semantic layer picks among the hypotheses; the
+  // ambiguity is how clearly the chosen one beats the runner-up.
+  const uint32_t H = im.hypotheses.size();
+  const bool verify = cfg.verify.enabled && !im.semantic.empty();
+  uint32_t best = 0, second = UINT32_MAX;
+  if (verify) {
+    for (uint32_t h = 0; h < H; ++h)
+      im.hypotheses[h].verification = verify_pose(im.voxels, im.semantic, im.hypotheses[h].map_T_scan,
+                                                  cfg.verify.max_points, im.weights);
+    for (uint32_t h = 1; h < H; ++h)
+      if (im.hypotheses[h].verification.score > im.hypotheses[best].verification.score) best = h;
+    for (uint32_t h = 0; h < H; ++h)
+      if (h != best && (second == UINT32_MAX ||
+                        im.hypotheses[h].verification.score > im.hypotheses[second].verification.score))
+        second = h;
+  } else {
+    second = H > 1 ? 1 : UINT32_MAX;
   }
-  TlsResult tls;
-  s = solve_tls(im.sub_a, im.sub_b, im.sub_w, q, cfg.pose.tls_threshold, cfg.pose.max_iterations, &tls, im.mask,
-                im.tls_weights);
-  if (s != Status::Ok || tls.inliers < cfg.pose.min_inliers) {
-    lap(&out.times.pose);
-    return finish(Status::NoSolution);
-  }
-  out.map_T_scan = tls.b_T_a;
-  out.inliers = tls.inliers;
-  double best_score = 0.0;
-  for (uint32_t i = 0; i < q; ++i) best_score += im.mask[i] ? im.sub_w[i] : 0.0;
-  out.score = best_score;
-
-  // 10. Ambiguity: the best clique among correspondences that disagree with the answer.
-  const double far2 = 4.0 * double(cfg.pose.tls_threshold) * cfg.pose.tls_threshold;
-  uint32_t nd = 0;
-  for (uint32_t i = 0; i < C; ++i) {
-    const Eigen::Vector3d pa(im.a[3 * i], im.a[3 * i + 1], im.a[3 * i + 2]);
-    const Eigen::Vector3d pb(im.b[3 * i], im.b[3 * i + 1], im.b[3 * i + 2]);
-    if ((pb - tls.b_T_a * pa).squaredNorm() <= far2) continue;
-    for (int d = 0; d < 3; ++d) { im.sub_a[3 * nd + d] = im.a[3 * i + d]; im.sub_b[3 * nd + d] = im.b[3 * i + d]; }
-    im.sub_w[nd] = im.w[i];
-    ++nd;
-  }
-  double second = 0.0;
-  if (nd >= 2) {
-    im.graph.build(im.sub_a, im.sub_b, nd, cfg.clique.consistency_eps);
-    im.clique_solver.solve(im.graph, cfg.clique.second_budget, im.clique, &cs);
-    for (uint32_t i = 0; i < im.clique.size(); ++i) second += std::max(im.sub_w[im.clique[i]], 1e-6f);
+  const PoseHypothesis& answer = im.hypotheses[best];
+  out.map_T_scan = answer.map_T_scan;
+  out.inliers = answer.inliers;
+  out.clique_size = answer.clique_size;
+  out.score = answer.support;
+  out.chosen_hypothesis = best;
+  out.verified = verify;
+  im.chosen = best;
+  for (uint32_t h = 0; h < H && h < kMaxReportedHypotheses; ++h) {
+    const PoseHypothesis& p = im.hypotheses[h];
+    HypothesisReport& r = out.hypothesis[h];
+    r.x = static_cast<float>(p.map_T_scan.translation().x());
+    r.y = static_cast<float>(p.map_T_scan.translation().y());
+    const Eigen::Matrix3d R = p.map_T_scan.linear();
+    r.yaw_deg = static_cast<float>(std::atan2(R(1, 0), R(0, 0)) * kRadToDeg);
+    r.clique_size = p.clique_size;
+    r.inliers = p.inliers;
+    r.support = static_cast<float>(p.support);
+    r.verified_score = p.verification.score;
+    r.verified_voxels = p.verification.scored;
   }
   // Weak support is ambiguity too: an answer resting on k inliers is at least min_inliers / k ambiguous
   // (a bare-minimum clique with nothing competing is still a guess).
-  const double support = double(cfg.pose.min_inliers) / double(tls.inliers);
-  out.ambiguity = best_score > 0 ? std::min(1.0, std::max(second / best_score, support)) : 1.0;
+  const double support = double(cfg.hypotheses.min_inliers) / double(answer.inliers);
+  double rival = 0.0;
+  if (second != UINT32_MAX) {
+    if (verify) {
+      const double margin = double(answer.verification.score) - im.hypotheses[second].verification.score;
+      const double scale = double(cfg.verify.margin_scale) * std::max<uint32_t>(answer.verification.scored, 1);
+      rival = std::exp(-std::max(0.0, margin) / scale);
+    } else {
+      rival = answer.support > 0 ? im.hypotheses[second].support / answer.support : 1.0;
+    }
+  }
+  out.ambiguity = std::min(1.0, std::max(rival, support));
   lap(&out.times.pose);
 
-  // 11. Optional refinement against the map's point layer.
+  // 10. Optional refinement against the map's point layer.
   if (cfg.refine.enabled && map_.counts.refine_points > 0) {
     Eigen::Isometry3d refined;
     RefineStats rs;
@@ -492,10 +428,6 @@ Status Localizer::localize(const ScanView& scan, LocalizeResult* out_ptr) {
   return finish(Status::Ok);
 }
 
-}  // namespace gsf
-
-namespace gsf {
-
 uint32_t Localizer::last_correspondences(Correspondence* out, uint32_t max) const {
   if (!impl_) return 0;
   const Impl& im = *impl_;
@@ -505,7 +437,7 @@ uint32_t Localizer::last_correspondences(Correspondence* out, uint32_t max) cons
     out[i].map_instance = c.map;
     for (int d = 0; d < 3; ++d) out[i].query_xyz[d] = im.a[3 * i + d];
     out[i].weight = c.weight;
-    out[i].in_clique = im.in_clique[i] != 0;
+    out[i].in_clique = im.chosen != UINT32_MAX && im.hypotheses.in_clique(im.chosen, i);
   }
   return im.selected;
 }

@@ -40,6 +40,10 @@ bool section_specs(const MapView& m, SectionSpec* s) {
   s[7] = {MapSection::IndexOffsets, sizeof(uint32_t), uint64_t(m.counts.index_keys) + 1, m.index_offsets};
   s[8] = {MapSection::IndexEntries, sizeof(uint32_t), m.counts.triangles, m.index_entries};
   s[9] = {MapSection::RefinePoints, sizeof(float), uint64_t(m.counts.refine_points) * 4, m.refine_points};
+  const uint64_t tc = m.params.semantic_tile_cells;
+  if (tc > kMaxSemanticTileCells) return false;
+  s[10] = {MapSection::SemanticTileKeys, sizeof(uint32_t), m.counts.semantic_tiles, m.semantic_tile_keys};
+  s[11] = {MapSection::SemanticCells, sizeof(uint32_t), uint64_t(m.counts.semantic_tiles) * tc * tc, m.semantic_cells};
   return true;
 }
 
@@ -69,6 +73,11 @@ Status check_params(const MapParams& p) {
   if (!all_finite(fs, sizeof(fs) / sizeof(fs[0]))) return Status::CorruptData;
   if (!(p.grid_spacing > 0 && p.length_scale > 0 && p.signal_variance > 0 && p.noise_variance > 0 &&
         p.field_radius > 0 && p.voxel_size > 0 && p.side_bin > 0 && p.min_side >= 0 && p.max_side > p.min_side))
+    return Status::CorruptData;
+  // The semantic layer's shape: both zero (no layer) or a positive cell and 1..64 cells per tile.
+  const bool no_layer = p.semantic_cell == 0.0f && p.semantic_tile_cells == 0;
+  if (!no_layer && !(std::isfinite(p.semantic_cell) && p.semantic_cell > 0 && p.semantic_tile_cells > 0 &&
+                     p.semantic_tile_cells <= kMaxSemanticTileCells))
     return Status::CorruptData;
   return Status::Ok;
 }
@@ -108,7 +117,8 @@ Status check_contents(const MapView& m) {
   for (uint32_t i = 0; i < m.counts.triangles; ++i)
     if (m.index_entries[i] >= m.counts.triangles) return Status::CorruptData;
   if (!all_finite(m.refine_points, uint64_t(m.counts.refine_points) * 4)) return Status::CorruptData;
-  return Status::Ok;
+  if (m.counts.semantic_tiles > 0 && m.params.semantic_tile_cells == 0) return Status::CorruptData;
+  return m.semantic_grid().validate(d);
 }
 
 }  // namespace
@@ -223,6 +233,8 @@ Status load_map(const void* data, size_t bytes, MapView* out) {
   m.index_offsets = static_cast<const uint32_t*>(ptr[7]);
   m.index_entries = static_cast<const uint32_t*>(ptr[8]);
   m.refine_points = m.counts.refine_points ? static_cast<const float*>(ptr[9]) : nullptr;
+  m.semantic_tile_keys = m.counts.semantic_tiles ? static_cast<const uint32_t*>(ptr[10]) : nullptr;
+  m.semantic_cells = m.counts.semantic_tiles ? static_cast<const uint32_t*>(ptr[11]) : nullptr;
   const Status cs = check_contents(m);
   if (cs != Status::Ok) return cs;
   *out = m;

@@ -67,7 +67,7 @@ Status MaxCliqueSolver::bind(Arena& arena, uint32_t max_vertices) {
   if (max_vertices == 0 || max_vertices > 4096) return Status::InvalidArgument;
   max_vertices_ = max_vertices;
   words_max_ = words_for(max_vertices);
-  const size_t depth = size_t(max_vertices) + 1;  // a clique has at most n vertices
+  const size_t depth = size_t(max_vertices < kMaxCliqueDepth ? max_vertices : kMaxCliqueDepth) + 1;
   frames_ = arena.allocate<Frame>(depth);
   pool_words_ = arena.allocate<uint64_t>(depth * words_max_);
   pool_order_ = arena.allocate<uint32_t>(depth * max_vertices);
@@ -116,7 +116,8 @@ uint32_t MaxCliqueSolver::colour_sort(const ConsistencyGraph& g, const uint64_t*
   return count;
 }
 
-Status MaxCliqueSolver::solve(const ConsistencyGraph& g, uint64_t budget, FixedVector<uint32_t>& clique, CliqueStats* stats) {
+Status MaxCliqueSolver::solve(const ConsistencyGraph& g, uint64_t budget, FixedVector<uint32_t>& clique, CliqueStats* stats,
+                              const uint64_t* allowed) {
   clique.clear();
   CliqueStats st;
   if (!bound_) return Status::NotInitialized;
@@ -133,6 +134,8 @@ Status MaxCliqueSolver::solve(const ConsistencyGraph& g, uint64_t budget, FixedV
     uint64_t* cand = frames_[0].cand;
     for (uint32_t i = 0; i < w; ++i) cand[i] = 0;
     for (uint32_t v = 0; v < n; ++v) cand[v >> 6] |= uint64_t(1) << (v & 63);
+    if (allowed)
+      for (uint32_t i = 0; i < w; ++i) cand[i] &= allowed[i];
     for (;;) {
       int best_v = -1, best_deg = -1;
       for (uint32_t v = 0; v < n; ++v) {
@@ -141,7 +144,7 @@ Status MaxCliqueSolver::solve(const ConsistencyGraph& g, uint64_t budget, FixedV
         for (uint32_t x = 0; x < w; ++x) deg += __builtin_popcountll(cand[x] & g.row(v)[x]);
         if (deg > best_deg) { best_deg = deg; best_v = static_cast<int>(v); }
       }
-      if (best_v < 0) break;
+      if (best_v < 0 || best_size >= kMaxCliqueDepth) break;
       best_[best_size++] = static_cast<uint32_t>(best_v);
       const uint64_t* nb = g.row(static_cast<uint32_t>(best_v));
       for (uint32_t x = 0; x < w; ++x) cand[x] &= nb[x];
@@ -153,6 +156,9 @@ Status MaxCliqueSolver::solve(const ConsistencyGraph& g, uint64_t budget, FixedV
   Frame* f = &frames_[0];
   for (uint32_t i = 0; i < w; ++i) f->cand[i] = 0;
   for (uint32_t v = 0; v < n; ++v) f->cand[v >> 6] |= uint64_t(1) << (v & 63);
+  if (allowed)
+    for (uint32_t i = 0; i < w; ++i) f->cand[i] &= allowed[i];
+  const uint32_t max_depth = max_vertices_ < kMaxCliqueDepth ? max_vertices_ : kMaxCliqueDepth;
   f->count = colour_sort(g, f->cand, f->order, f->colour);
   f->pos = f->count;
   st.nodes = 1;
@@ -174,7 +180,7 @@ Status MaxCliqueSolver::solve(const ConsistencyGraph& g, uint64_t budget, FixedV
       next->cand[x] = f->cand[x] & nb[x];
       empty = empty && next->cand[x] == 0;
     }
-    if (empty) {
+    if (empty || depth + 1 >= max_depth) {  // a leaf, or the depth bound
       if (depth + 1 > best_size) {
         best_size = depth + 1;
         for (uint32_t k = 0; k < best_size; ++k) best_[k] = current_[k];

@@ -36,7 +36,7 @@ int cmd_evaluate(int argc, char** argv) {
       {"logits", "synthetic or none (see build-map)", "synthetic"},
       {"threshold", "ambiguity threshold for answering (precision vs answered)", "0.5"},
       {"limit", "evaluate only the first N queries", "0"},
-      {"set", "config overrides name=value[,name=value] (see pipeline.cpp), e.g. match.tau=0.1", ""},
+      {"set", "config overrides name=value[,name=value] (see pipeline.cpp), e.g. gsf.tau=0.1", ""},
       {"quiet", "no progress on stderr", "", true},
   };
   if (wants_help(argc, argv)) {

@@ -9,6 +9,8 @@
 
 #include <Eigen/Geometry>
 
+#include "gsf/localizer.h"
+
 namespace gsf::cli {
 
 struct PoseError {
@@ -41,6 +43,7 @@ struct QueryRecord {
   uint32_t inliers = 0;
   Eigen::Isometry3d estimate = Eigen::Isometry3d::Identity();
   Eigen::Isometry3d truth = Eigen::Isometry3d::Identity();
+  LocalizeResult result;     // the library's own counts for this query (diagnostics)
 };
 
 struct CurvePoint {

@@ -24,17 +24,25 @@ bool apply_override(LocalizerConfig* c, const std::string& a, std::string* error
   const double x = std::strtod(v.c_str(), &end);
   if (v.empty() || *end != '\0') { *error = "override '" + a + "': value is not a number"; return false; }
   struct F { const char* name; float* f; uint32_t* u; };
+  uint32_t verify_enabled = c->verify.enabled ? 1 : 0;
   const F fields[] = {
-      {"match.tau", &c->match.tau, nullptr},
+      {"gsf.tau", &c->gsf.tau, nullptr},
+      {"gsf.observed_variance", &c->gsf.observed_variance, nullptr},
+      {"gsf.normalize_mass", &c->gsf.normalize_mass, nullptr},
+      {"gsf.covariance_weight", &c->gsf.covariance_weight, nullptr},
+      {"gsf.yaw_bins", nullptr, &c->gsf.yaw_bins},
       {"match.min_similarity", &c->match.min_similarity, nullptr},
-      {"match.observed_variance", &c->match.observed_variance, nullptr},
-      {"match.normalize_mass", &c->match.normalize_mass, nullptr},
-      {"match.covariance_weight", &c->match.covariance_weight, nullptr},
-      {"match.yaw_bins", nullptr, &c->match.yaw_bins},
+      {"match.vertex_tie_tolerance", &c->match.vertex_tie_tolerance, nullptr},
       {"match.max_correspondences", nullptr, &c->match.max_correspondences},
       {"match.max_matches_per_triangle", nullptr, &c->match.max_matches_per_triangle},
-      {"clique.consistency_eps", &c->clique.consistency_eps, nullptr},
-      {"pose.tls_threshold", &c->pose.tls_threshold, nullptr},
+      {"match.max_candidates", nullptr, &c->match.max_candidates},
+      {"hypotheses.max_hypotheses", nullptr, &c->hypotheses.max_hypotheses},
+      {"hypotheses.consistency_eps", &c->hypotheses.consistency_eps, nullptr},
+      {"hypotheses.tls_threshold", &c->hypotheses.tls_threshold, nullptr},
+      {"hypotheses.min_inliers", nullptr, &c->hypotheses.min_inliers},
+      {"verify.enabled", nullptr, &verify_enabled},
+      {"verify.max_points", nullptr, &c->verify.max_points},
+      {"verify.margin_scale", &c->verify.margin_scale, nullptr},
       {"field.length_scale", &c->field.length_scale, nullptr},
       {"field.radius", &c->field.radius, nullptr},
       {"field.grid_spacing", &c->field.grid_spacing, nullptr},
@@ -51,6 +59,7 @@ bool apply_override(LocalizerConfig* c, const std::string& a, std::string* error
       if (f.f) *f.f = static_cast<float>(x);
       else if (x < 0 || x != static_cast<double>(static_cast<uint32_t>(x))) { *error = "override '" + a + "' needs a whole number"; return false; }
       else *f.u = static_cast<uint32_t>(x);
+      c->verify.enabled = verify_enabled != 0;
       return true;
     }
   *error = "unknown config name '" + k + "'";

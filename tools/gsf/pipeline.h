@@ -15,7 +15,7 @@
 namespace gsf::cli {
 
 LocalizerConfig default_config();
-// Applies "name=value" overrides (e.g. match.tau=0.1); false with a message for unknown names/values.
+// Applies "name=value" overrides (e.g. gsf.tau=0.1); false with a message for unknown names/values.
 bool apply_override(LocalizerConfig* config, const std::string& assignment, std::string* error);
 bool apply_overrides(LocalizerConfig* config, const std::string& comma_list, std::string* error);
 

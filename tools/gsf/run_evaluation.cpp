@@ -29,6 +29,64 @@ struct ModeRun {
   uint64_t workspace_bytes = 0;
 };
 
+// The library's per-query counts: where candidates were dropped, what the hypotheses were.
+void write_diagnostics(JsonWriter& j, const QueryRecord& r) {
+  const LocalizeResult& x = r.result;
+  j.key("diagnostics");
+  j.begin_object();
+  j.field("instances", x.query_instances);
+  j.field("triangles", x.query_triangles);
+  j.field("match_candidates", x.match_candidates);
+  j.field("match_dropped", x.match_dropped);
+  j.field("tie_ordered_triangles", x.tie_ordered_triangles);
+  j.field("triangle_matches", x.triangle_matches);
+  j.field("gsf_survivors", x.gsf_survivors);
+  j.field("candidate_pairs", x.candidate_pairs);
+  j.field("candidate_pairs_dropped", x.candidate_pairs_dropped);
+  j.field("correspondences", x.correspondences);
+  j.field("correspondences_dropped", x.correspondences_dropped);
+  j.field("clique_size", x.clique_size);
+  j.field("clique_searches", x.clique_searches);
+  j.field("clique_nodes", static_cast<unsigned long long>(x.clique_nodes));
+  j.field("budget_exhausted", x.budget_exhausted);
+  j.field("capacity_truncated", x.capacity_truncated);
+  j.field("field_probes", x.field_probes);
+  j.field("field_comparisons", x.field_comparisons);
+  j.field("verified", x.verified);
+  j.field("chosen_hypothesis", x.chosen_hypothesis);
+  j.key("stage_ms");
+  j.begin_object();
+  j.field("voxel", r.stages.voxel);
+  j.field("cluster", r.stages.cluster);
+  j.field("field", r.stages.field);
+  j.field("triangle", r.stages.triangle);
+  j.field("match", r.stages.match);
+  j.field("gsf", r.stages.gsf);
+  j.field("clique", r.stages.clique);
+  j.field("pose", r.stages.pose);
+  j.field("refine", r.stages.refine);
+  j.end_object();
+  j.key("hypotheses");
+  j.begin_array();
+  for (uint32_t h = 0; h < x.hypotheses && h < kMaxReportedHypotheses; ++h) {
+    const HypothesisReport& p = x.hypothesis[h];
+    const double dx = p.x - r.truth.translation().x(), dy = p.y - r.truth.translation().y();
+    j.begin_object();
+    j.field("x", p.x);
+    j.field("y", p.y);
+    j.field("yaw_deg", p.yaw_deg);
+    j.field("clique_size", p.clique_size);
+    j.field("inliers", p.inliers);
+    j.field("support", p.support);
+    j.field("verified_score", p.verified_score);
+    j.field("verified_voxels", p.verified_voxels);
+    j.field("distance_to_truth_m", std::sqrt(dx * dx + dy * dy));
+    j.end_object();
+  }
+  j.end_array();
+  j.end_object();
+}
+
 void write_json(const std::string& path, const EvalOptions& o, const MapView& map, const std::vector<ModeRun>& runs,
                 const std::vector<ModeSummary>& sums) {
   JsonWriter j;
@@ -93,7 +151,8 @@ void write_json(const std::string& path, const EvalOptions& o, const MapView& ma
     j.end_object();
     j.key("queries");
     j.begin_array();
-    for (const auto& r : runs[m].records) {
+    const ModeRun& run = runs[m];
+    for (const auto& r : run.records) {
       j.begin_object();
       j.field("index", r.index);
       j.field("frame", r.frame);
@@ -105,6 +164,7 @@ void write_json(const std::string& path, const EvalOptions& o, const MapView& ma
       j.field("time_ms", r.time_ms);
       j.field("ambiguity", r.ambiguity);
       j.field("inliers", r.inliers);
+      if (run.mode != "scan-context") write_diagnostics(j, r);
       j.end_object();
     }
     j.end_array();
@@ -258,6 +318,7 @@ int run_evaluation(const EvalOptions& o) {
       r.estimate = res.map_T_scan;
       r.ambiguity = res.ambiguity;
       r.inliers = res.inliers;
+      r.result = res;
       r.time_ms = ms(res.times.total);
       r.stages = StageMs{ms(res.times.voxel), ms(res.times.cluster), ms(res.times.field), ms(res.times.triangle),
                          ms(res.times.match), ms(res.times.gsf), ms(res.times.clique), ms(res.times.pose), ms(res.times.refine)};

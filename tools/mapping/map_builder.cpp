@@ -209,6 +209,11 @@ Status MapBuilder::build(std::vector<uint64_t>* blob, size_t* bytes_out, MapBuil
   }
   st.refine_points = static_cast<uint32_t>(refine.size() / 4);
 
+  // Semantic layer for whole-scan verification of pose hypotheses.
+  std::vector<uint32_t> sem_keys, sem_cells;
+  if (semantic_.cell > 0.0f) build_semantic_layer(layer, semantic_, &sem_keys, &sem_cells);
+  st.semantic_tiles = static_cast<uint32_t>(sem_keys.size());
+
   MapView view;
   view.params = map_params_from(config_);
   view.counts.instances = ni;
@@ -216,6 +221,13 @@ Status MapBuilder::build(std::vector<uint64_t>* blob, size_t* bytes_out, MapBuil
   view.counts.index_keys = key_count;
   view.counts.refine_points = st.refine_points;
   view.counts.road_length_m = road_length_;
+  view.counts.semantic_tiles = st.semantic_tiles;
+  if (st.semantic_tiles > 0) {
+    view.params.semantic_cell = semantic_.cell;
+    view.params.semantic_tile_cells = semantic_.tile_cells;
+  }
+  view.semantic_tile_keys = sem_keys.empty() ? nullptr : sem_keys.data();
+  view.semantic_cells = sem_cells.empty() ? nullptr : sem_cells.data();
   for (int k = 0; k < 3; ++k) { view.counts.bounds_min[k] = 1e30f; view.counts.bounds_max[k] = -1e30f; }
   for (uint32_t i = 0; i < ni; ++i)
     for (int k = 0; k < 3; ++k) {

@@ -16,6 +16,7 @@
 #include "gsf/config.h"
 #include "gsf/scan.h"
 #include "gsf/status.h"
+#include "mapping/semantic_layer.h"
 
 namespace gsf::mapping {
 
@@ -28,6 +29,7 @@ struct MapBuildStats {
   uint32_t triangles = 0;
   uint32_t index_keys = 0;
   uint32_t refine_points = 0;
+  uint32_t semantic_tiles = 0;
   uint32_t fields_failed = 0;
   size_t bytes = 0;
   double seconds_accumulate = 0, seconds_cluster = 0, seconds_fields = 0, seconds_triangles = 0;
@@ -41,6 +43,8 @@ class MapBuilder {
   explicit MapBuilder(const LocalizerConfig& config, float refine_voxel = 1.0f);
   Status add_scan(const ScanView& scan, const Eigen::Isometry3d& world_T_lidar);
   void set_road_length(float metres) { road_length_ = metres; }
+  // The semantic layer used to verify pose hypotheses; cell <= 0 leaves it out of the map.
+  void set_semantic_layer(const SemanticLayerConfig& c) { semantic_ = c; }
   // Serialises the map into `blob` (16-byte aligned words); *bytes is the map's size.
   Status build(std::vector<uint64_t>* blob, size_t* bytes, MapBuildStats* stats, const Progress& progress = nullptr);
 
@@ -53,6 +57,7 @@ class MapBuilder {
   LocalizerConfig config_;
   float refine_voxel_;
   float road_length_ = 0.0f;
+  SemanticLayerConfig semantic_;
   MapBuildStats stats_;
   std::unordered_map<uint64_t, Accum> voxels_;
   std::vector<uint8_t> scan_arena_;

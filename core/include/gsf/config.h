@@ -5,8 +5,10 @@
 #include <cstdint>
 
 #include "gsf/gaussian_field.h"
+#include "gsf/gsf_filter.h"
 #include "gsf/instance_clustering.h"
 #include "gsf/map_format.h"
+#include "gsf/pose_hypotheses.h"
 #include "gsf/refine.h"
 #include "gsf/status.h"
 #include "gsf/triangle.h"
@@ -14,36 +16,25 @@
 
 namespace gsf {
 
+// Coarse matching and correspondence selection. Every cap ranks before it cuts (never storage order)
+// and the localizer reports how many candidates each cap dropped.
 struct MatchConfig {
-  bool use_gsf = true;                    // false: instance-only Outram behaviour (ablation)
-  uint32_t max_matches_per_triangle = 64; // map triangles accepted per query triangle
-  uint32_t max_triangle_matches = 24000;  // total per query (capacity)
-  uint32_t yaw_bins = 36;                 // rotation hypotheses are binned for probe caching (10 deg)
-  uint32_t probe_cache_slots = 1024;      // cached query-field probes (instance, yaw bin)
-  uint32_t similarity_cache_slots = 8192; // cached omega per (query instance, map instance, yaw bin)
-  float observed_variance = 0.6f;         // grid points where the query field's variance exceeds this
-                                          // fraction of the prior are unobserved and not compared
-  float normalize_mass = 0.0f;            // >0: compare per-point class distributions (wasserstein.h)
-  // Weight of the W2 covariance term in the per-match similarity. The posterior covariance depends only
-  // on where data lies (a sparse scan vs the dense map), not on semantics; measured on the simulator it
-  // halves the true/false separation, so the filter uses the mean term (0). 1 = the paper's W2.
-  float covariance_weight = 0.0f;
-  float tau = 0.2f;                       // omega = exp(-w2 / tau), w2 per compared grid point
-  float min_similarity = 0.3f;            // a triangle match survives if all three omegas reach this
-  uint32_t max_correspondences = 256;     // vertices of the consistency graph (capacity)
-  uint32_t max_field_points = 4096;       // semantic points gathered per query instance field
+  bool use_gsf = true;                     // false: instance-only Outram behaviour (ablation)
+  uint32_t max_matches_per_triangle = 256; // best map triangles kept per query triangle (by side residual)
+  float vertex_tie_tolerance = 0.06f;      // relative; query sides closer than this are tried in both orders
+  float min_similarity = 0.3f;             // with GSF: a triangle match survives if all three omegas reach this
+  uint32_t max_candidates = 24000;         // distinct (query, map) instance pairs accumulated (capacity)
+  uint32_t max_correspondences = 512;      // vertices of the consistency graph (best by votes x weight)
+  uint32_t max_field_points = 4096;        // semantic points gathered per query instance field
 };
 
-struct CliqueConfig {
-  float consistency_eps = 1.0f;   // m; | |a_i-a_j| - |b_i-b_j| | <= eps (Outram: 1.0 m)
-  uint64_t node_budget = 200000;  // branch-and-bound nodes per search; then best-so-far is used
-  uint64_t second_budget = 50000; // nodes for the second-best (ambiguity) search
-};
-
-struct PoseConfig {
-  float tls_threshold = 1.5f;     // m; residual truncation of the weighted TLS (paper Eq. 8)
-  uint32_t max_iterations = 50;   // GNC iterations
-  uint32_t min_inliers = 3;       // fewer -> NoSolution
+// Whole-scan verification of the pose hypotheses against the map's semantic layer (semantic_grid.h).
+struct VerifyConfig {
+  bool enabled = true;         // off, or a map without the layer: the maximum clique's pose is the answer
+  uint32_t max_points = 4096;  // query voxels scored per hypothesis (uniform stride over the scan)
+  // Ambiguity from verification: exp(-(best - second) / (margin_scale * scored voxels)). The margin is a
+  // share of the scored voxels so the same setting serves sparse and dense scans.
+  float margin_scale = 0.01f;
 };
 
 struct LocalizerConfig {
@@ -53,8 +44,9 @@ struct LocalizerConfig {
   FieldConfig field;
   TriangleConfig triangle;
   MatchConfig match;
-  CliqueConfig clique;
-  PoseConfig pose;
+  GsfFilterConfig gsf;
+  HypothesisConfig hypotheses;
+  VerifyConfig verify;
   RefineConfig refine;  // off by default (the "gsf+refine" evaluation row turns it on)
 };
 

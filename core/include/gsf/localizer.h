@@ -1,7 +1,8 @@
 // The Localizer facade: init(config, map, buffer) once, then localize(scan) -> LocalizeResult, with no
 // heap use, no exceptions and bounded work per call. Stages (one file each) run in a fixed order:
-//   voxel layer -> instances -> query fields -> triangles -> index matches -> GSF filter ->
-//   correspondences -> consistency graph -> max clique -> robust pose
+//   voxel layer -> instances -> query fields -> triangles -> ranked index matches -> GSF filter ->
+//   correspondences (ranked) -> pose hypotheses (peeled max cliques + TLS) -> whole-scan verification
+//   -> ambiguity -> optional refinement
 #pragma once
 #include <cstddef>
 #include <cstdint>
@@ -18,8 +19,20 @@
 namespace gsf {
 
 struct StageTimes {  // nanoseconds from the Clock given at init (all zero without one)
+  // match: index lookups and ranking; gsf: the GSF filter and correspondence accumulation; clique: the
+  // hypotheses (cliques + TLS poses); pose: verification and ambiguity.
   uint64_t voxel = 0, cluster = 0, field = 0, triangle = 0, match = 0, gsf = 0, clique = 0, pose = 0, refine = 0, total = 0;
 };
+
+// One pose hypothesis as the localizer saw it (diagnostics).
+struct HypothesisReport {
+  float x = 0, y = 0, yaw_deg = 0;   // map_T_scan translation and heading
+  uint32_t clique_size = 0, inliers = 0;
+  float support = 0;                 // sum of inlier weights
+  float verified_score = 0;          // agree - disagree (semantic_grid.h); 0 without verification
+  uint32_t verified_voxels = 0;      // voxels that landed on known cells
+};
+constexpr uint32_t kMaxReportedHypotheses = 8;
 
 struct LocalizeResult {
   Status status = Status::NotInitialized;
@@ -32,11 +45,23 @@ struct LocalizeResult {
   // different pose is as well supported, or the answer rests on the bare minimum (decline to answer).
   double ambiguity = 1.0;
   uint32_t query_instances = 0, query_triangles = 0, triangle_matches = 0, gsf_survivors = 0, correspondences = 0;
+  // What each cap dropped (all ranked before cutting), so a failure can be traced to a cap.
+  uint32_t match_candidates = 0;        // map triangles accepted by labels and sides, before the per-triangle cap
+  uint32_t match_dropped = 0;           // ... dropped by match.max_matches_per_triangle
+  uint32_t tie_ordered_triangles = 0;   // query triangles also tried in a tied vertex order
+  uint32_t candidate_pairs = 0;         // distinct (query, map) instance pairs from surviving matches
+  uint32_t candidate_pairs_dropped = 0; // pairs refused because match.max_candidates was full
+  uint32_t correspondences_dropped = 0; // pairs ranked out by match.max_correspondences
+  uint32_t clique_searches = 0;
+  uint32_t hypotheses = 0;              // distinct pose hypotheses (<= hypotheses.max_hypotheses)
+  uint32_t chosen_hypothesis = 0;       // index of the answer among them (0 = the maximum clique)
+  bool verified = false;                // the answer was chosen by whole-scan verification
+  HypothesisReport hypothesis[kMaxReportedHypotheses];
   uint64_t clique_nodes = 0;
   uint32_t field_probes = 0;       // query-field probes computed by the GSF filter (cost driver)
   uint32_t field_comparisons = 0;  // (query instance, map instance, yaw bin) similarities computed
   bool refined = false;            // refinement ran and its result was accepted
-  bool budget_exhausted = false;   // max clique ran out of nodes; the best clique found is used
+  bool budget_exhausted = false;   // the first clique search ran out of nodes; its best clique is used
   bool capacity_truncated = false; // some stage hit a Config capacity and kept a deterministic subset
   StageTimes times;
 };
@@ -46,14 +71,16 @@ class Localizer {
   // Bytes of the caller buffer init() needs for this config (independent of the map).
   static size_t required_bytes(const LocalizerConfig& config);
 
-  // The same total broken down by stage (for memory budgets; sums to required_bytes).
+  // The same total broken down by stage (for memory budgets). Recorded by the one layout function while
+  // it binds, so the parts always sum to required_bytes (other = the Impl object and its alignment).
   struct Budget {
     size_t voxel, cluster, field, triangle, match, gsf_cache, correspondence, clique, refine, other, total;
   };
   static Budget budget(const LocalizerConfig& config);
 
   // `map` must stay valid (and its blob unchanged) for the Localizer's lifetime. The map's build
-  // parameters must agree with config (field, grid, triangles): otherwise ConfigMismatch.
+  // parameters must agree with config (field, grid, triangles): otherwise ConfigMismatch. `buffer`
+  // must be 16-byte aligned (InvalidArgument otherwise) and at least required_bytes(config) long.
   Status init(const LocalizerConfig& config, const MapView& map, void* buffer, size_t bytes, Clock* clock = nullptr);
 
   // One-shot global localization of one scan. Always fills `out` (status inside as well as returned).
@@ -75,9 +102,10 @@ class Localizer {
   // Switch the GSF filter without re-init (ablation: off = instance-only Outram behaviour).
   void set_use_gsf(bool on) { config_.match.use_gsf = on; }
 
-  struct Impl;  // stage objects, bound into the arena
 
  private:
+  struct Impl;  // stage objects, bound into the arena (defined in localizer.cpp only)
+  static Status bind_workspace(Arena& arena, const LocalizerConfig& config, Impl& impl, Budget* parts);
   LocalizerConfig config_{};
   MapView map_{};
   Arena arena_;

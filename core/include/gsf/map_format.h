@@ -11,13 +11,14 @@
 #include <cstddef>
 #include <cstdint>
 
+#include "gsf/semantic_grid.h"
 #include "gsf/status.h"
 #include "gsf/triangle.h"
 
 namespace gsf {
 
 constexpr char kMapMagic[8] = {'G', 'S', 'F', 'M', 'A', 'P', '\r', '\n'};
-constexpr uint32_t kMapVersion = 1;
+constexpr uint32_t kMapVersion = 2;  // 2: semantic layer for hypothesis verification (v1 -> VersionMismatch)
 
 // Parameters the map was built with that a localizer must agree with (checked by the Localizer).
 struct MapParams {
@@ -32,7 +33,9 @@ struct MapParams {
   float field_radius;
   float voxel_size;
   float side_bin, min_side, max_side;
-  uint32_t reserved[4];
+  float semantic_cell;           // m; cell of the semantic layer (0 when the map has none)
+  uint32_t semantic_tile_cells;  // cells per tile side (0 when the map has none)
+  uint32_t reserved[2];
 };
 
 struct MapCounts {
@@ -43,7 +46,7 @@ struct MapCounts {
   float road_length_m;     // length of the mapping drive, for bytes-per-km reporting
   float bounds_min[3];
   float bounds_max[3];
-  uint32_t reserved;
+  uint32_t semantic_tiles; // tiles of the semantic layer (0: no layer; verification is then off)
 };
 
 struct MapHeader {
@@ -70,8 +73,10 @@ enum class MapSection : uint32_t {
   IndexOffsets,      // uint32 x (index_keys + 1), CSR into IndexEntries
   IndexEntries,      // uint32 x triangles (triangle ids)
   RefinePoints,      // float x refine_points x 4 (x, y, z, label) - optional
+  SemanticTileKeys,  // uint32 x semantic_tiles (sorted, unique; semantic_grid.h)
+  SemanticCells,     // uint32 x semantic_tiles x semantic_tile_cells^2 (class masks)
 };
-constexpr uint32_t kMapSectionCount = 10;
+constexpr uint32_t kMapSectionCount = 12;
 
 struct SectionEntry {
   uint32_t id;
@@ -109,9 +114,20 @@ struct MapView {
   const uint32_t* index_offsets = nullptr;
   const uint32_t* index_entries = nullptr;
   const float* refine_points = nullptr;
+  const uint32_t* semantic_tile_keys = nullptr;
+  const uint32_t* semantic_cells = nullptr;
   size_t total_bytes = 0;
 
   uint32_t grid_points() const { return params.grid_nx * params.grid_ny * params.grid_layers; }
+  SemanticGridView semantic_grid() const {
+    SemanticGridView g;
+    g.cell = params.semantic_cell;
+    g.tile_cells = params.semantic_tile_cells;
+    g.tile_count = counts.semantic_tiles;
+    g.tile_keys = semantic_tile_keys;
+    g.cells = semantic_cells;
+    return g;
+  }
 };
 
 // Bytes write_map() needs for these contents.

@@ -49,8 +49,13 @@ class MaxCliqueSolver {
  public:
   static size_t required_bytes(uint32_t max_vertices);
   Status bind(Arena& arena, uint32_t max_vertices);
-  // Writes the clique's vertex ids (ascending) into `clique`.
-  Status solve(const ConsistencyGraph& graph, uint64_t node_budget, FixedVector<uint32_t>& clique, CliqueStats* stats);
+  // Writes the clique's vertex ids (ascending) into `clique`. `allowed` (graph.words() words, or null
+  // for all vertices) restricts the search to a vertex subset: the hypothesis stage peels one clique
+  // after another without rebuilding the graph. Cliques stop growing at kMaxCliqueDepth vertices (a
+  // clique that large is an answer already; the bound keeps the search stack small).
+  Status solve(const ConsistencyGraph& graph, uint64_t node_budget, FixedVector<uint32_t>& clique, CliqueStats* stats,
+               const uint64_t* allowed = nullptr);
+  static constexpr uint32_t kMaxCliqueDepth = 255;
 
  private:
   struct Frame {

@@ -1,0 +1,79 @@
+// Pose hypotheses from the correspondences: the consistency graph is built once, then cliques are
+// peeled one after another. Each maximum clique gives a weighted TLS pose (paper Eq. 8); every
+// correspondence that agrees with that pose is removed before the next search, so the next clique is a
+// genuinely different answer (in a lattice: the next lattice shift or rotation). Up to K hypotheses,
+// each search with its own node budget, so the stage is bounded in memory and time.
+//
+// The first hypothesis is the paper's answer (the maximum clique); the verification stage
+// (semantic_grid.h) re-ranks them against the whole scan.
+#pragma once
+#include <cstdint>
+
+#include <Eigen/Geometry>
+
+#include "gsf/arena.h"
+#include "gsf/fixed_vector.h"
+#include "gsf/max_clique.h"
+#include "gsf/semantic_grid.h"
+#include "gsf/status.h"
+
+namespace gsf {
+
+struct HypothesisConfig {
+  uint32_t max_hypotheses = 8;     // K: cliques peeled per query
+  uint64_t first_budget = 200000;  // branch-and-bound nodes for the first (maximum) clique
+  uint64_t next_budget = 20000;    // nodes for each further clique
+  float consistency_eps = 1.0f;    // m; | |a_i-a_j| - |b_i-b_j| | <= eps (Outram: 1.0 m)
+  float tls_threshold = 1.5f;      // m; residual truncation of the weighted TLS (paper Eq. 8)
+  uint32_t max_iterations = 50;    // GNC iterations
+  uint32_t min_inliers = 3;        // a clique or TLS solution with fewer is no hypothesis
+  float same_pose_m = 2.0f;        // hypotheses closer than this and same_pose_deg are one answer
+  float same_pose_deg = 5.0f;
+};
+
+struct PoseHypothesis {
+  Eigen::Isometry3d map_T_scan = Eigen::Isometry3d::Identity();
+  uint32_t clique_size = 0;
+  uint32_t inliers = 0;        // TLS inliers
+  double support = 0.0;        // sum of the inliers' GSF weights
+  PoseVerification verification;
+};
+
+struct HypothesisStats {
+  uint32_t searches = 0;       // clique searches run
+  uint64_t nodes = 0;          // branch-and-bound nodes over all searches
+  bool budget_exhausted = false;  // the first search ran out of nodes (best-so-far used)
+  uint32_t merged = 0;         // cliques whose pose repeated an earlier hypothesis
+};
+
+class PoseHypotheses {
+ public:
+  static size_t required_bytes(uint32_t max_correspondences, uint32_t max_hypotheses);
+  Status bind(Arena& arena, uint32_t max_correspondences, uint32_t max_hypotheses);
+  // a, b: n x 3 query / map positions; w: n weights (> 0). Fills the hypotheses in the order found
+  // (the first is the maximum clique's). NoSolution if no clique reaches min_inliers.
+  Status generate(const float* a, const float* b, const float* w, uint32_t n, const HypothesisConfig& config,
+                  HypothesisStats* stats);
+
+  uint32_t size() const { return count_; }
+  PoseHypothesis& operator[](uint32_t i) { return hyps_[i]; }
+  const PoseHypothesis& operator[](uint32_t i) const { return hyps_[i]; }
+  // 1 for correspondences in hypothesis h's clique (h < size()); n entries.
+  bool in_clique(uint32_t h, uint32_t i) const { return owner_[i] == h + 1; }
+
+ private:
+  ConsistencyGraph graph_;
+  MaxCliqueSolver solver_;
+  FixedVector<uint32_t> clique_;
+  uint64_t* allowed_ = nullptr;   // words
+  uint32_t* owner_ = nullptr;     // per correspondence: 1 + hypothesis whose clique took it, 0 none
+  float* sub_a_ = nullptr;
+  float* sub_b_ = nullptr;
+  float* sub_w_ = nullptr;
+  float* tls_w_ = nullptr;
+  uint8_t* mask_ = nullptr;
+  PoseHypothesis* hyps_ = nullptr;
+  uint32_t max_n_ = 0, max_h_ = 0, count_ = 0;
+};
+
+}  // namespace gsf

@@ -1,0 +1,67 @@
+// The map's compact semantic layer and the whole-scan verification of a pose hypothesis.
+//
+// Layer: a bird's-eye grid of `cell` metre cells grouped in square tiles of tile_cells x tile_cells,
+// only tiles the mapping drive saw are stored (sorted tile keys + dense cells). A cell is a class mask:
+// bit c set when class c makes at least the builder's minimum share of the cell's ground voxels (for
+// ground classes) or of its above-ground voxels (other classes); bit 31 marks a cell the map observed.
+// 4 bytes a cell; 1 KiB a 16 x 16 tile.
+//
+// Verification: every sampled voxel of the query scan (stuff included: terrain, vegetation, fences,
+// walls, not only instances) is moved by the hypothesis into the map and compared with its cell:
+//   ground-class voxel: agrees if the cell has that ground class; disagrees if the cell has other ground
+//                       classes only; unknown if the cell has no ground.
+//   other voxel:        agrees if the cell has that class; disagrees if the cell was observed without it
+//                       (the map saw that spot and it held something else or nothing above ground);
+//                       unknown if the cell was never observed.
+// score = sum of stability weights of agreeing voxels - the same sum over disagreeing voxels. In a
+// lattice every shift of the columns agrees on the columns and the roads; the hedge, the terrain
+// island, the fence 30 m away are what separate the shifts, and they are in the score.
+#pragma once
+#include <cstdint>
+
+#include <Eigen/Geometry>
+
+#include "gsf/semantic_classes.h"
+#include "gsf/status.h"
+
+namespace gsf {
+
+class VoxelLayer;
+
+constexpr uint32_t kCellObserved = 1u << 31;
+constexpr ClassMask kGroundClasses =
+    class_bit(kRoad) | class_bit(kParking) | class_bit(kSidewalk) | class_bit(kOtherGround) | class_bit(kTerrain);
+constexpr uint32_t kMaxSemanticTileCells = 64;
+
+// Tile key of integer tile coordinates; valid for |tx|, |ty| < 32768 (false otherwise).
+bool semantic_tile_key(int64_t tx, int64_t ty, uint32_t* key);
+
+struct SemanticGridView {
+  float cell = 0.0f;          // m
+  uint32_t tile_cells = 0;    // cells per tile side
+  uint32_t tile_count = 0;
+  const uint32_t* tile_keys = nullptr;  // tile_count, strictly increasing
+  const uint32_t* cells = nullptr;      // tile_count x tile_cells^2, row-major (y, then x) per tile
+
+  bool empty() const { return tile_count == 0; }
+  // Cell mask at (x, y) in the map frame; 0 outside stored tiles. *tile_hint caches the last tile index.
+  uint32_t cell_at(float x, float y, uint32_t* tile_hint) const;
+  // Structural checks for untrusted arrays: parameters, keys strictly increasing, masks use only class
+  // bits below num_classes and the observed bit.
+  Status validate(uint32_t num_classes) const;
+};
+
+struct PoseVerification {
+  float score = 0.0f;      // agree - disagree (stability-weighted)
+  float agree = 0.0f;
+  float disagree = 0.0f;
+  uint32_t scored = 0;     // sampled voxels that landed on a known cell
+  uint32_t unknown = 0;    // sampled voxels that landed outside the map's layer
+};
+
+// Scores map_T_scan over at most max_points voxels of the query's voxel layer, sampled with a uniform
+// stride over the layer (never "the first N"). weights: stability weight per dense class.
+PoseVerification verify_pose(const VoxelLayer& voxels, const SemanticGridView& grid, const Eigen::Isometry3d& map_T_scan,
+                             uint32_t max_points, const float* weights);
+
+}  // namespace gsf

@@ -1,0 +1,63 @@
+// Coarse matching of one query triangle against the map's triangle index, ranked and then capped.
+//
+// Every map triangle found under the 27 neighbouring keys that passes Outram's acceptance rules (labels
+// equal in vertex order, every side within the relative tolerance) is a candidate. Candidates are
+// ranked by their side residual (the largest relative side difference), ties broken by a hash of the map
+// triangle id, and only the best `cap` are kept. Storage order (key, then map x order) never decides
+// what survives: in a lattice, where thousands of map triangles fit equally well, a cap that kept "the
+// first N" would keep one corner of the map. The caller learns how many were accepted and dropped.
+//
+// Vertex order: the canonical order (triangle.h) sorts sides, so when two query sides tie within the
+// tie tolerance (isosceles triangles are the rule in lattices) the order, and with it the vertex
+// correspondence, is ambiguous. Every vertex order whose sides are sorted up to that tolerance is tried;
+// each candidate records the order it matched in.
+#pragma once
+#include <cstdint>
+
+#include "gsf/arena.h"
+#include "gsf/status.h"
+#include "gsf/triangle.h"
+#include "gsf/triangle_index.h"
+
+namespace gsf {
+
+// The query vertex orders tried: order k maps matched position j to canonical query vertex kOrders[k][j].
+constexpr uint8_t kTriangleVertexOrders[6][3] = {{0, 1, 2}, {2, 1, 0}, {1, 0, 2}, {0, 2, 1}, {1, 2, 0}, {2, 0, 1}};
+
+struct RankedTriangleMatch {
+  uint32_t map;     // map triangle id
+  float residual;   // max over sides of |d_q - d_m| / d_q
+  uint32_t tie;     // deterministic, position-free tie breaker (hash of map id and order)
+  uint8_t order;    // query vertex order (kTriangleVertexOrders row)
+  uint8_t pad[3];
+};
+
+struct TriangleMatchStats {
+  uint32_t accepted = 0;  // candidates passing labels and sides (all vertex orders)
+  uint32_t kept = 0;      // after the cap
+  uint32_t orders = 0;    // vertex orders tried for this query triangle (1 without side ties)
+  uint32_t dropped() const { return accepted - kept; }
+};
+
+class TriangleMatcher {
+ public:
+  static size_t required_bytes(uint32_t cap);
+  Status bind(Arena& arena, uint32_t cap);
+  // Ranks the candidates of query triangle `q`; afterwards size() best-first entries are in match(i).
+  // tie_tolerance: relative side difference under which two query sides count as tied (0: canonical
+  // order only).
+  TriangleMatchStats match(const Triangle& q, const TriangleIndexView& index, const Triangle* map_triangles,
+                           const TriangleConfig& config, float tie_tolerance);
+  uint32_t size() const { return size_; }
+  const RankedTriangleMatch& match_at(uint32_t i) const { return heap_[i]; }
+  // The query triangle's vertex (instance id) at matched position j for the order of match i.
+  static uint32_t query_vertex(const Triangle& q, uint8_t order, int j) { return q.v[kTriangleVertexOrders[order][j]]; }
+
+ private:
+  void offer(const RankedTriangleMatch& m);
+  RankedTriangleMatch* heap_ = nullptr;  // max-heap on (residual, tie) while collecting; sorted after
+  uint32_t cap_ = 0;
+  uint32_t size_ = 0;
+};
+
+}  // namespace gsf

@@ -1,0 +1,85 @@
+#include "gsf/semantic_grid.h"
+
+#include <cmath>
+
+#include "gsf/voxel_layer.h"
+
+namespace gsf {
+
+bool semantic_tile_key(int64_t tx, int64_t ty, uint32_t* key) {
+  if (tx <= -32768 || tx >= 32768 || ty <= -32768 || ty >= 32768) return false;
+  *key = (uint32_t(tx + 32768) << 16) | uint32_t(ty + 32768);
+  return true;
+}
+
+uint32_t SemanticGridView::cell_at(float x, float y, uint32_t* hint) const {
+  if (tile_count == 0 || !(cell > 0.0f)) return 0;
+  const float tile = cell * static_cast<float>(tile_cells);
+  const float fx = std::floor(x / tile), fy = std::floor(y / tile);
+  if (!(std::fabs(fx) < 32768.0f && std::fabs(fy) < 32768.0f)) return 0;  // also rejects NaN
+  uint32_t key;
+  if (!semantic_tile_key(static_cast<int64_t>(fx), static_cast<int64_t>(fy), &key)) return 0;
+  uint32_t t;
+  if (hint && *hint < tile_count && tile_keys[*hint] == key) {
+    t = *hint;
+  } else {
+    uint32_t lo = 0, hi = tile_count;
+    while (lo < hi) {
+      const uint32_t mid = lo + (hi - lo) / 2;
+      if (tile_keys[mid] < key) lo = mid + 1; else hi = mid;
+    }
+    if (lo >= tile_count || tile_keys[lo] != key) return 0;
+    t = lo;
+    if (hint) *hint = t;
+  }
+  int32_t cx = static_cast<int32_t>((x - fx * tile) / cell), cy = static_cast<int32_t>((y - fy * tile) / cell);
+  const int32_t n = static_cast<int32_t>(tile_cells);
+  cx = cx < 0 ? 0 : (cx >= n ? n - 1 : cx);  // float rounding at the tile's far edge
+  cy = cy < 0 ? 0 : (cy >= n ? n - 1 : cy);
+  return cells[size_t(t) * tile_cells * tile_cells + size_t(cy) * tile_cells + size_t(cx)];
+}
+
+Status SemanticGridView::validate(uint32_t num_classes) const {
+  if (tile_count == 0) return Status::Ok;
+  if (!tile_keys || !cells) return Status::CorruptData;
+  if (!(cell > 0.0f) || !std::isfinite(cell) || tile_cells == 0 || tile_cells > kMaxSemanticTileCells)
+    return Status::CorruptData;
+  const uint32_t allowed = kCellObserved | (num_classes >= 31 ? 0x7FFFFFFFu : ((1u << num_classes) - 1));
+  for (uint32_t i = 1; i < tile_count; ++i)
+    if (tile_keys[i - 1] >= tile_keys[i]) return Status::CorruptData;
+  const uint64_t n = uint64_t(tile_count) * tile_cells * tile_cells;
+  for (uint64_t i = 0; i < n; ++i)
+    if (cells[i] & ~allowed) return Status::CorruptData;
+  return Status::Ok;
+}
+
+PoseVerification verify_pose(const VoxelLayer& voxels, const SemanticGridView& grid, const Eigen::Isometry3d& T,
+                             uint32_t max_points, const float* weights) {
+  PoseVerification v;
+  const uint32_t n = voxels.size();
+  if (n == 0 || max_points == 0 || grid.empty()) return v;
+  const uint32_t stride = (n + max_points - 1) / max_points;
+  const Eigen::Matrix3f R = T.linear().cast<float>();
+  const Eigen::Vector3f t = T.translation().cast<float>();
+  uint32_t hint = 0;
+  for (uint32_t i = 0; i < n; i += stride) {
+    const Voxel& vx = voxels.voxel(i);
+    const Eigen::Vector3f p = R * Eigen::Vector3f(vx.centroid[0], vx.centroid[1], vx.centroid[2]) + t;
+    const uint32_t mask = grid.cell_at(p.x(), p.y(), &hint);
+    const uint32_t bit = class_bit(vx.label);
+    const float w = weights[vx.label];
+    int verdict = 0;  // +1 agree, -1 disagree, 0 unknown
+    if (bit & kGroundClasses) {
+      if (mask & kGroundClasses) verdict = (mask & bit) ? 1 : -1;
+    } else if (mask & kCellObserved) {
+      verdict = (mask & bit) ? 1 : -1;
+    }
+    if (verdict == 0) { ++v.unknown; continue; }
+    ++v.scored;
+    if (verdict > 0) v.agree += w; else v.disagree += w;
+  }
+  v.score = v.agree - v.disagree;
+  return v;
+}
+
+}  // namespace gsf

@@ -1,0 +1,125 @@
+#include "gsf/triangle_matcher.h"
+
+#include <cmath>
+
+#include "gsf/bounded_hash_map.h"
+
+namespace gsf {
+namespace {
+
+// Worse = larger residual, then larger tie value.
+inline bool worse(const RankedTriangleMatch& a, const RankedTriangleMatch& b) {
+  return a.residual > b.residual || (a.residual == b.residual && a.tie > b.tie);
+}
+
+void sift_down(RankedTriangleMatch* h, uint32_t n, uint32_t i) {
+  for (;;) {
+    uint32_t m = i;
+    const uint32_t l = 2 * i + 1, r = l + 1;
+    if (l < n && worse(h[l], h[m])) m = l;
+    if (r < n && worse(h[r], h[m])) m = r;
+    if (m == i) return;
+    const RankedTriangleMatch t = h[i]; h[i] = h[m]; h[m] = t;
+    i = m;
+  }
+}
+
+}  // namespace
+
+size_t TriangleMatcher::required_bytes(uint32_t cap) {
+  Arena counting;
+  TriangleMatcher m;
+  m.bind(counting, cap);
+  return counting.used();
+}
+
+Status TriangleMatcher::bind(Arena& arena, uint32_t cap) {
+  cap_ = 0;
+  size_ = 0;
+  if (cap == 0) return Status::InvalidArgument;
+  heap_ = arena.allocate<RankedTriangleMatch>(cap);
+  if (arena.counting()) return Status::Ok;
+  if (!heap_) return Status::BufferTooSmall;
+  cap_ = cap;
+  return Status::Ok;
+}
+
+void TriangleMatcher::offer(const RankedTriangleMatch& m) {
+  if (size_ < cap_) {  // sift up
+    uint32_t i = size_++;
+    heap_[i] = m;
+    while (i > 0) {
+      const uint32_t p = (i - 1) / 2;
+      if (!worse(heap_[i], heap_[p])) break;
+      const RankedTriangleMatch t = heap_[i]; heap_[i] = heap_[p]; heap_[p] = t;
+      i = p;
+    }
+  } else if (worse(heap_[0], m)) {  // replace the worst kept
+    heap_[0] = m;
+    sift_down(heap_, size_, 0);
+  }
+}
+
+TriangleMatchStats TriangleMatcher::match(const Triangle& q, const TriangleIndexView& index, const Triangle* map,
+                                          const TriangleConfig& config, float tie_tolerance) {
+  TriangleMatchStats st;
+  size_ = 0;
+  if (cap_ == 0) return st;
+  // Distances between canonical vertices: d(0,1) = side[0], d(1,2) = side[1], d(2,0) = side[2].
+  auto dist = [&q](uint8_t i, uint8_t j) {
+    const uint8_t lo = i < j ? i : j, hi = i < j ? j : i;
+    return lo == 0 ? (hi == 1 ? q.side[0] : q.side[2]) : q.side[1];
+  };
+  for (uint8_t o = 0; o < 6; ++o) {
+    const uint8_t* p = kTriangleVertexOrders[o];
+    float side[3];
+    uint8_t label[3];
+    for (int k = 0; k < 3; ++k) {
+      side[k] = dist(p[k], p[(k + 1) % 3]);
+      label[k] = q.label[p[k]];
+    }
+    // The order is possible if its sides are sorted up to the tie tolerance (order 0 always is).
+    if (o > 0 && !(tie_tolerance > 0.0f && side[0] <= side[1] * (1.0f + tie_tolerance) &&
+                   side[1] <= side[2] * (1.0f + tie_tolerance)))
+      continue;
+    ++st.orders;
+    int32_t qk[3];
+    for (int i = 0; i < 3; ++i) qk[i] = static_cast<int32_t>(std::floor(side[i] / config.side_bin));
+    for (int d0 = -1; d0 <= 1; ++d0)
+      for (int d1 = -1; d1 <= 1; ++d1)
+        for (int d2 = -1; d2 <= 1; ++d2) {
+          uint32_t b, e;
+          if (!index.lookup(triangle_key(qk[0] + d0, qk[1] + d1, qk[2] + d2), &b, &e)) continue;
+          for (uint32_t it = b; it < e; ++it) {
+            const uint32_t mid = index.entries[it];
+            const Triangle& m = map[mid];
+            if (m.label[0] != label[0] || m.label[1] != label[1] || m.label[2] != label[2]) continue;
+            float residual = 0.0f;
+            bool ok = true;
+            for (int s = 0; s < 3 && ok; ++s) {
+              const float r = std::fabs(side[s] - m.side[s]);
+              ok = r < config.relative_side_tolerance * side[s];
+              const float rel = side[s] > 0.0f ? r / side[s] : 0.0f;
+              residual = rel > residual ? rel : residual;
+            }
+            if (!ok) continue;
+            ++st.accepted;
+            RankedTriangleMatch c{};
+            c.map = mid;
+            c.residual = residual;
+            c.tie = static_cast<uint32_t>(mix64((uint64_t(mid) << 3) | o) >> 32);
+            c.order = o;
+            offer(c);
+          }
+        }
+  }
+  // Best first (heap sort: repeatedly move the worst to the end).
+  for (uint32_t n = size_; n > 1; --n) {
+    const RankedTriangleMatch t = heap_[0]; heap_[0] = heap_[n - 1]; heap_[n - 1] = t;
+    sift_down(heap_, n - 1, 0);
+  }
+  st.kept = size_;
+  return st;
+}
+
+}  // namespace gsf

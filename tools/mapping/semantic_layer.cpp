@@ -1,0 +1,52 @@
+#include "mapping/semantic_layer.h"
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <map>
+
+#include "gsf/semantic_grid.h"
+
+namespace gsf::mapping {
+
+uint32_t build_semantic_layer(const VoxelLayer& voxels, const SemanticLayerConfig& c, std::vector<uint32_t>* keys,
+                              std::vector<uint32_t>* cells) {
+  keys->clear();
+  cells->clear();
+  const uint32_t T = c.tile_cells;
+  const double tile = double(c.cell) * T;
+  // tile key -> per cell class counts
+  std::map<uint32_t, std::vector<std::array<uint32_t, kNumClasses>>> tiles;
+  uint32_t skipped = 0;
+  for (uint32_t i = 0; i < voxels.size(); ++i) {
+    const Voxel& v = voxels.voxel(i);
+    const double fx = std::floor(v.centroid[0] / tile), fy = std::floor(v.centroid[1] / tile);
+    uint32_t key;
+    if (!(std::fabs(fx) < 32768.0 && std::fabs(fy) < 32768.0) ||
+        !semantic_tile_key(static_cast<int64_t>(fx), static_cast<int64_t>(fy), &key)) {
+      ++skipped;
+      continue;
+    }
+    auto& t = tiles[key];
+    if (t.empty()) t.assign(size_t(T) * T, std::array<uint32_t, kNumClasses>{});
+    const int64_t cx = std::clamp<int64_t>(static_cast<int64_t>((v.centroid[0] - fx * tile) / c.cell), 0, T - 1);
+    const int64_t cy = std::clamp<int64_t>(static_cast<int64_t>((v.centroid[1] - fy * tile) / c.cell), 0, T - 1);
+    t[size_t(cy) * T + size_t(cx)][v.label] += 1;
+  }
+  for (const auto& [key, t] : tiles) {
+    keys->push_back(key);
+    for (const auto& counts : t) {
+      uint32_t ground = 0, above = 0;
+      for (int k = 0; k < kNumClasses; ++k) (class_bit(k) & kGroundClasses ? ground : above) += counts[k];
+      uint32_t mask = (ground + above) > 0 ? kCellObserved : 0u;
+      for (int k = 0; k < kNumClasses; ++k) {
+        const uint32_t group = class_bit(k) & kGroundClasses ? ground : above;
+        if (counts[k] > 0 && double(counts[k]) >= double(c.min_share) * group) mask |= class_bit(k);
+      }
+      cells->push_back(mask);
+    }
+  }
+  return skipped;
+}
+
+}  // namespace gsf::mapping

@@ -1,0 +1,23 @@
+// Builds the map's semantic layer (core/include/gsf/semantic_grid.h) from the map's voxels: per
+// bird's-eye cell, the classes that make at least `min_share` of the cell's ground voxels (ground
+// classes) or of its above-ground voxels (every other class). Host side; uses the heap.
+#pragma once
+#include <cstdint>
+#include <vector>
+
+#include "gsf/voxel_layer.h"
+
+namespace gsf::mapping {
+
+struct SemanticLayerConfig {
+  float cell = 1.0f;         // m
+  uint32_t tile_cells = 16;  // cells per tile side (16 x 16 x 4 B = 1 KiB a tile)
+  float min_share = 0.1f;    // a class is in a cell's mask if it has this share of the cell's group
+};
+
+// Writes sorted tile keys and their cells (tile_cells^2 masks each). Voxels outside the representable
+// tile range are skipped; returns how many.
+uint32_t build_semantic_layer(const VoxelLayer& voxels, const SemanticLayerConfig& config, std::vector<uint32_t>* keys,
+                              std::vector<uint32_t>* cells);
+
+}  // namespace gsf::mapping
