@@ -12,7 +12,7 @@
 
 namespace {
 
-std::vector<uint64_t> base_map(size_t* bytes) {
+std::vector<uint64_t> base_map(size_t* bytes) {  // also written as the loader's seed (GSF_WRITE_SEED)
   using namespace gsf;
   MapView v;
   std::memset(&v.params, 0, sizeof v.params);
@@ -34,6 +34,12 @@ std::vector<uint64_t> base_map(size_t* bytes) {
   v.instances = in; v.field_inputs = inputs.data(); v.field_alpha = alpha.data(); v.grid_mean = mean.data();
   v.grid_var = var.data(); v.triangles = t; v.index_keys = keys; v.index_offsets = off; v.index_entries = ent;
   v.refine_points = refine.data();
+  // A two-tile semantic layer (2 x 2 cells per tile) so its checks are fuzzed too.
+  p.semantic_cell = 1.0f; p.semantic_tile_cells = 2;
+  static uint32_t tile_keys[2] = {(32768u << 16) | 32768u, (32768u << 16) | 32769u};
+  static uint32_t cells[8] = {gsf::kCellObserved | gsf::class_bit(gsf::kRoad), 0, gsf::kCellObserved | gsf::class_bit(gsf::kPole),
+                              gsf::kCellObserved, 0, gsf::kCellObserved | gsf::class_bit(gsf::kTerrain), 0, 0};
+  v.counts.semantic_tiles = 2; v.semantic_tile_keys = tile_keys; v.semantic_cells = cells;
   *bytes = map_serialized_size(v);
   std::vector<uint64_t> buf(*bytes / 8 + 2);
   write_map(v, buf.data(), *bytes, nullptr);
@@ -74,6 +80,10 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   for (uint32_t k = 0; k < view.counts.index_keys; ++k)
     for (uint32_t e = view.index_offsets[k]; e < view.index_offsets[k + 1]; ++e)
       sink = sink + view.triangles[view.index_entries[e]].side[0];
+  uint32_t hint = 0;
+  const gsf::SemanticGridView grid = view.semantic_grid();
+  for (float x = -3; x < 3; x += 0.7f)
+    for (float y = -3; y < 40; y += 0.9f) sink = sink + float(grid.cell_at(x, y, &hint) & 0xFF);
   for (uint32_t i = 0; i < view.counts.instances; ++i)
     if (view.instances[i].label >= gsf::kNumClasses || view.instances[i].inducing_count > view.params.inducing_stride)
       __builtin_trap();

@@ -1,0 +1,261 @@
+// Ranked triangle matching, vertex-order ties, peeled pose hypotheses and whole-scan verification:
+// the stages that let a query in a lattice of identical columns find the right lattice shift.
+#include <catch2/catch.hpp>
+
+#include <cmath>
+#include <vector>
+
+#include "arena_buffer.h"
+#include "gsf/pose_hypotheses.h"
+#include "gsf/semantic_grid.h"
+#include "gsf/triangle_index.h"
+#include "gsf/triangle_matcher.h"
+#include "gsf/voxel_layer.h"
+#include "gsf/wasserstein.h"
+#include "test_cloud.h"
+
+using namespace gsf;
+using gsf_test::ArenaBuffer;
+using gsf_test::Cloud;
+
+namespace {
+
+struct Index {
+  std::vector<Triangle> tris;
+  std::vector<uint64_t> keys, scratch;
+  std::vector<uint32_t> offsets, entries;
+  TriangleIndexView view;
+  explicit Index(std::vector<Triangle> t, float bin) : tris(std::move(t)) {
+    const uint32_t n = static_cast<uint32_t>(tris.size());
+    keys.resize(n + 1); scratch.resize(n + 1); offsets.resize(n + 2); entries.resize(n + 1);
+    uint32_t kc = 0;
+    build_triangle_index(tris.data(), n, bin, keys.data(), offsets.data(), entries.data(), &kc, scratch.data());
+    view.keys = keys.data(); view.offsets = offsets.data(); view.entries = entries.data();
+    view.key_count = kc; view.entry_count = n;
+  }
+};
+
+Triangle triangle_with_sides(uint32_t id0, float s0, float s1, float s2) {
+  Triangle t{};
+  t.v[0] = id0; t.v[1] = id0 + 1; t.v[2] = id0 + 2;
+  t.side[0] = s0; t.side[1] = s1; t.side[2] = s2;
+  for (int k = 0; k < 3; ++k) t.label[k] = kPole;
+  return t;
+}
+
+}  // namespace
+
+TEST_CASE("Ranked matching keeps the best-fitting map triangle when a cap would have cut it in storage order") {
+  // 300 map triangles in a lattice all fit the query within tolerance (1-2% off); the one exact copy is
+  // stored last (map x order puts it at the end). A cap of 8 in storage order would drop it.
+  std::vector<Triangle> map;
+  for (uint32_t i = 0; i < 300; ++i) {
+    const float e = 1.0f + 0.01f + 0.01f * float((i * 37) % 100) / 100.0f;
+    map.push_back(triangle_with_sides(3 * i, 8.0f * e, 8.0f * 1.3f * e, 8.0f * 1.9f * e));
+  }
+  map.push_back(triangle_with_sides(900, 8.0f, 8.0f * 1.3f, 8.0f * 1.9f));
+  Index idx(map, 1.0f);
+  TriangleConfig tc;
+  ArenaBuffer buf(TriangleMatcher::required_bytes(8));
+  TriangleMatcher matcher;
+  REQUIRE(matcher.bind(buf.arena, 8) == Status::Ok);
+  const Triangle q = triangle_with_sides(0, 8.0f, 8.0f * 1.3f, 8.0f * 1.9f);
+  const TriangleMatchStats st = matcher.match(q, idx.view, idx.tris.data(), tc, 0.0f);
+  CHECK(st.accepted == 301);
+  CHECK(st.kept == 8);
+  CHECK(st.dropped() == 293);  // every drop is counted
+  REQUIRE(matcher.size() == 8);
+  CHECK(matcher.match_at(0).map == 300);  // the exact copy ranks first
+  CHECK(matcher.match_at(0).residual == 0.0f);
+  for (uint32_t i = 1; i < matcher.size(); ++i) CHECK(matcher.match_at(i - 1).residual <= matcher.match_at(i).residual);
+}
+
+TEST_CASE("Tied query sides are tried in both vertex orders") {
+  // Isosceles map triangle: sides 5, 5.05, 8 (a lattice's right angles give such ties). The query's
+  // noise put its two short sides the other way round, so its canonical order pairs the vertices
+  // differently; only the tied order pairs them as the map does.
+  std::vector<Triangle> map = {triangle_with_sides(0, 5.0f, 5.05f, 8.0f)};
+  Index idx(map, 1.0f);
+  TriangleConfig tc;
+  ArenaBuffer buf(TriangleMatcher::required_bytes(16));
+  TriangleMatcher matcher;
+  REQUIRE(matcher.bind(buf.arena, 16) == Status::Ok);
+  Triangle q = triangle_with_sides(10, 5.0f, 5.04f, 8.0f);  // canonical (a, b, c)
+  q.label[0] = kPole; q.label[1] = kTrunk; q.label[2] = kPole;
+  idx.tris[0].label[0] = kPole; idx.tris[0].label[1] = kTrunk; idx.tris[0].label[2] = kPole;
+  // Without ties only the canonical order is tried.
+  TriangleMatchStats st = matcher.match(q, idx.view, idx.tris.data(), tc, 0.0f);
+  CHECK(st.orders == 1);
+  // With the tie tolerance the reversed order (c, b, a) with sides (5.04, 5, 8) is tried as well; both
+  // pairings pass the 3% side check here and both are kept.
+  st = matcher.match(q, idx.view, idx.tris.data(), tc, 0.06f);
+  CHECK(st.orders == 2);
+  REQUIRE(matcher.size() == 2);
+  bool reversed = false;
+  for (uint32_t i = 0; i < matcher.size(); ++i)
+    if (matcher.match_at(i).order == 1) {
+      reversed = true;
+      CHECK(TriangleMatcher::query_vertex(q, 1, 0) == q.v[2]);
+      CHECK(TriangleMatcher::query_vertex(q, 1, 2) == q.v[0]);
+    }
+  CHECK(reversed);
+  // A scalene triangle gets no second order.
+  const Triangle scalene = triangle_with_sides(20, 4.0f, 6.0f, 9.0f);
+  CHECK(matcher.match(scalene, idx.view, idx.tris.data(), tc, 0.06f).orders == 1);
+}
+
+namespace {
+
+// A 1-D lattice of columns every 8 m along x; correspondences of 6 query columns to map columns shifted
+// by `shift` periods.
+void lattice_correspondences(int shift, float noise, std::vector<float>* a, std::vector<float>* b) {
+  for (int k = 0; k < 6; ++k) {
+    const float x = 8.0f * k, y = (k % 2) ? 4.0f : -4.0f;
+    a->insert(a->end(), {x + noise * (k % 3), y, 0.0f});
+    b->insert(b->end(), {x + 8.0f * shift + 100.0f, y + 50.0f, 0.0f});
+  }
+}
+
+}  // namespace
+
+TEST_CASE("Peeling yields one hypothesis per lattice shift, the largest clique first") {
+  std::vector<float> a, b;
+  lattice_correspondences(0, 0.02f, &a, &b);  // the true shift: 6 correspondences
+  std::vector<float> a2, b2;
+  lattice_correspondences(2, 0.0f, &a2, &b2);  // a competing shift: its first 4 only
+  a.insert(a.end(), a2.begin(), a2.begin() + 12);
+  b.insert(b.end(), b2.begin(), b2.begin() + 12);
+  const uint32_t n = static_cast<uint32_t>(a.size() / 3);
+  std::vector<float> w(n, 1.0f);
+  HypothesisConfig hc;
+  ArenaBuffer buf(PoseHypotheses::required_bytes(64, 8));
+  PoseHypotheses hyp;
+  REQUIRE(hyp.bind(buf.arena, 64, 8) == Status::Ok);
+  HypothesisStats st;
+  REQUIRE(hyp.generate(a.data(), b.data(), w.data(), n, hc, &st) == Status::Ok);
+  REQUIRE(hyp.size() >= 2);
+  CHECK(hyp[0].clique_size == 6);
+  CHECK(hyp[0].map_T_scan.translation().isApprox(Eigen::Vector3d(100, 50, 0), 0.05));
+  CHECK(hyp[1].clique_size == 4);
+  CHECK(hyp[1].map_T_scan.translation().isApprox(Eigen::Vector3d(116, 50, 0), 0.05));
+  for (uint32_t i = 0; i < 6; ++i) CHECK(hyp.in_clique(0, i));
+  CHECK(st.searches >= 2);
+  CHECK_FALSE(st.budget_exhausted);
+  // Too few correspondences: no hypothesis, a clear status.
+  CHECK(hyp.generate(a.data(), b.data(), w.data(), 2, hc, &st) == Status::NoSolution);
+  CHECK(hyp.size() == 0);
+}
+
+namespace {
+
+// The map's semantic layer over a 64 x 32 m patch: road everywhere, a column every 8 m along y = 0,
+// and ONE bush (vegetation) beside the column at x = 24.
+struct LatticeLayer {
+  std::vector<uint32_t> keys, cells;
+  SemanticGridView view;
+  LatticeLayer() {
+    const uint32_t T = 16;
+    for (int tx = 0; tx < 4; ++tx)
+      for (int ty = -1; ty < 1; ++ty) {
+        uint32_t k;
+        semantic_tile_key(tx, ty, &k);
+        keys.push_back(k);
+      }
+    std::sort(keys.begin(), keys.end());
+    cells.assign(keys.size() * T * T, kCellObserved | class_bit(kRoad));
+    view.cell = 1.0f; view.tile_cells = T; view.tile_count = static_cast<uint32_t>(keys.size());
+    view.tile_keys = keys.data(); view.cells = cells.data();
+    for (int c = 0; c < 8; ++c) set(8.0f * c + 0.5f, 0.5f, class_bit(kPole));
+    for (float x = 26.0f; x < 28.5f; x += 1.0f)
+      for (float y = 2.0f; y < 4.5f; y += 1.0f) set(x, y, class_bit(kVegetation));
+  }
+  void set(float x, float y, uint32_t bits) {
+    const int tx = static_cast<int>(std::floor(x / 16)), ty = static_cast<int>(std::floor(y / 16));
+    uint32_t k;
+    semantic_tile_key(tx, ty, &k);
+    const size_t t = std::lower_bound(keys.begin(), keys.end(), k) - keys.begin();
+    const int cx = static_cast<int>(x - 16.0f * tx), cy = static_cast<int>(y - 16.0f * ty);
+    cells[t * 256 + cy * 16 + cx] |= bits;
+  }
+};
+
+// The query scan seen from (sx, 0): road, the columns, and the bush if it is in the world at all.
+Cloud lattice_scan(float sx, bool with_bush) {
+  Cloud c;
+  for (float x = -20; x <= 20; x += 0.3f)
+    for (float y = -10; y <= 10; y += 0.3f) c.add(x, y, 0.0f, 40);
+  for (int col = 0; col < 8; ++col)
+    for (float z = 0.3f; z < 4.0f; z += 0.2f) c.add(8.0f * col + 0.5f - sx, 0.5f, z, 80);
+  if (with_bush)
+    for (float x = 26.0f; x < 28.5f; x += 0.2f)
+      for (float y = 2.0f; y < 4.5f; y += 0.2f)
+        for (float z = 0.3f; z < 1.2f; z += 0.3f) c.add(x - sx, y, z, 70);
+  return c;
+}
+
+}  // namespace
+
+TEST_CASE("Verification picks the true lattice shift given one distinguishing bush") {
+  LatticeLayer layer;
+  REQUIRE(layer.view.validate(kNumClasses) == Status::Ok);
+  VoxelConfig vc;
+  vc.min_range = 0.0f;
+  ArenaBuffer buf(VoxelLayer::required_bytes(vc));
+  VoxelLayer voxels;
+  REQUIRE(voxels.bind(buf.arena, vc) == Status::Ok);
+  const float sensor_x = 24.0f;
+  const Cloud scan = lattice_scan(sensor_x, true);
+  REQUIRE(voxels.build(scan.view(), nullptr) == Status::Ok);
+  float weights[kNumClasses];
+  stability_weights(weights);
+  auto score_at = [&](float x) {
+    Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
+    T.translation() = Eigen::Vector3d(x, 0, 0);
+    return verify_pose(voxels, layer.view, T, 4096, weights);
+  };
+  const PoseVerification truth = score_at(sensor_x);
+  // Every other lattice shift agrees on road and columns alike; only the bush separates them.
+  for (int k = -2; k <= 2; ++k) {
+    if (k == 0) continue;
+    const PoseVerification shifted = score_at(sensor_x + 8.0f * k);
+    INFO("shift " << k << ": " << shifted.score << " vs " << truth.score);
+    CHECK(shifted.score < truth.score);
+  }
+  CHECK(truth.disagree == 0.0f);
+  // Without the bush in the scan the shifts tie within the road's edge effects: nothing to choose by.
+  const Cloud bare = lattice_scan(sensor_x, false);
+  REQUIRE(voxels.build(bare.view(), nullptr) == Status::Ok);
+  const PoseVerification bare_truth = score_at(sensor_x), bare_shift = score_at(sensor_x + 8.0f);
+  CHECK(bare_truth.disagree == 0.0f);
+  CHECK(bare_shift.disagree == 0.0f);
+  // Off the layer nothing is scored (no evidence either way), and a NaN pose is not a crash.
+  const PoseVerification off = score_at(5000.0f);
+  CHECK(off.scored == 0);
+  Eigen::Isometry3d nan_pose = Eigen::Isometry3d::Identity();
+  nan_pose.translation().x() = std::nan("");
+  CHECK(verify_pose(voxels, layer.view, nan_pose, 4096, weights).scored == 0);
+}
+
+TEST_CASE("Semantic layer validation rejects unsorted keys, foreign bits and bad shapes") {
+  LatticeLayer layer;
+  SemanticGridView v = layer.view;
+  CHECK(v.validate(kNumClasses) == Status::Ok);
+  std::vector<uint32_t> keys = layer.keys;
+  std::swap(keys[0], keys[1]);
+  v.tile_keys = keys.data();
+  CHECK(v.validate(kNumClasses) == Status::CorruptData);
+  v = layer.view;
+  std::vector<uint32_t> cells = layer.cells;
+  cells[5] |= 1u << 25;  // no class 25
+  v.cells = cells.data();
+  CHECK(v.validate(kNumClasses) == Status::CorruptData);
+  v = layer.view;
+  v.tile_cells = 0;
+  CHECK(v.validate(kNumClasses) == Status::CorruptData);
+  v = layer.view;
+  v.cell = std::nanf("");
+  CHECK(v.validate(kNumClasses) == Status::CorruptData);
+  uint32_t k;
+  CHECK_FALSE(semantic_tile_key(40000, 0, &k));
+  CHECK(semantic_tile_key(-32767, 32767, &k));
+}
