@@ -1,4 +1,5 @@
-// gsf simulate --out DIR [--preset demo|tiny] [--seed N] [--beams N]
+// gsf simulate --out DIR [--preset demo|tiny|suite|tiny-lattice] [--zone row|lattice|hall|avenue|auto]
+//              [--cue-density X] [--seed N] [--beams N] [--label-noise P] [--no-instance-ids]
 #include <cstdio>
 
 #include "args.h"
@@ -10,8 +11,15 @@ namespace gsf::cli {
 int cmd_simulate(int argc, char** argv) {
   const std::vector<OptionSpec> specs = {
       {"out", "dataset root to write (SemanticKITTI layout + meta.json)", "", false, true},
-      {"preset", "world size: demo (a few km) or tiny (tests)", "demo"},
+      {"preset", "world size: demo (a few km), tiny (tests), suite (bench/suite.sh: 2 x 2 blocks + zone) or "
+                 "tiny-lattice (ctest: one block + a small lattice)", "demo"},
+      {"zone", "repetitive zone: row, lattice, hall, avenue, or auto (by seed: seed % 4 in that order); "
+               "default: the preset's (row; lattice for tiny-lattice)", ""},
+      {"cue-density", "share 0..1 of the zone's repeated instances with a distinctive cue within 6 m "
+                      "(default: legacy stuff for demo/tiny row, 0.5 otherwise)", ""},
       {"seed", "world seed (overrides the preset's)", ""},
+      {"label-noise", "share 0..1 of points written with a confused label (pole<->trunk, terrain<->vegetation, ...)", "0"},
+      {"no-instance-ids", "write labels with the instance id bits zeroed", "", true},
       {"beams", "LiDAR beams (e.g. 32 or 64)", ""},
       {"blocks-x", "city blocks along x (overrides the preset)", ""},
       {"blocks-y", "city blocks along y (overrides the preset)", ""},
@@ -25,15 +33,41 @@ int cmd_simulate(int argc, char** argv) {
   Args args;
   std::string err;
   if (!args.parse(argc, argv, 2, specs, &err)) return usage_error("simulate", err);
-  sim::SimConfig cfg;
-  if (args.get("preset") == "demo") cfg = sim::SimConfig::demo();
-  else if (args.get("preset") == "tiny") cfg = sim::SimConfig::tiny();
-  else return usage_error("simulate", "unknown preset '" + args.get("preset") + "' (demo or tiny)");
   long long v;
+  const std::string preset = args.get("preset");
+  sim::SimConfig cfg;
+  if (preset == "demo") cfg = sim::SimConfig::demo();
+  else if (preset == "tiny") cfg = sim::SimConfig::tiny();
+  else if (preset == "suite") cfg = sim::SimConfig::suite(sim::ZoneType::Row);
+  else if (preset == "tiny-lattice") cfg = sim::SimConfig::tiny_lattice();
+  else return usage_error("simulate", "unknown preset '" + preset + "' (demo, tiny, suite or tiny-lattice)");
+  uint64_t seed = cfg.world.seed;
   if (args.has("seed")) {
-    if (!args.get_int("seed", &v, &err)) return usage_error("simulate", err);
-    cfg.world.seed = static_cast<uint64_t>(v);
+    if (!args.get_int("seed", &v, &err) || v < 0) return usage_error("simulate", err.empty() ? "--seed must be >= 0" : err);
+    seed = static_cast<uint64_t>(v);
   }
+  if (args.has("zone")) {
+    sim::ZoneType zone;
+    const std::string z = args.get("zone");
+    if (z == "auto") zone = static_cast<sim::ZoneType>(seed % 4);
+    else if (!sim::parse_zone(z.c_str(), &zone))
+      return usage_error("simulate", "--zone must be row, lattice, hall, avenue or auto");
+    if (preset == "suite") cfg = sim::SimConfig::suite(zone);  // the suite sizes its zone per type
+    cfg.world.zone = zone;
+  }
+  cfg.world.seed = seed;
+  // Presets made for many seeds draw their time gap from the world seed too.
+  if (args.has("seed") && (preset == "suite" || preset == "tiny-lattice")) cfg.time_gap.seed = seed * 2654435761u + 7u;
+  double d;
+  if (args.has("cue-density")) {
+    if (!args.get_double("cue-density", &d, &err) || !(d >= 0.0 && d <= 1.0))
+      return usage_error("simulate", "--cue-density must be a number in 0..1");
+    cfg.world.cue_density = static_cast<float>(d);
+  }
+  if (!args.get_double("label-noise", &d, &err) || !(d >= 0.0 && d <= 1.0))
+    return usage_error("simulate", "--label-noise must be a number in 0..1");
+  cfg.label_noise = static_cast<float>(d);
+  cfg.instance_ids = !args.flag("no-instance-ids");
   if (args.has("beams")) {
     if (!args.get_int("beams", &v, &err) || v < 2 || v > 256) return usage_error("simulate", "--beams must be 2..256");
     cfg.lidar.beams = static_cast<int>(v);
@@ -58,9 +92,10 @@ int cmd_simulate(int argc, char** argv) {
     std::fprintf(stderr, "gsf simulate: failed: %s\n", to_string(s));
     return 1;
   }
-  std::printf("simulated %.0f m of road: %u map scans, %u queries (%u in the repetitive zone), %llu points -> %s\n",
-              sum.road_length_m, sum.map_scans, sum.queries, sum.zone_queries, (unsigned long long)sum.points,
-              args.get("out").c_str());
+  std::printf("simulated %.0f m of road, zone %s (%u repeated instances, %u with a cue): %u map scans, %u queries "
+              "(%u in the repetitive zone, %u near it), %llu points -> %s\n",
+              sum.road_length_m, sim::zone_name(cfg.world.zone), sum.zone_instances, sum.cued_instances, sum.map_scans,
+              sum.queries, sum.zone_queries, sum.near_zone_queries, (unsigned long long)sum.points, args.get("out").c_str());
   return 0;
 }
 

@@ -38,15 +38,21 @@ ModeSummary summarize(const std::string& mode, const std::vector<QueryRecord>& r
     for (int k = 0; k < 9; ++k) st[k].push_back(v[k]);
     if (r.answered) ++s.answered;
     if (r.in_zone) ++s.zone_queries;
+    else if (r.near_zone) ++s.near_zone_queries;
+    else ++s.elsewhere_queries;
     if (r.success) {
       ++s.successes;
       if (r.in_zone) ++s.zone_successes;
+      else if (r.near_zone) ++s.near_zone_successes;
+      else ++s.elsewhere_successes;
       t_sum += r.error.translation_m;
       r_sum += r.error.rotation_deg;
     }
   }
   if (s.queries) s.success_rate = double(s.successes) / s.queries;
   if (s.zone_queries) s.zone_success_rate = double(s.zone_successes) / s.zone_queries;
+  if (s.near_zone_queries) s.near_zone_success_rate = double(s.near_zone_successes) / s.near_zone_queries;
+  if (s.elsewhere_queries) s.elsewhere_success_rate = double(s.elsewhere_successes) / s.elsewhere_queries;
   if (s.successes) { s.ate_m = t_sum / s.successes; s.are_deg = r_sum / s.successes; }
   s.median_ms = percentile(times, 0.5);
   s.p95_ms = percentile(times, 0.95);

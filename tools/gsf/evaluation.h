@@ -36,6 +36,7 @@ struct QueryRecord {
   bool answered = false;
   bool success = false;
   bool in_zone = false;      // in the simulator's repetitive zone
+  bool near_zone = false;    // within 60 m of it (not inside)
   PoseError error;
   double time_ms = 0;
   StageMs stages;
@@ -58,6 +59,10 @@ struct ModeSummary {
   double success_rate = 0;           // successes / queries
   uint32_t zone_queries = 0, zone_successes = 0;
   double zone_success_rate = 0;
+  uint32_t near_zone_queries = 0, near_zone_successes = 0;  // near the zone, not inside
+  double near_zone_success_rate = 0;
+  uint32_t elsewhere_queries = 0, elsewhere_successes = 0;  // neither in nor near the zone
+  double elsewhere_success_rate = 0;
   double ate_m = 0, are_deg = 0;     // mean over successes
   double median_ms = 0, p95_ms = 0, mean_ms = 0;
   StageMs median_stage;

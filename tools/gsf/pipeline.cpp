@@ -119,6 +119,18 @@ Meta read_meta(const std::string& root) {
     for (size_t i = pos + 29; i < s.size() && s[i] != ']'; ++i)
       if (s[i] == '0' || s[i] == '1') m.query_in_zone.push_back(s[i] == '1');
   }
+  pos = s.find("\"query_near_zone\": [");
+  if (pos != std::string::npos) {
+    for (size_t i = pos + 20; i < s.size() && s[i] != ']'; ++i)
+      if (s[i] == '0' || s[i] == '1') m.query_near_zone.push_back(s[i] == '1');
+  }
+  pos = s.find("\"zone\": {\"type\": \"");
+  if (pos != std::string::npos) {
+    const size_t b = pos + 18, e = s.find('"', b);
+    if (e != std::string::npos) m.zone_type = s.substr(b, e - b);
+    const size_t c = s.find("\"cue_density\":", pos);
+    if (c != std::string::npos) m.cue_density = std::strtof(s.c_str() + c + 14, nullptr);
+  }
   return m;
 }
 

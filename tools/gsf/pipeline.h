@@ -33,6 +33,9 @@ struct Meta {
   bool present = false;
   float road_length_m = 0;
   std::vector<bool> query_in_zone;
+  std::vector<bool> query_near_zone;  // within 60 m of the zone, not inside (simulator meta.json)
+  std::string zone_type;              // "row", "lattice", "hall", "avenue"; empty if not recorded
+  float cue_density = -1;             // -1: legacy row stuff or not recorded
 };
 Meta read_meta(const std::string& dataset_root);
 

@@ -88,7 +88,7 @@ void write_diagnostics(JsonWriter& j, const QueryRecord& r) {
 }
 
 void write_json(const std::string& path, const EvalOptions& o, const MapView& map, const std::vector<ModeRun>& runs,
-                const std::vector<ModeSummary>& sums) {
+                const std::vector<ModeSummary>& sums, const Meta& meta) {
   JsonWriter j;
   j.begin_object();
   j.field("map", o.map_path);
@@ -101,6 +101,8 @@ void write_json(const std::string& path, const EvalOptions& o, const MapView& ma
   j.field("map_triangles", map.counts.triangles);
   j.field("success_translation_m", kSuccessTranslation);
   j.field("success_rotation_deg", kSuccessRotationDeg);
+  j.field("zone_type", meta.zone_type);
+  j.field("cue_density", static_cast<double>(meta.cue_density));
   j.key("modes");
   j.begin_object();
   for (size_t m = 0; m < runs.size(); ++m) {
@@ -115,6 +117,10 @@ void write_json(const std::string& path, const EvalOptions& o, const MapView& ma
     j.field("success_rate", s.success_rate);
     j.field("zone_queries", s.zone_queries);
     j.field("zone_success_rate", s.zone_success_rate);
+    j.field("near_zone_queries", s.near_zone_queries);
+    j.field("near_zone_success_rate", s.near_zone_success_rate);
+    j.field("elsewhere_queries", s.elsewhere_queries);
+    j.field("elsewhere_success_rate", s.elsewhere_success_rate);
     j.field("ate_m", s.ate_m);
     j.field("are_deg", s.are_deg);
     j.field("median_ms", s.median_ms);
@@ -159,6 +165,7 @@ void write_json(const std::string& path, const EvalOptions& o, const MapView& ma
       j.field("status", r.status);
       j.field("success", r.success);
       j.field("in_zone", r.in_zone);
+      j.field("near_zone", r.near_zone);
       j.field("translation_error_m", r.answered ? r.error.translation_m : -1.0);
       j.field("rotation_error_deg", r.answered ? r.error.rotation_deg : -1.0);
       j.field("time_ms", r.time_ms);
@@ -306,6 +313,7 @@ int run_evaluation(const EvalOptions& o) {
       r.index = q;
       r.frame = src->frame_id(q);
       r.in_zone = q < meta.query_in_zone.size() && meta.query_in_zone[q];
+      r.near_zone = q < meta.query_near_zone.size() && meta.query_near_zone[q];
       r.truth = truth;
       LocalizeResult res;
       if (rs == Status::Ok) {
@@ -354,6 +362,7 @@ int run_evaluation(const EvalOptions& o) {
         r.index = q;
         r.frame = src->frame_id(q);
         r.in_zone = q < meta.query_in_zone.size() && meta.query_in_zone[q];
+        r.near_zone = q < meta.query_near_zone.size() && meta.query_near_zone[q];
         src->pose(q, &r.truth);
         if (src->read(q, buf.buffer()) == Status::Ok) {
           const auto t0 = std::chrono::steady_clock::now();
@@ -387,14 +396,17 @@ int run_evaluation(const EvalOptions& o) {
   const double km = map.counts.road_length_m / 1000.0;
   std::printf("\nmap: %zu bytes, %u instances, %u triangles, %.0f m of road -> %.2f MB/km\n", map.total_bytes,
               map.counts.instances, map.counts.triangles, map.counts.road_length_m, km > 0 ? map.total_bytes / 1e6 / km : 0.0);
-  std::printf("queries: %u (%u in the repetitive zone); success = t < %.0f m and r < %.0f deg\n\n", nq,
-              sums.empty() ? 0 : sums[0].zone_queries, kSuccessTranslation, kSuccessRotationDeg);
-  std::printf("%-13s %8s %8s %7s %7s %9s %9s %7s %10s %9s %9s\n", "mode", "success", "repet.", "ATE m", "ARE deg",
-              "median ms", "p95 ms", "x off", "workspace", "prec@thr", "answered");
+  std::printf("queries: %u (%u in the repetitive zone%s%s, %u near it, %u elsewhere); success = t < %.0f m and r < %.0f deg\n\n",
+              nq, sums.empty() ? 0 : sums[0].zone_queries, meta.zone_type.empty() ? "" : ": ", meta.zone_type.c_str(),
+              sums.empty() ? 0 : sums[0].near_zone_queries, sums.empty() ? 0 : sums[0].elsewhere_queries,
+              kSuccessTranslation, kSuccessRotationDeg);
+  std::printf("%-13s %8s %8s %8s %8s %7s %7s %9s %9s %7s %10s %9s %9s\n", "mode", "success", "repet.", "near", "else",
+              "ATE m", "ARE deg", "median ms", "p95 ms", "x off", "workspace", "prec@thr", "answered");
   for (size_t m = 0; m < sums.size(); ++m) {
     const ModeSummary& x = sums[m];
-    std::printf("%-13s %7.1f%% %7.1f%% %7.2f %7.2f %9.1f %9.1f %7.2f %8.1fMB %8.1f%% %8.1f%%\n", x.mode.c_str(),
-                100 * x.success_rate, 100 * x.zone_success_rate, x.ate_m, x.are_deg, x.median_ms, x.p95_ms,
+    std::printf("%-13s %7.1f%% %7.1f%% %7.1f%% %7.1f%% %7.2f %7.2f %9.1f %9.1f %7.2f %8.1fMB %8.1f%% %8.1f%%\n",
+                x.mode.c_str(), 100 * x.success_rate, 100 * x.zone_success_rate, 100 * x.near_zone_success_rate,
+                100 * x.elsewhere_success_rate, x.ate_m, x.are_deg, x.median_ms, x.p95_ms,
                 x.time_ratio_to_gsf_off, runs[m].workspace_bytes / 1e6, 100 * x.precision_at_default,
                 100 * x.answered_at_default);
   }
@@ -406,7 +418,7 @@ int run_evaluation(const EvalOptions& o) {
                   x.median_stage.clique, x.median_stage.pose, x.median_stage.refine);
   std::printf("  (prec@thr / answered: precision and share answered when declining queries with ambiguity > %.2f)\n",
               o.threshold);
-  if (!o.json_out.empty()) write_json(o.json_out, o, map, runs, sums);
+  if (!o.json_out.empty()) write_json(o.json_out, o, map, runs, sums, meta);
   if (!o.svg_dir.empty()) write_svgs(o, map, runs);
   return 0;
 }

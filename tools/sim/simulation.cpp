@@ -51,6 +51,107 @@ SimConfig SimConfig::tiny() {
   return c;
 }
 
+SimConfig SimConfig::suite(ZoneType zone) {
+  SimConfig c;
+  c.world.seed = 1;
+  c.world.blocks_x = 2;
+  c.world.blocks_y = 2;
+  c.world.block_size = 100.0f;
+  c.world.zone = zone;
+  c.world.cue_density = 0.5f;
+  c.world.zone_length = 240.0f;  // row: 25 columns per row
+  c.world.zone_margin = 60.0f;
+  c.time_gap.seed = 7;
+  c.query_spacing = 20.0f;
+  c.near_query_spacing = 10.0f;
+  if (zone == ZoneType::Row) c.zone_query_spacing = 7.0f;
+  return c;
+}
+
+SimConfig SimConfig::tiny_lattice() {
+  SimConfig c = tiny();
+  c.world.seed = 13;
+  c.world.blocks_x = 1;
+  c.world.blocks_y = 1;
+  c.world.block_size = 70.0f;
+  c.world.zone = ZoneType::Lattice;
+  c.world.cue_density = 0.5f;
+  c.world.lattice_nx = 4;
+  c.world.lattice_ny = 3;
+  c.world.zone_margin = 40.0f;
+  c.map_spacing = 14.0f;
+  c.query_spacing = 30.0f;
+  c.zone_query_spacing = 14.0f;
+  c.time_gap.seed = 3;
+  return c;
+}
+
+float zone_query_spacing(const World& w, const SimConfig& c) {
+  if (c.zone_query_spacing > 0) return c.zone_query_spacing;
+  switch (w.params.zone) {
+    case ZoneType::Row: return c.query_spacing / 2;
+    case ZoneType::Lattice: return 6.0f;
+    case ZoneType::Hall: return 7.0f;
+    case ZoneType::Avenue: return 6.0f;
+  }
+  return c.query_spacing / 2;
+}
+
+namespace {
+struct LabelPartners {
+  uint16_t semantic;
+  uint16_t partner[2];
+  int count;
+};
+// First partner the likelier (3 of 4 confusions when there are two).
+constexpr LabelPartners kPartners[] = {
+    {10, {18, 20}, 2},  // car -> truck / other-vehicle
+    {40, {48, 44}, 2},  // road -> sidewalk / parking
+    {44, {40, 48}, 2},  // parking -> road / sidewalk
+    {48, {40, 72}, 2},  // sidewalk -> road / terrain
+    {49, {48, 40}, 2},  // other-ground -> sidewalk / road
+    {50, {51, 0}, 1},   // building -> fence
+    {51, {50, 70}, 2},  // fence -> building / vegetation
+    {70, {72, 71}, 2},  // vegetation -> terrain / trunk
+    {71, {80, 70}, 2},  // trunk -> pole / vegetation
+    {72, {70, 48}, 2},  // terrain -> vegetation / sidewalk
+    {80, {71, 81}, 2},  // pole -> trunk / traffic-sign
+    {81, {80, 0}, 1},   // traffic-sign -> pole
+};
+const LabelPartners* partners_of(uint16_t sem) {
+  for (const auto& p : kPartners)
+    if (p.semantic == sem) return &p;
+  return nullptr;
+}
+}  // namespace
+
+int label_partner_count(uint16_t semantic) {
+  const LabelPartners* p = partners_of(semantic);
+  return p ? p->count : 0;
+}
+
+uint16_t label_partner(uint16_t semantic, int k) {
+  const LabelPartners* p = partners_of(semantic);
+  return p && k >= 0 && k < p->count ? p->partner[k] : semantic;
+}
+
+void apply_label_noise(uint32_t* labels, uint32_t count, float p, uint64_t seed) {
+  gsf::Rng rng(seed);
+  for (uint32_t i = 0; i < count; ++i) {
+    const float u = rng.uniform01();
+    const uint32_t pick = rng.uniform(4);  // drawn for every point: the stream does not depend on labels
+    if (u >= p) continue;
+    const uint16_t sem = static_cast<uint16_t>(labels[i] & 0xFFFFu);
+    const int n = label_partner_count(sem);
+    if (n == 0) continue;
+    labels[i] = (labels[i] & 0xFFFF0000u) | label_partner(sem, (n > 1 && pick == 3) ? 1 : 0);
+  }
+}
+
+void strip_instance_ids(uint32_t* labels, uint32_t count) {
+  for (uint32_t i = 0; i < count; ++i) labels[i] &= 0xFFFFu;
+}
+
 uint64_t scan_seed(uint64_t seed, int sequence, uint32_t frame) {
   return gsf::mix64(seed * 1000003u + uint64_t(sequence) * 7919u + frame);
 }
@@ -59,13 +160,16 @@ Drive mapping_drive(const World& w, const SimConfig& c) {
   Drive d;
   const float lane = w.params.road_width / 4;
   for (const RoadSegment& r : w.roads) {
+    if (!(r.drives & kMapDrive)) continue;
+    const float rl = r.width > 0 ? r.width / 4 : lane;
     const float len = std::fabs(r.x1 - r.x0) + std::fabs(r.y1 - r.y0);
     const float dx = (r.x1 - r.x0) / len, dy = (r.y1 - r.y0) / len;
     const double yaw = std::atan2(dy, dx);
     for (float s = 0.0f; s <= len; s += c.map_spacing) {
-      const float x = r.x0 + s * dx + lane * dy, y = r.y0 + s * dy - lane * dx;  // right-hand lane
+      const float x = r.x0 + s * dx + rl * dy, y = r.y0 + s * dy - rl * dx;  // right-hand lane
       d.poses.push_back(make_pose(x, y, c.sensor_height, yaw));
       d.in_zone.push_back(w.in_zone(x, y));
+      d.near_zone.push_back(w.near_zone(x, y));
     }
   }
   return d;
@@ -77,16 +181,21 @@ Drive query_drive(const World& w, const SimConfig& c) {
   const float lane = w.params.road_width / 4;
   const double deg = M_PI / 180.0;
   int segment = 0;
+  const float zone_spacing = zone_query_spacing(w, c);
   for (const RoadSegment& r : w.roads) {
+    if (!(r.drives & kQueryDrive)) continue;
+    const float lane_r = r.width > 0 ? r.width / 4 : lane;
     const float len = std::fabs(r.x1 - r.x0) + std::fabs(r.y1 - r.y0);
     const float dx = (r.x1 - r.x0) / len, dy = (r.y1 - r.y0) / len;
-    // Alternate: opposite direction in the other lane, or the same direction in the other lane.
+    // Alternate: opposite direction in the other lane, or the same direction in the other lane. Zone
+    // roads and aisles: always against the segment's (the mapping drive's) direction.
     const bool reverse = (segment++ % 2) == 0 || r.in_zone;
-    const float spacing = r.in_zone ? c.query_spacing / 2 : c.query_spacing;
+    const float spacing = r.in_zone ? zone_spacing
+                                    : (r.approach && c.near_query_spacing > 0 ? c.near_query_spacing : c.query_spacing);
     for (float s = spacing * 0.37f; s <= len; s += spacing) {
       // Reverse: the left lane of the mapping direction. Same direction: the road centre line, half a
       // lane from the mapping lane.
-      const float side = reverse ? lane : 0.0f;
+      const float side = reverse ? lane_r : 0.0f;
       float x = r.x0 + s * dx - side * dy, y = r.y0 + s * dy + side * dx;
       x += c.pose_noise_xy * (2 * rng.uniform01() - 1) * std::fabs(dy);
       y += c.pose_noise_xy * (2 * rng.uniform01() - 1) * std::fabs(dx);
@@ -95,6 +204,7 @@ Drive query_drive(const World& w, const SimConfig& c) {
       const double pitch = c.pose_noise_tilt_deg * deg * (2 * rng.uniform01() - 1);
       d.poses.push_back(make_pose(x, y, c.sensor_height, yaw, roll, pitch));
       d.in_zone.push_back(w.in_zone(x, y));
+      d.near_zone.push_back(w.near_zone(x, y));
     }
   }
   return d;
@@ -118,6 +228,10 @@ Status run_simulation(const SimConfig& c, const std::string& root, SimSummary* s
     const Drive& d = *drives[seq];
     for (uint32_t f = 0; f < d.poses.size(); ++f) {
       casters[seq]->scan(d.poses[f], c.lidar, scan_seed(c.world.seed, seq, f), &scan);
+      if (c.label_noise > 0)
+        apply_label_noise(scan.labels.data(), scan.size(), c.label_noise,
+                          gsf::mix64(scan_seed(c.world.seed, seq, f) ^ 0x4C4142454C4E4F49ULL));
+      if (!c.instance_ids) strip_instance_ids(scan.labels.data(), scan.size());
       s = writer.write_scan(f, scan.xyzi.data(), scan.labels.data(), nullptr, scan.size());
       if (s != Status::Ok) return s;
       sum.points += scan.size();
@@ -129,6 +243,9 @@ Status run_simulation(const SimConfig& c, const std::string& root, SimSummary* s
   sum.map_scans = static_cast<uint32_t>(map.poses.size());
   sum.queries = static_cast<uint32_t>(queries.poses.size());
   for (bool z : queries.in_zone) sum.zone_queries += z ? 1u : 0u;
+  for (bool z : queries.near_zone) sum.near_zone_queries += z ? 1u : 0u;
+  sum.zone_instances = static_cast<uint32_t>(world.zone_instances.size());
+  for (const ZoneInstance& zi : world.zone_instances) sum.cued_instances += zi.cued ? 1u : 0u;
   // meta.json
   std::ofstream meta(std::filesystem::path(root) / "meta.json", std::ios::trunc);
   meta << "{\n  \"generator\": \"gsf simulate\",\n  \"seed\": " << c.world.seed << ",\n";
@@ -147,6 +264,29 @@ Status run_simulation(const SimConfig& c, const std::string& root, SimSummary* s
   meta << "  \"map_scans\": " << sum.map_scans << ",\n  \"queries\": " << sum.queries << ",\n";
   meta << "  \"query_in_repetitive_zone\": [";
   for (size_t i = 0; i < queries.in_zone.size(); ++i) meta << (i ? "," : "") << (queries.in_zone[i] ? 1 : 0);
+  // Zone description and sensing options (keys added after the original ones).
+  const WorldParams& wp = c.world;
+  meta << "],\n  \"zone\": {\"type\": \"" << zone_name(wp.zone) << "\", \"cues\": \""
+       << (wp.legacy_row_cues() ? "legacy" : "density") << "\", \"cue_density\": "
+       << (wp.legacy_row_cues() ? -1.0f : wp.effective_cue_density()) << ", \"rect\": [" << world.zone_rect[0] << ", "
+       << world.zone_rect[1] << ", " << world.zone_rect[2] << ", " << world.zone_rect[3] << "]";
+  if (wp.zone == ZoneType::Lattice)
+    meta << ", \"nx\": " << wp.lattice_nx << ", \"ny\": " << wp.lattice_ny << ", \"dx\": " << wp.lattice_spacing
+         << ", \"dy\": " << wp.lattice_spacing;
+  else if (wp.zone == ZoneType::Hall)
+    meta << ", \"nx\": " << wp.hall_nx << ", \"ny\": " << wp.hall_ny << ", \"dx\": " << wp.hall_dx << ", \"dy\": " << wp.hall_dy;
+  else if (wp.zone == ZoneType::Avenue)
+    meta << ", \"length\": " << wp.avenue_length << ", \"period\": " << wp.avenue_period << ", \"kind\": \""
+         << (!world.zone_repeated_prims.empty() && world.prims[world.zone_repeated_prims[0]].semantic == 71 ? "trees" : "lamps") << "\"";
+  else
+    meta << ", \"length\": " << wp.zone_length << ", \"period\": " << wp.zone_period;
+  meta << ", \"margin\": " << wp.zone_margin << ", \"repeated_instances\": " << sum.zone_instances
+       << ", \"cued_instances\": " << sum.cued_instances << ", \"zone_queries\": " << sum.zone_queries
+       << ", \"near_zone_queries\": " << sum.near_zone_queries << ", \"near_zone_m\": " << kNearZone << "},\n";
+  meta << "  \"sensing\": {\"label_noise\": " << c.label_noise << ", \"instance_ids\": " << (c.instance_ids ? "true" : "false")
+       << "},\n";
+  meta << "  \"query_near_zone\": [";
+  for (size_t i = 0; i < queries.near_zone.size(); ++i) meta << (i ? "," : "") << (queries.near_zone[i] ? 1 : 0);
   meta << "]\n}\n";
   if (!meta) return Status::IoError;
   if (summary) *summary = sum;

@@ -3,7 +3,8 @@
 //   sequence "01": the localization drive, other lanes and the opposite direction, in the world after
 //                  the time gap (cars moved/removed, vegetation changed).
 // Output is the SemanticKITTI layout (port/semantic_kitti.h) plus meta.json (seed, parameters, road
-// length, and per query frame whether it lies in the repetitive zone). Same config -> identical bytes.
+// length, zone type and cue density, and per query frame whether it lies in the repetitive zone or near
+// it). Same config -> identical bytes.
 #pragma once
 #include <cstdint>
 #include <functional>
@@ -28,24 +29,48 @@ struct SimConfig {
   float pose_noise_xy = 0.5f;    // m, lateral jitter of query poses
   float pose_noise_yaw_deg = 3.0f;
   float pose_noise_tilt_deg = 0.5f;
+  // Query spacing inside the zone; 0 = the zone's default (row: query_spacing / 2, lattice 6 m, hall 7 m,
+  // avenue 6 m). The approach road of a lattice / hall gets near_query_spacing (0 = query_spacing).
+  float zone_query_spacing = 0.0f;
+  float near_query_spacing = 0.0f;
+  // Sensing: share of points whose written label is confused with a plausible other class (a network's
+  // mistakes), and whether labels keep the instance id in their high 16 bits.
+  float label_noise = 0.0f;
+  bool instance_ids = true;
   static SimConfig demo();  // a few km of road, hundreds of map scans, 100+ queries
   static SimConfig tiny();  // seconds to generate, for tests
+  // bench/suite.sh: a 2 x 2-block city plus the zone, ~100-150 queries, >= 30 in the zone, cue density 0.5.
+  static SimConfig suite(ZoneType zone);
+  // ctest end-to-end: a 4 x 3 lattice and a one-block city, <= 40 map scans, ~15 queries, half in the zone.
+  static SimConfig tiny_lattice();
 };
+
+float zone_query_spacing(const World& world, const SimConfig& config);
 
 struct Drive {
   std::vector<Eigen::Isometry3d> poses;  // world_T_lidar
   std::vector<bool> in_zone;
+  std::vector<bool> near_zone;           // within kNearZone m of the zone, not inside
 };
 
 Drive mapping_drive(const World& world, const SimConfig& config);
 Drive query_drive(const World& world, const SimConfig& config);
 uint64_t scan_seed(uint64_t seed, int sequence, uint32_t frame);
 
+// The plausible confusion partners of a SemanticKITTI class (pole<->trunk, terrain<->vegetation,
+// sidewalk<->road, building<->fence, ...); 0 partners for classes the simulator does not write.
+int label_partner_count(uint16_t semantic);
+uint16_t label_partner(uint16_t semantic, int k);
+// Replaces the semantic part of a share `p` of labels by a partner (instance bits kept); seeded.
+void apply_label_noise(uint32_t* labels, uint32_t count, float p, uint64_t seed);
+void strip_instance_ids(uint32_t* labels, uint32_t count);
+
 using SimProgress = std::function<void(const char* stage, uint32_t done, uint32_t total)>;
 
 struct SimSummary {
   float road_length_m = 0;
-  uint32_t map_scans = 0, queries = 0, zone_queries = 0;
+  uint32_t map_scans = 0, queries = 0, zone_queries = 0, near_zone_queries = 0;
+  uint32_t zone_instances = 0, cued_instances = 0;
   uint64_t points = 0;
 };
 

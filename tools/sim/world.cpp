@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <string_view>
 
 #include "gsf/bounded_hash_map.h"
 #include "gsf/rng.h"
@@ -65,6 +66,33 @@ struct Gen {
 
 }  // namespace
 
+const char* zone_name(ZoneType z) {
+  switch (z) {
+    case ZoneType::Row: return "row";
+    case ZoneType::Lattice: return "lattice";
+    case ZoneType::Hall: return "hall";
+    case ZoneType::Avenue: return "avenue";
+  }
+  return "row";
+}
+
+bool parse_zone(const char* name, ZoneType* out) {
+  for (ZoneType z : {ZoneType::Row, ZoneType::Lattice, ZoneType::Hall, ZoneType::Avenue})
+    if (std::string_view(name) == zone_name(z)) {
+      *out = z;
+      return true;
+    }
+  return false;
+}
+
+float xy_distance(const Primitive& p, float x, float y) {
+  if (p.shape == Shape::Box) {
+    const float dx = std::max({p.a[0] - x, 0.0f, x - p.b[0]}), dy = std::max({p.a[1] - y, 0.0f, y - p.b[1]});
+    return std::hypot(dx, dy);
+  }
+  return std::max(0.0f, std::hypot(x - p.a[0], y - p.a[1]) - p.b[0]);
+}
+
 float World::road_length() const {
   float l = 0;
   for (const auto& r : roads) l += std::fabs(r.x1 - r.x0) + std::fabs(r.y1 - r.y0);
@@ -72,7 +100,16 @@ float World::road_length() const {
 }
 
 bool World::in_zone(float x, float y) const {
-  return params.repetitive_zone && x >= zone_x0 && x <= zone_x1 && std::fabs(y - zone_y) < 40.0f;
+  if (params.zone == ZoneType::Row || params.zone == ZoneType::Avenue)
+    return params.repetitive_zone && x >= zone_x0 && x <= zone_x1 && std::fabs(y - zone_y) < 40.0f;
+  return params.repetitive_zone && x >= zone_rect[0] && x <= zone_rect[2] && y >= zone_rect[1] && y <= zone_rect[3];
+}
+
+bool World::near_zone(float x, float y) const {
+  if (!params.repetitive_zone || in_zone(x, y)) return false;
+  const float dx = std::max({zone_rect[0] - x, 0.0f, x - zone_rect[2]});
+  const float dy = std::max({zone_rect[1] - y, 0.0f, y - zone_rect[3]});
+  return std::hypot(dx, dy) <= kNearZone;
 }
 
 uint16_t World::ground_class(float x, float y) const {
@@ -89,10 +126,20 @@ uint16_t World::ground_class(float x, float y) const {
     const float i = std::round(x / B);
     if (i >= 0 && i <= params.blocks_x) dmin = std::min(dmin, std::fabs(x - i * B));
   }
-  if (params.repetitive_zone && x >= gx && x <= zone_x1 + params.zone_margin) dmin = std::min(dmin, std::fabs(y - zone_y));
+  // The zone's road: row and avenue run a road through the zone; lattice and hall have an approach road
+  // up to the zone rectangle and a plain floor inside it.
+  const bool road_zone = params.zone == ZoneType::Row || params.zone == ZoneType::Avenue;
+  if (params.repetitive_zone && road_zone && x >= gx && x <= zone_x1 + params.zone_margin) dmin = std::min(dmin, std::fabs(y - zone_y));
+  if (params.repetitive_zone && !road_zone && x >= gx && x <= zone_rect[0]) dmin = std::min(dmin, std::fabs(y - zone_y));
   if (dmin <= hw) return kRoad;
   if (dmin <= hw + sw) return kSidewalk;
-  if (params.repetitive_zone && x > gx + hw + sw && x <= zone_x1 + params.zone_margin && std::fabs(y - zone_y) < 40.0f) {
+  if (params.repetitive_zone && !road_zone && x >= zone_rect[0] && x <= zone_rect[2] && y >= zone_rect[1] && y <= zone_rect[3])
+    return params.zone == ZoneType::Lattice ? kParking : kOtherGround;
+  if (params.repetitive_zone && road_zone && !params.legacy_row_cues() && x > gx + hw + sw &&
+      x <= zone_x1 + params.zone_margin && std::fabs(y - zone_y) < 40.0f)
+    return params.zone == ZoneType::Row ? kParking : kOtherGround;  // plain floor: cues are the only stuff
+  if (params.repetitive_zone && params.legacy_row_cues() && x > gx + hw + sw && x <= zone_x1 + params.zone_margin &&
+      std::fabs(y - zone_y) < 40.0f) {
     // Irregular ground patches per zone period and side (the "stuff" that tells periods apart).
     const int cell = static_cast<int>(std::floor((x - zone_x0) / (params.zone_period / 2)));
     const int side = y > zone_y ? 1 : 0;
@@ -114,6 +161,258 @@ uint16_t World::ground_class(float x, float y) const {
   return kTerrain;
 }
 
+namespace {
+
+// Records primitives [first, end) as one repeated instance of the zone.
+void add_zone_instance(World& w, size_t first, float x, float y, float radius) {
+  for (size_t i = first; i < w.prims.size(); ++i) w.zone_repeated_prims.push_back(static_cast<uint32_t>(i));
+  w.zone_instances.push_back(ZoneInstance{w.prims[first].instance, x, y, radius, false});
+}
+
+struct Rect { float x0, y0, x1, y1; };
+
+// The paper's Fig. 1 car park: the road extends past the city by zone_margin without any instance, then
+// zone_length of road lined by four rows of identical columns every zone_period. Legacy stuff (demo,
+// tiny): per half-period and side a random kind of bushes / fence / low wall / nothing, plus ground
+// patches (World::ground_class); otherwise cues by cue_density (place_cues) on a plain parking floor.
+void row_zone(Gen& g, std::vector<Rect>* keep_out) {
+  World& w = g.w;
+  const WorldParams& p = w.params;
+  const float hw = p.road_width / 2, sw = p.sidewalk_width;
+  w.zone_rect[0] = w.zone_x0; w.zone_rect[1] = w.zone_y - 40; w.zone_rect[2] = w.zone_x1; w.zone_rect[3] = w.zone_y + 40;
+  const float rows[4] = {-(hw + sw + 1.5f), -(hw + sw + 7.5f), hw + sw + 1.5f, hw + sw + 7.5f};
+  for (float x = w.zone_x0; x <= w.zone_x1 + 1e-3f; x += p.zone_period)
+    for (float ry : rows) {
+      const size_t first = w.prims.size();
+      g.cylinder(kPole, g.id(), x, w.zone_y + ry, 0.0f, 0.3f, 4.5f);
+      add_zone_instance(w, first, x, w.zone_y + ry, 0.3f);
+    }
+  *keep_out = {Rect{w.zone_x0 - 1e3f, w.zone_y - hw - sw - 0.2f, w.zone_x1 + 1e3f, w.zone_y + hw + sw + 0.2f}};
+  if (!p.legacy_row_cues()) return;
+  for (float x = w.zone_x0 - p.zone_period; x <= w.zone_x1 + p.zone_period; x += p.zone_period / 2)
+    for (int side = -1; side <= 1; side += 2) {
+      const size_t first = w.prims.size();
+      const float base = w.zone_y + side * (hw + sw);
+      const int kind = static_cast<int>(g.rng.uniform(5));
+      if (kind == 0 || kind == 1) {
+        const int nb = 1 + static_cast<int>(g.rng.uniform(3));
+        for (int k = 0; k < nb; ++k) g.bush(x + g.uni(0.5f, 4.5f), base + side * g.uni(3.0f, 12.0f));
+      } else if (kind == 2) {
+        const float yy = base + side * g.uni(4.0f, 11.0f);
+        g.box(kFence, 0, x + g.uni(0, 1), yy - 0.05f, 0, x + g.uni(2.5f, 5.0f), yy + 0.05f, g.uni(1.0f, 1.6f));
+      } else if (kind == 3) {
+        const float yy = base + side * g.uni(10.0f, 13.0f);
+        g.box(kBuilding, 0, x + g.uni(0, 1), yy - 0.2f, 0, x + g.uni(3.0f, 5.0f), yy + 0.2f, g.uni(1.5f, 2.8f));
+      }  // kind 4: open ground
+      for (size_t i = first; i < w.prims.size(); ++i) w.zone_cue_prims.push_back(static_cast<uint32_t>(i));
+    }
+}
+
+// y of the grid road the approach leaves from, and the first x a zone instance may take.
+float approach_y(const WorldParams& p) { return p.block_size * static_cast<float>(p.blocks_y / 2); }
+
+// Aisles of a 2-D zone: x-aisles (along x) k = 0..ny at y0a + k * sy, from xa to xb; mapping drives the
+// even ones (+x), queries the odd ones (-x, i.e. the other direction); y-aisles k = 0..nx at x0a + k * sx
+// from ya to yb, queries only on odd k, in alternating directions (perpendicular crossings).
+void add_aisles(World& w, std::vector<Rect>* keep_out, int nx, int ny, float x0a, float sx, float y0a, float sy, float xa, float xb, float ya, float yb) {
+  constexpr float kAisleWidth = 3.0f;  // lanes 0.75 m off the aisle centre line
+  constexpr float kClear = 2.25f;      // cues keep this far from a used aisle's centre line
+  for (int k = 0; k <= ny; ++k) {
+    const float y = y0a + k * sy;
+    RoadSegment r{xa, y, xb, y, true};
+    r.drives = (k % 2 == 0) ? kMapDrive : kQueryDrive;
+    r.width = kAisleWidth;
+    w.roads.push_back(r);
+    keep_out->push_back(Rect{xa - 1e3f, y - kClear, xb + 1e3f, y + kClear});
+  }
+  for (int k = 1; k <= nx; k += 2) {
+    const float x = x0a + k * sx;
+    RoadSegment r = (k % 4 == 1) ? RoadSegment{x, ya, x, yb, true} : RoadSegment{x, yb, x, ya, true};
+    r.drives = kQueryDrive;
+    r.width = kAisleWidth;
+    w.roads.push_back(r);
+    keep_out->push_back(Rect{x - kClear, ya - 1e3f, x + kClear, yb + 1e3f});
+  }
+}
+
+void approach_road(World& w, std::vector<Rect>* keep_out) {
+  RoadSegment a{w.params.blocks_x * w.params.block_size, w.zone_y, w.zone_rect[0], w.zone_y, false};
+  a.approach = true;
+  w.roads.push_back(a);
+  keep_out->push_back(Rect{a.x0, w.zone_y - w.params.road_width / 2 - w.params.sidewalk_width - 0.2f, a.x1 + 2.0f,
+                            w.zone_y + w.params.road_width / 2 + w.params.sidewalk_width + 0.2f});
+}
+
+// A 2-D square lattice car park: lattice_nx x lattice_ny identical columns (pole, r 0.3 m, 4.5 m) at
+// exactly (x0 + i s, y0 + j s); every gap between column rows is an aisle; parking floor.
+void lattice_zone(Gen& g, std::vector<Rect>* keep_out) {
+  World& w = g.w;
+  const WorldParams& p = w.params;
+  const float s = p.lattice_spacing;
+  w.zone_y = approach_y(p);
+  const float x0 = w.city_x1 + p.zone_margin;
+  const float y0 = w.zone_y + s / 2 - static_cast<float>(p.lattice_ny / 2) * s;  // aisle ny/2 is the approach's
+  const float x1 = x0 + (p.lattice_nx - 1) * s, y1 = y0 + (p.lattice_ny - 1) * s;
+  w.zone_rect[0] = x0 - s; w.zone_rect[1] = y0 - s; w.zone_rect[2] = x1 + s; w.zone_rect[3] = y1 + s;
+  w.zone_x0 = w.zone_rect[0]; w.zone_x1 = w.zone_rect[2];
+  for (int j = 0; j < p.lattice_ny; ++j)
+    for (int i = 0; i < p.lattice_nx; ++i) {
+      const float x = x0 + i * s, y = y0 + j * s;
+      const size_t first = w.prims.size();
+      g.cylinder(kPole, g.id(), x, y, 0.0f, 0.3f, 4.5f);
+      add_zone_instance(w, first, x, y, 0.3f);
+    }
+  add_aisles(w, keep_out, p.lattice_nx, p.lattice_ny, x0 - s / 2, s, y0 - s / 2, s, w.zone_rect[0], w.zone_rect[2], w.zone_rect[1],
+             w.zone_rect[3]);
+  approach_road(w, keep_out);
+}
+
+// A pillared hall / open deck: hall_nx x hall_ny pillars (hall_dx x hall_dy apart; square 0.7 m boxes
+// or 0.45 m-radius cylinders of pole class, 4 m) inside a low perimeter wall (building, one height in
+// 1.2..3 m per hall) with entrance gaps placed 180-degree symmetrically; concrete (other-ground) floor.
+void hall_zone(Gen& g, std::vector<Rect>* keep_out) {
+  World& w = g.w;
+  const WorldParams& p = w.params;
+  const float dx = p.hall_dx, dy = p.hall_dy;
+  w.zone_y = approach_y(p);
+  const float x0 = w.city_x1 + p.zone_margin;
+  const float y0 = w.zone_y + dy / 2 - static_cast<float>(p.hall_ny / 2) * dy;
+  const float x1 = x0 + (p.hall_nx - 1) * dx, y1 = y0 + (p.hall_ny - 1) * dy;
+  const float wx0 = x0 - dx / 2 - 4.0f, wx1 = x1 + dx / 2 + 4.0f, wy0 = y0 - dy / 2 - 3.5f, wy1 = y1 + dy / 2 + 3.5f;
+  w.zone_rect[0] = wx0; w.zone_rect[1] = wy0; w.zone_rect[2] = wx1; w.zone_rect[3] = wy1;
+  w.zone_x0 = wx0; w.zone_x1 = wx1;
+  const bool square = g.chance(0.5f);
+  const float half = square ? 0.35f : 0.45f;
+  for (int j = 0; j < p.hall_ny; ++j)
+    for (int i = 0; i < p.hall_nx; ++i) {
+      const float x = x0 + i * dx, y = y0 + j * dy;
+      const size_t first = w.prims.size();
+      if (square) g.box(kPole, g.id(), x - half, y - half, 0.0f, x + half, y + half, 4.0f);
+      else g.cylinder(kPole, g.id(), x, y, 0.0f, half, 4.0f);
+      add_zone_instance(w, first, x, y, half);
+    }
+  // Walls with gaps: west at the approach aisle (ny/2), east at its 180-degree image, south at y-aisle 1,
+  // north at its image (nx - 1).
+  const float h = g.uni(1.2f, 3.0f), t = 0.3f;
+  const int kc = p.hall_ny / 2;
+  const float west_gap = y0 - dy / 2 + kc * dy, east_gap = y0 - dy / 2 + (p.hall_ny - kc) * dy;
+  const float south_gap = x0 - dx / 2 + dx, north_gap = x0 - dx / 2 + (p.hall_nx - 1) * dx;
+  auto wall_x = [&](float x, float gap) {  // a wall along y at x, gap centred at y = gap
+    const float ga = gap - 3.5f, gb = gap + 3.5f;
+    w.zone_structure_prims.push_back(static_cast<uint32_t>(w.prims.size()));
+    g.box(kBuilding, 0, x - t / 2, wy0, 0.0f, x + t / 2, ga, h);
+    w.zone_structure_prims.push_back(static_cast<uint32_t>(w.prims.size()));
+    g.box(kBuilding, 0, x - t / 2, gb, 0.0f, x + t / 2, wy1, h);
+  };
+  auto wall_y = [&](float y, float gap) {
+    const float ga = gap - 3.0f, gb = gap + 3.0f;
+    w.zone_structure_prims.push_back(static_cast<uint32_t>(w.prims.size()));
+    g.box(kBuilding, 0, wx0, y - t / 2, 0.0f, ga, y + t / 2, h);
+    w.zone_structure_prims.push_back(static_cast<uint32_t>(w.prims.size()));
+    g.box(kBuilding, 0, gb, y - t / 2, 0.0f, wx1, y + t / 2, h);
+  };
+  wall_x(wx0, west_gap);
+  wall_x(wx1, east_gap);
+  wall_y(wy0, south_gap);
+  wall_y(wy1, north_gap);
+  add_aisles(w, keep_out, p.hall_nx, p.hall_ny, x0 - dx / 2, dx, y0 - dy / 2, dy, wx0 + 1.5f, wx1 - 1.5f, wy0 + 1.5f, wy1 - 1.5f);
+  approach_road(w, keep_out);
+}
+
+// A boulevard: the road continues from the city through avenue_length of two identical rows of trees
+// (trunk + crown, one size) or lamp posts (pole + arm over the road), every avenue_period on both
+// sides, and zone_margin beyond; nothing else instantiable; paved (other-ground) verges.
+void avenue_zone(Gen& g, std::vector<Rect>* keep_out) {
+  World& w = g.w;
+  const WorldParams& p = w.params;
+  const float hw = p.road_width / 2, sw = p.sidewalk_width, gx = p.blocks_x * p.block_size;
+  w.zone_y = approach_y(p);
+  w.zone_x0 = w.city_x1 + p.zone_margin;
+  const int n = static_cast<int>(std::floor(p.avenue_length / p.avenue_period)) + 1;
+  w.zone_x1 = w.zone_x0 + (n - 1) * p.avenue_period;
+  w.zone_rect[0] = w.zone_x0; w.zone_rect[1] = w.zone_y - 40; w.zone_rect[2] = w.zone_x1; w.zone_rect[3] = w.zone_y + 40;
+  w.roads.push_back(RoadSegment{gx, w.zone_y, w.zone_x1 + p.zone_margin, w.zone_y, true});
+  const bool trees = g.chance(0.5f);
+  const float off = hw + sw - 0.8f;
+  for (int i = 0; i < n; ++i)
+    for (int side = -1; side <= 1; side += 2) {
+      const float x = w.zone_x0 + i * p.avenue_period, y = w.zone_y + side * off;
+      const size_t first = w.prims.size();
+      const uint32_t id = g.id();
+      if (trees) {
+        g.cylinder(kTrunk, id, x, y, 0.0f, 0.22f, 3.5f);
+        g.sphere(kVegetation, 0, x, y, 4.75f, 2.2f);
+      } else {  // lamp post: mast + arm reaching over the road
+        g.cylinder(kPole, id, x, y, 0.0f, 0.13f, 8.0f);
+        const float ya = y - side * 1.6f;
+        g.box(kPole, id, x - 0.06f, std::min(y, ya), 7.8f, x + 0.06f, std::max(y, ya), 7.95f);
+      }
+      add_zone_instance(w, first, x, y, trees ? 0.22f : 0.13f);
+    }
+  *keep_out = {Rect{w.zone_x0 - 1e3f, w.zone_y - hw - sw - 0.2f, w.zone_x1 + 1e3f, w.zone_y + hw + sw + 0.2f}};
+}
+
+bool overlaps(const Rect& r, const float* lo, const float* hi) {
+  return lo[0] < r.x1 && hi[0] > r.x0 && lo[1] < r.y1 && hi[1] > r.y0;
+}
+
+// Cues by cue_density: exactly round(density x N) repeated instances are drawn; each tries to get one cue
+// (bush, hedge, terrain island, fence segment or low wall; random type, size and place 0.6..3.2 m off)
+// whose footprint is within kCueRadius of it, clear of the drives' bands and farther than kCueRadius
+// from every instance not drawn. Instances not drawn thus have nothing distinctive within 6 m.
+void place_cues(Gen& g, const std::vector<Rect>& keep_out) {
+  World& w = g.w;
+  const size_t n = w.zone_instances.size();
+  const float density = std::clamp(w.params.effective_cue_density(), 0.0f, 1.0f);
+  const size_t k = std::min(n, static_cast<size_t>(std::lround(density * static_cast<float>(n))));
+  std::vector<uint32_t> order(n);
+  for (size_t i = 0; i < n; ++i) order[i] = static_cast<uint32_t>(i);
+  for (size_t i = 0; i < k; ++i) std::swap(order[i], order[i + g.rng.uniform(static_cast<uint32_t>(n - i))]);
+  std::vector<bool> drawn(n, false);
+  for (size_t i = 0; i < k; ++i) drawn[order[i]] = true;
+  std::sort(order.begin(), order.begin() + static_cast<long>(k));  // place in instance order
+  for (size_t c = 0; c < k; ++c) {
+    const ZoneInstance zi = w.zone_instances[order[c]];
+    for (int attempt = 0; attempt < 80; ++attempt) {
+      const int kind = static_cast<int>(g.rng.uniform(5));
+      const float ang = g.uni(0.0f, 6.2831853f), d = g.uni(zi.radius + 0.6f, 3.2f);
+      const float cx = zi.x + d * std::cos(ang), cy = zi.y + d * std::sin(ang);
+      const bool along_x = g.chance(0.5f);
+      Primitive q;
+      if (kind == 0) {  // bush
+        q = Primitive{Shape::Sphere, kVegetation, 0, {cx, cy, g.uni(0.1f, 0.4f)}, {g.uni(0.4f, 0.9f), 0, 0}};
+      } else {
+        float len = 0, wid = 0, h = 0;
+        uint16_t sem = kVegetation;
+        switch (kind) {
+          case 1: sem = kVegetation; len = g.uni(1.2f, 2.6f); wid = g.uni(0.4f, 0.7f); h = g.uni(0.7f, 1.3f); break;  // hedge
+          case 2: sem = kTerrain; len = g.uni(1.0f, 2.4f); wid = g.uni(0.8f, 1.8f); h = 0.15f; break;               // island
+          case 3: sem = kFence; len = g.uni(1.0f, 2.6f); wid = 0.06f; h = g.uni(1.0f, 1.7f); break;                 // fence
+          default: sem = kBuilding; len = g.uni(1.0f, 2.6f); wid = 0.25f; h = g.uni(0.6f, 1.4f); break;            // low wall
+        }
+        const float hx = (along_x ? len : wid) / 2, hy = (along_x ? wid : len) / 2;
+        q = Primitive{Shape::Box, sem, 0, {cx - hx, cy - hy, 0.0f}, {cx + hx, cy + hy, h}};
+      }
+      float lo[2], hi[2];
+      if (q.shape == Shape::Box) { lo[0] = q.a[0]; lo[1] = q.a[1]; hi[0] = q.b[0]; hi[1] = q.b[1]; }
+      else { lo[0] = q.a[0] - q.b[0]; lo[1] = q.a[1] - q.b[0]; hi[0] = q.a[0] + q.b[0]; hi[1] = q.a[1] + q.b[0]; }
+      bool ok = xy_distance(q, zi.x, zi.y) <= kCueRadius - 0.5f;
+      for (const Rect& r : keep_out) ok = ok && !overlaps(r, lo, hi);
+      for (size_t j = 0; j < n && ok; ++j) {
+        const ZoneInstance& o = w.zone_instances[j];
+        const float dist = xy_distance(q, o.x, o.y);
+        ok = dist >= o.radius + 0.3f && (drawn[j] || dist > kCueRadius + 0.25f);
+      }
+      if (!ok) continue;
+      w.zone_cue_prims.push_back(static_cast<uint32_t>(w.prims.size()));
+      w.prims.push_back(q);
+      break;
+    }
+  }
+}
+
+}  // namespace
+
 World generate_world(const WorldParams& p) {
   World w;
   w.params = p;
@@ -125,7 +424,8 @@ World generate_world(const WorldParams& p) {
   w.zone_y = 0.0f;
   w.zone_x0 = gx + p.zone_margin;
   w.zone_x1 = w.zone_x0 + p.zone_length;
-  if (p.repetitive_zone) w.roads.push_back(RoadSegment{gx, 0.0f, w.zone_x1 + p.zone_margin, 0.0f, true});
+  if (p.repetitive_zone && p.zone == ZoneType::Row)
+    w.roads.push_back(RoadSegment{gx, 0.0f, w.zone_x1 + p.zone_margin, 0.0f, true});
 
   auto near_crossing = [&](float along, float margin) {
     const float m = std::fmod(along, B);
@@ -198,32 +498,31 @@ World generate_world(const WorldParams& p) {
         for (float x = x0 + g.uni(2, 6); x < x1 - 4; x += g.uni(2.6f, 3.4f))
           if (g.chance(0.5f)) g.car(x, y0 + 3.0f, false);
     }
-  // The repetitive zone: identical columns on a lattice with period zone_period along x (four rows),
-  // nothing else instantiable; irregular vegetation, fences and low walls per period and side.
+  w.city_x1 = gx + hw + sw;  // poles, trees and cars of the grid stay within the outer sidewalks
   if (p.repetitive_zone) {
-    const float rows[4] = {-(hw + sw + 1.5f), -(hw + sw + 7.5f), hw + sw + 1.5f, hw + sw + 7.5f};
-    for (float x = w.zone_x0; x <= w.zone_x1 + 1e-3f; x += p.zone_period)
-      for (float ry : rows) g.cylinder(kPole, g.id(), x, w.zone_y + ry, 0.0f, 0.3f, 4.5f);
-    for (float x = w.zone_x0 - p.zone_period; x <= w.zone_x1 + p.zone_period; x += p.zone_period / 2)
-      for (int side = -1; side <= 1; side += 2) {
-        const float base = w.zone_y + side * (hw + sw);
-        const int kind = static_cast<int>(g.rng.uniform(5));
-        if (kind == 0 || kind == 1) {
-          const int nb = 1 + static_cast<int>(g.rng.uniform(3));
-          for (int k = 0; k < nb; ++k) g.bush(x + g.uni(0.5f, 4.5f), base + side * g.uni(3.0f, 12.0f));
-        } else if (kind == 2) {
-          const float yy = base + side * g.uni(4.0f, 11.0f);
-          g.box(kFence, 0, x + g.uni(0, 1), yy - 0.05f, 0, x + g.uni(2.5f, 5.0f), yy + 0.05f, g.uni(1.0f, 1.6f));
-        } else if (kind == 3) {
-          const float yy = base + side * g.uni(10.0f, 13.0f);
-          g.box(kBuilding, 0, x + g.uni(0, 1), yy - 0.2f, 0, x + g.uni(3.0f, 5.0f), yy + 0.2f, g.uni(1.5f, 2.8f));
-        }  // kind 4: open ground
-      }
+    std::vector<Rect> keep_out;  // bands the drives use: cues stay out of them
+    switch (p.zone) {
+      case ZoneType::Row: row_zone(g, &keep_out); break;
+      case ZoneType::Lattice: lattice_zone(g, &keep_out); break;
+      case ZoneType::Hall: hall_zone(g, &keep_out); break;
+      case ZoneType::Avenue: avenue_zone(g, &keep_out); break;
+    }
+    if (!p.legacy_row_cues()) place_cues(g, keep_out);
+    for (ZoneInstance& zi : w.zone_instances) {
+      zi.cued = false;
+      for (uint32_t c : w.zone_cue_prims) zi.cued = zi.cued || xy_distance(w.prims[c], zi.x, zi.y) <= kCueRadius;
+    }
   }
   // World bounds.
   w.min_xy[0] = -40; w.min_xy[1] = -40;
   w.max_xy[0] = (p.repetitive_zone ? w.zone_x1 + p.zone_margin : gx) + 40;
   w.max_xy[1] = gy + 40;
+  if (p.repetitive_zone && p.zone != ZoneType::Row) {
+    for (const RoadSegment& r : w.roads) w.max_xy[0] = std::max(w.max_xy[0], std::max(r.x0, r.x1) + 40);
+    w.min_xy[1] = std::min(w.min_xy[1], w.zone_rect[1] - 40);
+    w.max_xy[0] = std::max(w.max_xy[0], w.zone_rect[2] + 40);
+    w.max_xy[1] = std::max(w.max_xy[1], w.zone_rect[3] + 40);
+  }
   return w;
 }
 
