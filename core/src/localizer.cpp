@@ -386,9 +386,17 @@ Status Localizer::localize(const ScanView& scan, LocalizeResult* out_ptr) {
   out.chosen_hypothesis = best;
   out.verified = verify;
   im.chosen = best;
-  for (uint32_t h = 0; h < H && h < kMaxReportedHypotheses; ++h) {
+  // Report the best hypotheses by verified score (peel order without verification).
+  uint32_t reported = 0;
+  for (uint32_t h = 0; h < H; ++h) {
     const PoseHypothesis& p = im.hypotheses[h];
-    HypothesisReport& r = out.hypothesis[h];
+    uint32_t pos = reported < kMaxReportedHypotheses ? reported++ : kMaxReportedHypotheses;
+    while (pos > 0 && verify && out.hypothesis[pos - 1].verified_score < p.verification.score) {
+      if (pos < kMaxReportedHypotheses) out.hypothesis[pos] = out.hypothesis[pos - 1];
+      --pos;
+    }
+    if (pos >= kMaxReportedHypotheses) continue;
+    HypothesisReport& r = out.hypothesis[pos];
     r.x = static_cast<float>(p.map_T_scan.translation().x());
     r.y = static_cast<float>(p.map_T_scan.translation().y());
     const Eigen::Matrix3d R = p.map_T_scan.linear();
@@ -426,6 +434,11 @@ Status Localizer::localize(const ScanView& scan, LocalizeResult* out_ptr) {
     lap(&out.times.refine);
   }
   return finish(Status::Ok);
+}
+
+PoseVerification Localizer::score_pose(const Eigen::Isometry3d& map_T_scan) const {
+  if (!impl_) return PoseVerification();
+  return verify_pose(impl_->voxels, impl_->semantic, map_T_scan, config_.verify.max_points, impl_->weights);
 }
 
 uint32_t Localizer::last_correspondences(Correspondence* out, uint32_t max) const {

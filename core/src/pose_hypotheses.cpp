@@ -72,11 +72,32 @@ Status PoseHypotheses::generate(const float* a, const float* b, const float* w, 
     if (solve_tls(sub_a_, sub_b_, sub_w_, q, c.tls_threshold, c.max_iterations, &tls, mask_, tls_w_) != Status::Ok ||
         tls.inliers < c.min_inliers)
       continue;
-    // Everything this pose explains leaves the graph.
+    // Re-associate: every correspondence the clique's pose explains (within 2c, clique or not) joins a
+    // second TLS solve. A clique is a minimal consistent core; the pose of everything it explains is
+    // markedly more accurate, and verification compares poses at the 1 m scale of the semantic layer.
+    uint32_t m = 0;
     for (uint32_t i = 0; i < n; ++i) {
-      if (!((allowed_[i >> 6] >> (i & 63)) & 1u)) continue;
       const Eigen::Vector3d pa(a[3 * i], a[3 * i + 1], a[3 * i + 2]), pb(b[3 * i], b[3 * i + 1], b[3 * i + 2]);
-      if ((pb - tls.b_T_a * pa).squaredNorm() <= far2) allowed_[i >> 6] &= ~(uint64_t(1) << (i & 63));
+      if ((pb - tls.b_T_a * pa).squaredNorm() > far2) continue;
+      for (int d = 0; d < 3; ++d) { sub_a_[3 * m + d] = a[3 * i + d]; sub_b_[3 * m + d] = b[3 * i + d]; }
+      sub_w_[m] = w[i] > 1e-6f ? w[i] : 1e-6f;
+      ++m;
+      allowed_[i >> 6] &= ~(uint64_t(1) << (i & 63));  // everything this pose explains leaves the graph
+    }
+    TlsResult wide;
+    if (m > q && solve_tls(sub_a_, sub_b_, sub_w_, m, c.tls_threshold, c.max_iterations, &wide, mask_, tls_w_) == Status::Ok &&
+        wide.inliers >= tls.inliers)
+      tls = wide;
+    else
+      m = 0;  // mask_ below must describe the clique solve: redo it
+    if (m == 0) {
+      for (uint32_t i = 0; i < q; ++i) {
+        const uint32_t id = clique_[i];
+        for (int d = 0; d < 3; ++d) { sub_a_[3 * i + d] = a[3 * id + d]; sub_b_[3 * i + d] = b[3 * id + d]; }
+        sub_w_[i] = w[id] > 1e-6f ? w[id] : 1e-6f;
+      }
+      m = q;
+      solve_tls(sub_a_, sub_b_, sub_w_, q, c.tls_threshold, c.max_iterations, &tls, mask_, tls_w_);
     }
     bool repeated = false;
     for (uint32_t h = 0; h < count_ && !repeated; ++h) {
@@ -91,7 +112,7 @@ Status PoseHypotheses::generate(const float* a, const float* b, const float* w, 
     h.clique_size = q;
     h.inliers = tls.inliers;
     double support = 0.0;
-    for (uint32_t i = 0; i < q; ++i) support += mask_[i] ? sub_w_[i] : 0.0;
+    for (uint32_t i = 0; i < m; ++i) support += mask_[i] ? sub_w_[i] : 0.0;
     h.support = support;
     ++count_;
     for (uint32_t i = 0; i < q; ++i) owner_[clique_[i]] = count_;

@@ -59,7 +59,11 @@ PoseVerification verify_pose(const VoxelLayer& voxels, const SemanticGridView& g
   const uint32_t n = voxels.size();
   if (n == 0 || max_points == 0 || grid.empty()) return v;
   const uint32_t stride = (n + max_points - 1) / max_points;
-  const Eigen::Matrix3f R = T.linear().cast<float>();
+  // Bird's-eye comparison under the upright prior: only the hypothesis' heading and position matter. A
+  // clique of mid-height centroids constrains roll and pitch poorly, and a few degrees of tilt would
+  // move every tall structure's voxels across cells.
+  const float yaw = static_cast<float>(std::atan2(T.linear()(1, 0), T.linear()(0, 0)));
+  const Eigen::Matrix3f R = Eigen::AngleAxisf(yaw, Eigen::Vector3f::UnitZ()).toRotationMatrix();
   const Eigen::Vector3f t = T.translation().cast<float>();
   uint32_t hint = 0;
   for (uint32_t i = 0; i < n; i += stride) {
@@ -73,6 +77,14 @@ PoseVerification verify_pose(const VoxelLayer& voxels, const SemanticGridView& g
       if (mask & kGroundClasses) verdict = (mask & bit) ? 1 : -1;
     } else if (mask & kCellObserved) {
       verdict = (mask & bit) ? 1 : -1;
+    }
+    if (verdict < 0) {
+      // A hypothesis pose is good to about a cell: the class in a 4-neighbour cell still agrees (a
+      // lattice shift moves cues by metres, far beyond this tolerance).
+      const float c = grid.cell;
+      const float nx[4] = {p.x() - c, p.x() + c, p.x(), p.x()}, ny[4] = {p.y(), p.y(), p.y() - c, p.y() + c};
+      for (int k = 0; k < 4 && verdict < 0; ++k)
+        if (grid.cell_at(nx[k], ny[k], &hint) & bit) verdict = 1;
     }
     if (verdict == 0) { ++v.unknown; continue; }
     ++v.scored;

@@ -54,6 +54,8 @@ void write_diagnostics(JsonWriter& j, const QueryRecord& r) {
   j.field("field_comparisons", x.field_comparisons);
   j.field("verified", x.verified);
   j.field("chosen_hypothesis", x.chosen_hypothesis);
+  j.field("true_correspondences", r.true_correspondences);
+  j.field("truth_verified_score", r.truth_verified_score);
   j.key("stage_ms");
   j.begin_object();
   j.field("voxel", r.stages.voxel);
@@ -68,7 +70,7 @@ void write_diagnostics(JsonWriter& j, const QueryRecord& r) {
   j.end_object();
   j.key("hypotheses");
   j.begin_array();
-  for (uint32_t h = 0; h < x.hypotheses && h < kMaxReportedHypotheses; ++h) {
+  for (uint32_t h = 0; h < x.hypotheses && h < kMaxReportedHypotheses; ++h) {  // best verified first
     const HypothesisReport& p = x.hypothesis[h];
     const double dx = p.x - r.truth.translation().x(), dy = p.y - r.truth.translation().y();
     j.begin_object();
@@ -81,6 +83,11 @@ void write_diagnostics(JsonWriter& j, const QueryRecord& r) {
     j.field("verified_score", p.verified_score);
     j.field("verified_voxels", p.verified_voxels);
     j.field("distance_to_truth_m", std::sqrt(dx * dx + dy * dy));
+    const Eigen::Matrix3d Rt = r.truth.linear();
+    double dyaw = p.yaw_deg - std::atan2(Rt(1, 0), Rt(0, 0)) * 57.29577951308232;
+    while (dyaw > 180) dyaw -= 360;
+    while (dyaw < -180) dyaw += 360;
+    j.field("yaw_error_deg", dyaw);
     j.end_object();
   }
   j.end_array();
@@ -335,6 +342,12 @@ int run_evaluation(const EvalOptions& o) {
         r.success = is_success(r.error);
       }
       const uint32_t nc = lm.loc->last_correspondences(corr.data(), static_cast<uint32_t>(corr.size()));
+      for (uint32_t k = 0; k < nc && k < corr.size(); ++k) {
+        const Eigen::Vector3d qw = truth * Eigen::Vector3d(corr[k].query_xyz[0], corr[k].query_xyz[1], corr[k].query_xyz[2]);
+        const float* m = map.instances[corr[k].map_instance].centroid;
+        if ((qw - Eigen::Vector3d(m[0], m[1], m[2])).norm() < 2.0) ++r.true_correspondences;
+      }
+      if (res.status == Status::Ok) r.truth_verified_score = lm.loc->score_pose(truth).score;
       runs[lm.run].corr.emplace_back(corr.begin(), corr.begin() + std::min<size_t>(nc, corr.size()));
       runs[lm.run].records.push_back(r);
     }

@@ -32,7 +32,7 @@ struct HypothesisReport {
   float verified_score = 0;          // agree - disagree (semantic_grid.h); 0 without verification
   uint32_t verified_voxels = 0;      // voxels that landed on known cells
 };
-constexpr uint32_t kMaxReportedHypotheses = 8;
+constexpr uint32_t kMaxReportedHypotheses = 16;  // the best by verified score (all of them when fewer)
 
 struct LocalizeResult {
   Status status = Status::NotInitialized;
@@ -95,6 +95,9 @@ class Localizer {
     bool in_clique;
   };
   uint32_t last_correspondences(Correspondence* out, uint32_t max) const;
+  // Whole-scan verification of any pose against the last scan (diagnostics: how the ground truth would
+  // have scored). Zero scores without a map semantic layer or before the first localize().
+  PoseVerification score_pose(const Eigen::Isometry3d& map_T_scan) const;
 
   bool initialized() const { return initialized_; }
   const LocalizerConfig& config() const { return config_; }
