@@ -1,0 +1,93 @@
+#!/usr/bin/env bash
+# The localization suite: every zone type (row, lattice, hall, avenue) x several seeds, so no setting is
+# chosen on one world. Per world: gsf simulate --preset suite (2 x 2-block city + the zone, label noise,
+# no instance ids) -> gsf build-map -> gsf evaluate --mode instance,gsf --json; worlds run in parallel;
+# then bench/suite_summary.py prints per mode the mean and worst over seeds per zone type and overall,
+# and writes OUT/summary.json.
+#
+# Usage: bench/suite.sh [options]
+#   --seeds "1 2 3 4 5"       seeds (space or comma separated; env SUITE_SEEDS)
+#   --zones "row lattice hall avenue"   zone types (env SUITE_ZONES)
+#   --out DIR                 output directory (env SUITE_OUT; default out/suite)
+#   --set name=value,...      localizer config overrides for build-map and evaluate (env SUITE_SET)
+#   --jobs N                  worlds in parallel (env SUITE_JOBS; default 2)
+#   --preset NAME             simulate preset (default suite; tiny-lattice for a smoke run)
+#   --label-noise P           (default 0.03)    --instance-ids   keep instance ids (default: zeroed)
+#   --modes LIST              evaluate modes (default instance,gsf)
+#   --gsf PATH                gsf binary (default: build the release preset, use build/release/tools/gsf)
+#   --keep                    keep the simulated datasets (default: deleted after evaluation, ~100 MB each)
+# Per world OUT/<zone>-s<seed>/ holds meta.json, map.gsfmap, results.json, log.txt and seconds.txt.
+set -euo pipefail
+cd "$(dirname "$0")/.."
+seeds=${SUITE_SEEDS:-"1 2 3 4 5"}
+zones=${SUITE_ZONES:-"row lattice hall avenue"}
+out=${SUITE_OUT:-out/suite}
+set_overrides=${SUITE_SET:-}
+jobs=${SUITE_JOBS:-2}
+preset=suite
+label_noise=0.03
+ids_flag=--no-instance-ids
+modes=instance,gsf
+gsf=""
+keep=0
+while [ $# -gt 0 ]; do
+  case "$1" in
+    --seeds) seeds=$2; shift 2 ;;
+    --zones) zones=$2; shift 2 ;;
+    --out) out=$2; shift 2 ;;
+    --set) set_overrides=$2; shift 2 ;;
+    --jobs) jobs=$2; shift 2 ;;
+    --preset) preset=$2; shift 2 ;;
+    --label-noise) label_noise=$2; shift 2 ;;
+    --instance-ids) ids_flag=""; shift ;;
+    --modes) modes=$2; shift 2 ;;
+    --gsf) gsf=$2; shift 2 ;;
+    --keep) keep=1; shift ;;
+    -h|--help) sed -n '2,21p' "$0" | sed 's/^# \{0,1\}//'; exit 0 ;;
+    *) echo "suite.sh: unknown option '$1' (see --help)" >&2; exit 2 ;;
+  esac
+done
+seeds=${seeds//,/ }
+zones=${zones//,/ }
+if [ -z "$gsf" ]; then
+  cmake --preset release >/dev/null && cmake --build --preset release -j 2 --target gsf_cli >/dev/null
+  gsf=build/release/tools/gsf
+fi
+[ -x "$gsf" ] || { echo "suite.sh: no gsf binary at '$gsf'" >&2; exit 2; }
+mkdir -p "$out"
+gsf=$(cd "$(dirname "$gsf")" && pwd)/$(basename "$gsf")
+
+# One world: zone seed. Exit status non-zero (and log.txt kept) on any failure.
+run_world() {
+  local zone=$1 seed=$2 d="$out/$1-s$2"
+  local set_args=()
+  [ -n "$set_overrides" ] && set_args=(--set "$set_overrides")
+  rm -rf "$d" && mkdir -p "$d"
+  local t0=$SECONDS
+  {
+    "$gsf" simulate --preset "$preset" --zone "$zone" --seed "$seed" --label-noise "$label_noise" $ids_flag \
+      --out "$d/dataset" --quiet &&
+    "$gsf" build-map --dataset "$d/dataset" --out "$d/map.gsfmap" "${set_args[@]}" --quiet &&
+    "$gsf" evaluate --map "$d/map.gsfmap" --dataset "$d/dataset" --mode "$modes" --json "$d/results.json" \
+      "${set_args[@]}" --quiet
+  } >"$d/log.txt" 2>&1 || { echo "suite: $zone seed $seed FAILED (see $d/log.txt)" >&2; return 1; }
+  cp "$d/dataset/meta.json" "$d/meta.json"
+  [ "$keep" = 1 ] || rm -rf "$d/dataset"
+  echo $((SECONDS - t0)) >"$d/seconds.txt"
+  echo "suite: $zone seed $seed done in $((SECONDS - t0)) s" >&2
+}
+export -f run_world
+export out gsf preset label_noise ids_flag modes set_overrides keep
+
+start=$SECONDS
+n=0
+for z in $zones; do for s in $seeds; do n=$((n + 1)); done; done
+echo "suite: $n worlds ($zones) x seeds ($seeds), preset $preset, label noise $label_noise${ids_flag:+, no instance ids}${set_overrides:+, --set $set_overrides}, $jobs in parallel -> $out" >&2
+status=0
+for z in $zones; do for s in $seeds; do printf '%s %s\n' "$z" "$s"; done; done |
+  xargs -P "$jobs" -n 2 bash -c 'run_world "$0" "$1"' || status=1
+elapsed=$((SECONDS - start))
+echo "$elapsed" >"$out/seconds.txt"
+python3 bench/suite_summary.py "$out" --seconds "$elapsed" --set "$set_overrides"
+echo "suite: $n worlds in ${elapsed} s" >&2
+exit $status
