@@ -25,7 +25,9 @@ Status validate(const LocalizerConfig& c) {
       !(h.consistency_eps > 0) || !(h.tls_threshold > 0) || h.min_inliers < 3 || h.max_iterations == 0 ||
       !(h.same_pose_m >= 0) || !(h.same_pose_deg >= 0))
     return Status::InvalidArgument;
-  if (c.verify.max_points == 0 || !(c.verify.margin_scale > 0)) return Status::InvalidArgument;
+  if (c.verify.max_points == 0 || !(c.verify.margin_scale > 0) || c.verify.refine_top > 64 ||
+      !(c.verify.refine_step_m >= 0) || !(c.verify.refine_step_deg >= 0) || c.verify.refine_rounds > 16)
+    return Status::InvalidArgument;
   if (c.cluster.max_instances == 0 || c.cluster.max_instances >= (1u << 16)) return Status::InvalidArgument;
   return Status::Ok;
 }

@@ -369,6 +369,24 @@ Status Localizer::localize(const ScanView& scan, LocalizeResult* out_ptr) {
     for (uint32_t h = 0; h < H; ++h)
       im.hypotheses[h].verification = verify_pose(im.voxels, im.semantic, im.hypotheses[h].map_T_scan,
                                                   cfg.verify.max_points, im.weights);
+    // Re-score the leading hypotheses at their best local alignment (ranked, then capped: the
+    // selection is by score, ties by peel order).
+    uint32_t top[64];
+    uint32_t nt = 0;
+    const uint32_t R = std::min(cfg.verify.refine_top, H);
+    for (uint32_t h = 0; h < H; ++h) {
+      uint32_t pos = nt < R ? nt++ : R;
+      while (pos > 0 && im.hypotheses[top[pos - 1]].verification.score < im.hypotheses[h].verification.score) {
+        if (pos < R) top[pos] = top[pos - 1];
+        --pos;
+      }
+      if (pos < R) top[pos] = h;
+    }
+    for (uint32_t k = 0; k < nt && cfg.verify.refine_rounds > 0; ++k)
+      im.hypotheses[top[k]].verification =
+          verify_pose_refined(im.voxels, im.semantic, im.hypotheses[top[k]].map_T_scan, cfg.verify.max_points,
+                              im.weights, cfg.verify.refine_rounds, cfg.verify.refine_step_m,
+                              cfg.verify.refine_step_deg, nullptr);
     for (uint32_t h = 1; h < H; ++h)
       if (im.hypotheses[h].verification.score > im.hypotheses[best].verification.score) best = h;
     for (uint32_t h = 0; h < H; ++h)

@@ -41,13 +41,13 @@ void ConsistencyGraph::add_edge(uint32_t i, uint32_t j) {
   bits_[size_t(j) * words_ + (i >> 6)] |= uint64_t(1) << (i & 63);
 }
 
-Status ConsistencyGraph::build(const float* a, const float* b, uint32_t n, float eps) {
+Status ConsistencyGraph::build(const float* a, const float* b, uint32_t n, float eps, float z_weight) {
   const Status s = reset(n);
   if (s != Status::Ok) return s;
   for (uint32_t i = 0; i < n; ++i)
     for (uint32_t j = i + 1; j < n; ++j) {
-      const float dax = a[3 * i] - a[3 * j], day = a[3 * i + 1] - a[3 * j + 1], daz = a[3 * i + 2] - a[3 * j + 2];
-      const float dbx = b[3 * i] - b[3 * j], dby = b[3 * i + 1] - b[3 * j + 1], dbz = b[3 * i + 2] - b[3 * j + 2];
+      const float dax = a[3 * i] - a[3 * j], day = a[3 * i + 1] - a[3 * j + 1], daz = (a[3 * i + 2] - a[3 * j + 2]) * z_weight;
+      const float dbx = b[3 * i] - b[3 * j], dby = b[3 * i + 1] - b[3 * j + 1], dbz = (b[3 * i + 2] - b[3 * j + 2]) * z_weight;
       const float da = std::sqrt(dax * dax + day * day + daz * daz);
       const float db = std::sqrt(dbx * dbx + dby * dby + dbz * dbz);
       if (std::fabs(da - db) <= eps) add_edge(i, j);

@@ -46,7 +46,7 @@ Status PoseHypotheses::generate(const float* a, const float* b, const float* w, 
     if (stats_out) *stats_out = st;
     return Status::NoSolution;
   }
-  graph_.build(a, b, n, c.consistency_eps);
+  graph_.build(a, b, n, c.consistency_eps, c.consistency_z_weight);
   const uint32_t words = (n + 63) / 64;
   for (uint32_t i = 0; i < words; ++i) allowed_[i] = 0;
   for (uint32_t i = 0; i < n; ++i) allowed_[i >> 6] |= uint64_t(1) << (i & 63);
@@ -62,16 +62,20 @@ Status PoseHypotheses::generate(const float* a, const float* b, const float* w, 
     st.nodes += cs.nodes;
     const uint32_t q = clique_.size();
     if (q < c.min_inliers) break;
-    for (uint32_t i = 0; i < q; ++i) {
-      const uint32_t id = clique_[i];
-      allowed_[id >> 6] &= ~(uint64_t(1) << (id & 63));
-      for (int d = 0; d < 3; ++d) { sub_a_[3 * i + d] = a[3 * id + d]; sub_b_[3 * i + d] = b[3 * id + d]; }
-      sub_w_[i] = w[id] > 1e-6f ? w[id] : 1e-6f;
-    }
+    auto take_clique = [&]() {
+      for (uint32_t i = 0; i < q; ++i) {
+        const uint32_t id = clique_[i];
+        for (int d = 0; d < 3; ++d) { sub_a_[3 * i + d] = a[3 * id + d]; sub_b_[3 * i + d] = b[3 * id + d]; }
+        sub_w_[i] = w[id] > 1e-6f ? w[id] : 1e-6f;
+      }
+    };
+    take_clique();
     TlsResult tls;
     if (solve_tls(sub_a_, sub_b_, sub_w_, q, c.tls_threshold, c.max_iterations, &tls, mask_, tls_w_) != Status::Ok ||
-        tls.inliers < c.min_inliers)
+        tls.inliers < c.min_inliers) {
+      for (uint32_t i = 0; i < q; ++i) allowed_[clique_[i] >> 6] &= ~(uint64_t(1) << (clique_[i] & 63));
       continue;
+    }
     // Re-associate: every correspondence the clique's pose explains (within 2c, clique or not) joins a
     // second TLS solve. A clique is a minimal consistent core; the pose of everything it explains is
     // markedly more accurate, and verification compares poses at the 1 m scale of the semantic layer.
@@ -82,23 +86,33 @@ Status PoseHypotheses::generate(const float* a, const float* b, const float* w, 
       for (int d = 0; d < 3; ++d) { sub_a_[3 * m + d] = a[3 * i + d]; sub_b_[3 * m + d] = b[3 * i + d]; }
       sub_w_[m] = w[i] > 1e-6f ? w[i] : 1e-6f;
       ++m;
-      allowed_[i >> 6] &= ~(uint64_t(1) << (i & 63));  // everything this pose explains leaves the graph
     }
     TlsResult wide;
     if (m > q && solve_tls(sub_a_, sub_b_, sub_w_, m, c.tls_threshold, c.max_iterations, &wide, mask_, tls_w_) == Status::Ok &&
-        wide.inliers >= tls.inliers)
+        wide.inliers >= tls.inliers) {
       tls = wide;
-    else
-      m = 0;  // mask_ below must describe the clique solve: redo it
-    if (m == 0) {
-      for (uint32_t i = 0; i < q; ++i) {
-        const uint32_t id = clique_[i];
-        for (int d = 0; d < 3; ++d) { sub_a_[3 * i + d] = a[3 * id + d]; sub_b_[3 * i + d] = b[3 * id + d]; }
-        sub_w_[i] = w[id] > 1e-6f ? w[id] : 1e-6f;
-      }
+    } else {  // mask_ below must describe the clique solve: redo it
+      take_clique();
       m = q;
       solve_tls(sub_a_, sub_b_, sub_w_, q, c.tls_threshold, c.max_iterations, &tls, mask_, tls_w_);
     }
+    // Only what the final pose explains (its inliers) leaves the graph. Clique members it does not
+    // explain stay: a clique that mixed one lattice shift's correspondences with another's must not take
+    // the other shift's correspondences with it (that is how a true hypothesis was lost). The final
+    // pose has >= min_inliers inliers among the correspondences, so every round removes something.
+    const double c2 = double(c.tls_threshold) * c.tls_threshold;
+    for (uint32_t i = 0; i < n; ++i) {
+      const Eigen::Vector3d pa(a[3 * i], a[3 * i + 1], a[3 * i + 2]), pb(b[3 * i], b[3 * i + 1], b[3 * i + 2]);
+      if ((pb - tls.b_T_a * pa).squaredNorm() <= c2) allowed_[i >> 6] &= ~(uint64_t(1) << (i & 63));
+    }
+    for (uint32_t i = 0; i < q; ++i)  // and the clique itself, so the same search cannot repeat
+      if (!((allowed_[clique_[i] >> 6] >> (clique_[i] & 63)) & 1u)) continue;
+      else {
+        bool any_removed = false;
+        for (uint32_t k = 0; k < q && !any_removed; ++k)
+          any_removed = !((allowed_[clique_[k] >> 6] >> (clique_[k] & 63)) & 1u);
+        if (!any_removed) allowed_[clique_[i] >> 6] &= ~(uint64_t(1) << (clique_[i] & 63));
+      }
     bool repeated = false;
     for (uint32_t h = 0; h < count_ && !repeated; ++h) {
       const Eigen::Isometry3d d = hyps_[h].map_T_scan.inverse() * tls.b_T_a;

@@ -94,4 +94,33 @@ PoseVerification verify_pose(const VoxelLayer& voxels, const SemanticGridView& g
   return v;
 }
 
+PoseVerification verify_pose_refined(const VoxelLayer& voxels, const SemanticGridView& grid, const Eigen::Isometry3d& T,
+                                     uint32_t max_points, const float* weights, uint32_t rounds, float step_m,
+                                     float step_deg, Eigen::Isometry3d* refined) {
+  Eigen::Isometry3d best = T;
+  const uint32_t coarse = max_points / 4 > 0 ? max_points / 4 : 1;
+  float best_score = verify_pose(voxels, grid, best, coarse, weights).score;
+  double step = step_m, turn = double(step_deg) * 3.14159265358979323846 / 180.0;
+  for (uint32_t r = 0; r < rounds; ++r, step *= 0.5, turn *= 0.5) {
+    bool moved = true;
+    for (int pass = 0; pass < 2 && moved; ++pass) {
+      moved = false;
+      for (int k = 0; k < 6; ++k) {
+        Eigen::Isometry3d c = best;
+        if (k < 4) {
+          c.translation().x() += (k == 0 ? step : k == 1 ? -step : 0.0);
+          c.translation().y() += (k == 2 ? step : k == 3 ? -step : 0.0);
+        } else {
+          // Turn about the sensor: map_T_scan * Rz keeps the scan origin where it is.
+          c.linear() = c.linear() * Eigen::AngleAxisd(k == 4 ? turn : -turn, Eigen::Vector3d::UnitZ()).toRotationMatrix();
+        }
+        const float sc = verify_pose(voxels, grid, c, coarse, weights).score;
+        if (sc > best_score) { best_score = sc; best = c; moved = true; }
+      }
+    }
+  }
+  if (refined) *refined = best;
+  return verify_pose(voxels, grid, best, max_points, weights);
+}
+
 }  // namespace gsf

@@ -35,6 +35,12 @@ struct VerifyConfig {
   // Ambiguity from verification: exp(-(best - second) / (margin_scale * scored voxels)). The margin is a
   // share of the scored voxels so the same setting serves sparse and dense scans.
   float margin_scale = 0.01f;
+  // The best `refine_top` hypotheses (by first score) are re-scored after a bird's-eye pattern search
+  // (semantic_grid.h: verify_pose_refined), so a near-truth clique pose is compared at its best.
+  uint32_t refine_top = 4;
+  uint32_t refine_rounds = 3;
+  float refine_step_m = 0.4f;
+  float refine_step_deg = 0.8f;
 };
 
 struct LocalizerConfig {

@@ -21,8 +21,9 @@ class ConsistencyGraph {
  public:
   static size_t required_bytes(uint32_t max_vertices);
   Status bind(Arena& arena, uint32_t max_vertices);
-  // a, b: n x 3 (query and map positions of each correspondence).
-  Status build(const float* a, const float* b, uint32_t n, float eps);
+  // a, b: n x 3 (query and map positions of each correspondence). z_weight scales height differences
+  // (1: Euclidean 3-D distances; 0: horizontal distances only).
+  Status build(const float* a, const float* b, uint32_t n, float eps, float z_weight = 1.0f);
   // Arbitrary graphs (tests, adversarial inputs).
   Status reset(uint32_t n);
   void add_edge(uint32_t i, uint32_t j);

@@ -20,10 +20,13 @@
 namespace gsf {
 
 struct HypothesisConfig {
-  uint32_t max_hypotheses = 8;     // K: cliques peeled per query
+  uint32_t max_hypotheses = 32;    // K: cliques peeled per query (a 1-D row of 25 columns has ~50 shifts)
   uint64_t first_budget = 200000;  // branch-and-bound nodes for the first (maximum) clique
   uint64_t next_budget = 20000;    // nodes for each further clique
   float consistency_eps = 1.0f;    // m; | |a_i-a_j| - |b_i-b_j| | <= eps (Outram: 1.0 m)
+  // Weight of height differences in those distances. An instance centroid's height depends on how much
+  // of a pole or trunk one scan sees (near columns lose their tops); 1 = Outram's 3-D distances.
+  float consistency_z_weight = 1.0f;
   float tls_threshold = 1.5f;      // m; residual truncation of the weighted TLS (paper Eq. 8)
   uint32_t max_iterations = 50;    // GNC iterations
   uint32_t min_inliers = 3;        // a clique or TLS solution with fewer is no hypothesis

@@ -64,4 +64,12 @@ struct PoseVerification {
 PoseVerification verify_pose(const VoxelLayer& voxels, const SemanticGridView& grid, const Eigen::Isometry3d& map_T_scan,
                              uint32_t max_points, const float* weights);
 
+// verify_pose after a small bird's-eye pattern search around map_T_scan (moves of step_m along x and y
+// and step_deg of heading, halved each round, scored on a quarter of the points), so a hypothesis whose
+// clique pose is a fraction of a metre off is compared at its best alignment. *refined (optional)
+// receives the best pose found. Cost: rounds x 6 x max_points/4 + max_points cell lookups.
+PoseVerification verify_pose_refined(const VoxelLayer& voxels, const SemanticGridView& grid,
+                                     const Eigen::Isometry3d& map_T_scan, uint32_t max_points, const float* weights,
+                                     uint32_t rounds, float step_m, float step_deg, Eigen::Isometry3d* refined);
+
 }  // namespace gsf
