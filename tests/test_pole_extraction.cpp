@@ -7,6 +7,7 @@
 #include <catch2/catch.hpp>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
@@ -20,6 +21,7 @@
 #include "gsf/instance_clustering.h"
 #include "gsf/pole_extraction.h"
 #include "gsf/port/nuscenes.h"
+#include "gsf/port/scan_buffer.h"
 #include "gsf/voxel_layer.h"
 #include "test_cloud.h"
 
@@ -342,4 +344,274 @@ TEST_CASE("Pole extraction validates bind and build arguments; required_bytes is
   CHECK(none.run(s.view()) == Status::Ok);
   CHECK(none.poles.size() == 0);
   CHECK(none.ps.host_voxels == 0);
+}
+
+// ---------------------------------------------------------------------------------------------------
+// Real data. SemanticKITTI has pole (80) and trunk (71) labels: relabel them into their hosts the way
+// nuScenes-lidarseg would have labelled them (pole, traffic-sign, fence, other-structure -> building
+// = static.manmade; trunk -> vegetation = static.vegetation), extract, and compare with the true
+// poles/trunks (clustered from the original labels by InstanceClustering). An extracted instance is
+// correct when a true pole or trunk lies within 1 m horizontally; recall counts the true ones that are
+// at least 2 m tall (what the extractor looks for) and have an extracted instance within 1 m.
+namespace {
+
+bool read_kitti(const std::string& bin, Cloud* c) {
+  std::string lab = bin;
+  lab.replace(lab.find("velodyne"), 8, "labels");
+  lab.replace(lab.size() - 3, 3, "label");
+  std::ifstream fb(bin, std::ios::binary | std::ios::ate), fl(lab, std::ios::binary | std::ios::ate);
+  if (!fb || !fl) return false;
+  const size_t nb = static_cast<size_t>(fb.tellg()), nl = static_cast<size_t>(fl.tellg());
+  if (nb % 16 != 0 || nl != nb / 4) return false;
+  c->pts.resize(nb / 4);
+  c->labels.resize(nl / 4);
+  fb.seekg(0);
+  fl.seekg(0);
+  fb.read(reinterpret_cast<char*>(c->pts.data()), static_cast<std::streamsize>(nb));
+  fl.read(reinterpret_cast<char*>(c->labels.data()), static_cast<std::streamsize>(nl));
+  return static_cast<bool>(fb) && static_cast<bool>(fl);
+}
+
+uint32_t nuscenes_like(uint32_t label, bool signs_and_fences) {
+  const uint32_t id = label & 0xFFFF;
+  if (id == 80) return 50;
+  if (id == 71) return 70;
+  if (signs_and_fences && (id == 81 || id == 51 || id == 52)) return 50;
+  return id;
+}
+
+struct KittiScore {
+  uint32_t extracted = 0, correct = 0, gt = 0, gt_tall = 0, found_tall = 0, kind_right = 0;
+};
+
+KittiScore score_kitti(const Cloud& c, bool signs_and_fences, const PoleConfig& pc) {
+  KittiScore s;
+  // Ground truth: pole and trunk instances from the true labels.
+  ClusterConfig gc;
+  gc.instance_classes = class_bit(kPole) | class_bit(kTrunk);
+  for (int k = 0; k < kNumClasses; ++k) gc.max_extent[k] = 100.0f;
+  gc.min_voxels[kPole] = gc.min_voxels[kTrunk] = 2;
+  gc.max_instances = 1000;
+  VoxelConfig vc;
+  ArenaBuffer gbuf(VoxelLayer::required_bytes(vc) + InstanceClustering::required_bytes(gc, vc.max_voxels));
+  VoxelLayer glayer;
+  InstanceClustering gt;
+  REQUIRE(glayer.bind(gbuf.arena, vc) == Status::Ok);
+  REQUIRE(gt.bind(gbuf.arena, gc, vc.max_voxels) == Status::Ok);
+  REQUIRE(glayer.build(c.view(), nullptr) == Status::Ok);
+  REQUIRE(gt.build(glayer, nullptr) == Status::Ok);
+  // Extraction on the relabelled scan.
+  Cloud r = c;
+  for (auto& l : r.labels) l = nuscenes_like(l, signs_and_fences);
+  Pipeline p(vc, pc);
+  const Status st = p.run(r.view());
+  REQUIRE((st == Status::Ok || st == Status::CapacityExceeded));
+  s.gt = gt.size();
+  s.extracted = p.poles.size();
+  for (uint32_t k = 0; k < p.poles.size(); ++k) {
+    float best = 1e9f;
+    uint8_t label = 0;
+    for (uint32_t g = 0; g < gt.size(); ++g) {
+      const float d = hdist(p.poles.instance(k).centroid, gt.instance(g).centroid);
+      if (d < best) { best = d; label = gt.instance(g).label; }
+    }
+    if (best <= 1.0f) {
+      ++s.correct;
+      s.kind_right += label == p.poles.instance(k).label;
+    }
+  }
+  for (uint32_t g = 0; g < gt.size(); ++g) {
+    if (gt.instance(g).extent[2] < 2.0f) continue;
+    ++s.gt_tall;
+    for (uint32_t k = 0; k < p.poles.size(); ++k)
+      if (hdist(p.poles.instance(k).centroid, gt.instance(g).centroid) <= 1.0f) { ++s.found_tall; break; }
+  }
+  return s;
+}
+
+const char* kKittiFrames[] = {"00/velodyne/000052.bin", "00/velodyne/000088.bin", "00/velodyne/000850.bin",
+                              "00/velodyne/004501.bin", "07/velodyne/000000.bin", "07/velodyne/000001.bin",
+                              "07/velodyne/000002.bin", "07/velodyne/000003.bin", "08/velodyne/000720.bin",
+                              "08/velodyne/001500.bin"};
+
+}  // namespace
+
+TEST_CASE("Real SemanticKITTI: extraction from relabelled hosts against the true poles and trunks") {
+  const std::string root = std::string(GSF_DATA_DIR) + "/semantickitti-samples/sequences/";
+  if (!std::filesystem::exists(root)) {
+    WARN("real data not found under " << root << "; skipped");
+    return;
+  }
+  for (bool signs_and_fences : {false, true}) {
+    KittiScore total;
+    for (const char* f : kKittiFrames) {
+      Cloud c;
+      REQUIRE(read_kitti(root + f, &c));
+      const KittiScore s = score_kitti(c, signs_and_fences, PoleConfig());
+      std::printf("%s %s: extracted %u, within 1 m of a true pole/trunk %u (label right %u); true %u, >= 2 m tall %u, "
+                  "found %u\n", signs_and_fences ? "[+sign,fence,other-structure]" : "[pole,trunk only]", f,
+                  s.extracted, s.correct, s.kind_right, s.gt, s.gt_tall, s.found_tall);
+      total.extracted += s.extracted; total.correct += s.correct; total.gt += s.gt;
+      total.gt_tall += s.gt_tall; total.found_tall += s.found_tall; total.kind_right += s.kind_right;
+    }
+    const double precision = double(total.correct) / std::max(1u, total.extracted);
+    const double recall = double(total.found_tall) / std::max(1u, total.gt_tall);
+    WARN("SemanticKITTI, 10 scans, " << (signs_and_fences ? "signs/fences/other-structure also manmade" : "pole->building only")
+         << ": extracted " << total.extracted << ", correct " << total.correct << " (precision " << precision
+         << "), tall true " << total.gt_tall << ", found " << total.found_tall << " (recall " << recall
+         << "), label right " << total.kind_right);
+    // Measured (docs/pole-extraction.md): 69 extracted, precision 0.86, recall 0.66 (pole/trunk only);
+    // 62 extracted, precision 0.84, recall 0.49 (signs, fences, other-structure also manmade).
+    CHECK(precision >= 0.75);
+    CHECK(recall >= (signs_and_fences ? 0.40 : 0.55));
+    CHECK(total.extracted >= 40);
+    CHECK(total.kind_right * 100 >= total.correct * 95);  // pole vs trunk follows the host
+  }
+}
+
+// nuScenes-lidarseg: no pole/trunk ground truth. Per scan: how many instances a single scan gives.
+// Per scene: a world-frame map of all 40 keyframes (one voxel layer over the accumulated points, as
+// the map builder does) and its instances per 100 m of path; how many single-scan instances the map
+// has within 1 m (the query side finds the map side's poles); and across the two traversals of the same
+// street (scenes 0004 and 0002), how many map instances of one lie within 1 m of one of the other.
+namespace {
+
+struct SceneResult {
+  std::vector<std::array<float, 3>> map_instances;
+  std::vector<uint8_t> map_labels;
+  std::vector<Eigen::Vector3d> path;
+  double path_m = 0;
+  uint32_t scans = 0, scan_instances = 0, scan_instances_in_map = 0, map_voxels = 0;
+  uint32_t near_scan_instances = 0, near_scan_instances_in_map = 0;  // within 30 m of the sensor
+  uint32_t map_near_path = 0;                                         // map instances within 20 m of the path
+};
+
+bool run_scene(const std::string& root, const char* scene, SceneResult* out) {
+  port::NuScenesLidarsegSource src;
+  if (src.open(root, scene) != Status::Ok) return false;
+  port::OwnedScanBuffer buf(60000, false);
+  VoxelConfig vc;  // per scan: min_range 2.5 m drops the ego vehicle's surroundings
+  Pipeline scan(vc, PoleConfig());
+  ClassTable nusc;
+  nuscenes_lidarseg_class_table(&nusc);
+  PoleConfig from_table;
+  from_table.set_hosts(nusc);
+  REQUIRE(from_table.pole_hosts == scan.pc.pole_hosts);
+  REQUIRE(from_table.trunk_hosts == scan.pc.trunk_hosts);
+  Cloud world;
+  std::vector<std::vector<std::array<float, 4>>> per_scan;  // world x, y, z, range from the sensor
+  for (uint32_t i = 0; i < src.size(); ++i) {
+    REQUIRE(src.read(i, buf.buffer()) == Status::Ok);
+    Eigen::Isometry3d T;
+    REQUIRE(src.pose(i, &T) == Status::Ok);
+    if (!out->path.empty()) out->path_m += (T.translation() - out->path.back()).norm();
+    out->path.push_back(T.translation());
+    const Status s = scan.run(buf.buffer().view());
+    REQUIRE((s == Status::Ok || s == Status::CapacityExceeded));
+    per_scan.emplace_back();
+    for (uint32_t k = 0; k < scan.poles.size(); ++k) {
+      const float* c = scan.poles.instance(k).centroid;
+      const Eigen::Vector3d w = T * Eigen::Vector3d(c[0], c[1], c[2]);
+      per_scan.back().push_back({float(w.x()), float(w.y()), float(w.z()), std::hypot(c[0], c[1])});
+    }
+    const port::ScanBuffer& b = buf.buffer();
+    for (uint32_t p = 0; p < b.count; ++p) {
+      const float* q = b.points + 4 * size_t(p);
+      const double r = std::sqrt(q[0] * q[0] + q[1] * q[1] + q[2] * q[2]);
+      if (r < vc.min_range || r > vc.max_range) continue;
+      const Eigen::Vector3d w = T * Eigen::Vector3d(q[0], q[1], q[2]);
+      world.add(float(w.x()), float(w.y()), float(w.z()), b.labels[p]);
+    }
+    ++out->scans;
+  }
+  VoxelConfig mc;
+  mc.min_range = 0.0f;
+  mc.max_range = 1e5f;
+  mc.max_voxels = 1000000;
+  mc.max_columns = 200000;
+  PoleConfig mp;
+  mp.max_instances = 4096;
+  Pipeline map(mc, mp);
+  REQUIRE(map.run(world.view()) == Status::Ok);
+  out->map_voxels = map.layer.size();
+  for (uint32_t k = 0; k < map.poles.size(); ++k) {
+    const float* c = map.poles.instance(k).centroid;
+    out->map_instances.push_back({c[0], c[1], c[2]});
+    out->map_labels.push_back(map.poles.instance(k).label);
+  }
+  for (const auto& s : per_scan)
+    for (const auto& w : s) {
+      bool found = false;
+      for (const auto& m : out->map_instances)
+        if (std::hypot(w[0] - m[0], w[1] - m[1]) <= 1.0f) { found = true; break; }
+      ++out->scan_instances;
+      out->scan_instances_in_map += found;
+      if (w[3] <= 30.0f) {
+        ++out->near_scan_instances;
+        out->near_scan_instances_in_map += found;
+      }
+    }
+  for (const auto& m : out->map_instances) {
+    double closest = 1e9;
+    for (const auto& p : out->path) closest = std::min(closest, std::hypot(m[0] - p.x(), m[1] - p.y()));
+    out->map_near_path += closest <= 20.0;
+  }
+  return true;
+}
+
+}  // namespace
+
+TEST_CASE("Real nuScenes-lidarseg: poles and trunks from static.manmade and static.vegetation") {
+  const std::string root = std::string(GSF_DATA_DIR) + "/nuscenes-lidarseg-samples";
+  if (!std::filesystem::exists(root + "/sequences/0004")) {
+    WARN("real data not found under " << root << "; skipped");
+    return;
+  }
+  std::map<std::string, SceneResult> scenes;
+  for (const char* scene : {"0001", "0002", "0004"}) {
+    SceneResult r;
+    REQUIRE(run_scene(root, scene, &r));
+    uint32_t poles = 0;
+    for (uint8_t l : r.map_labels) poles += l == kPole;
+    const double per100 = 100.0 * r.map_instances.size() / r.path_m;
+    const double near100 = 100.0 * r.map_near_path / r.path_m;
+    const double consistent = double(r.scan_instances_in_map) / std::max(1u, r.scan_instances);
+    const double near_consistent = double(r.near_scan_instances_in_map) / std::max(1u, r.near_scan_instances);
+    std::printf("nuScenes scene %s: %u scans, %.1f m path; per scan %.1f instances (%.1f within 30 m); map of %u "
+                "voxels: %zu instances (%u poles, %zu trunks) = %.1f per 100 m, %u within 20 m of the path = %.1f per "
+                "100 m; single-scan instances with a map instance within 1 m: %u of %u (%.2f), within 30 m: %u of %u "
+                "(%.2f)\n",
+                scene, r.scans, r.path_m, double(r.scan_instances) / r.scans, double(r.near_scan_instances) / r.scans,
+                r.map_voxels, r.map_instances.size(), poles, r.map_instances.size() - poles, per100, r.map_near_path,
+                near100, r.scan_instances_in_map, r.scan_instances, consistent, r.near_scan_instances_in_map,
+                r.near_scan_instances, near_consistent);
+    // Measured (docs/pole-extraction.md): 15.8-19.9 per scan (9.2-11.2 within 30 m), 117-150 per 100 m
+    // (21-36 within 20 m of the path), consistency 0.48-0.58 (0.48-0.65 within 30 m).
+    CHECK(double(r.near_scan_instances) / r.scans >= 5.0);
+    CHECK(double(r.scan_instances) / r.scans <= 40.0);
+    CHECK(near100 >= 12.0);
+    CHECK(near100 <= 80.0);
+    CHECK(consistent >= 0.35);
+    CHECK(near_consistent >= 0.35);
+    scenes[scene] = r;
+  }
+  // The two traversals of one street: map instances of 0002 near 0004's path, found again in 0004's map.
+  const SceneResult& a = scenes["0002"];
+  const SceneResult& b = scenes["0004"];
+  uint32_t near = 0, again = 0;
+  for (const auto& m : a.map_instances) {
+    double closest = 1e9;
+    for (const auto& p : b.path) closest = std::min(closest, std::hypot(m[0] - p.x(), m[1] - p.y()));
+    if (closest > 20.0) continue;
+    ++near;
+    for (const auto& o : b.map_instances)
+      if (std::hypot(m[0] - o[0], m[1] - o[1]) <= 1.0f) { ++again; break; }
+  }
+  std::printf("nuScenes 0002 map instances within 20 m of 0004's path: %u, of which in 0004's map within 1 m: %u\n",
+              near, again);
+  WARN("nuScenes 0002 vs 0004 maps: " << near << " instances of 0002 near 0004's path, " << again
+       << " found again within 1 m");
+  // Measured: 26 near, 16 found again (0.62).
+  CHECK(near >= 10);
+  CHECK(again * 2 >= near);
 }

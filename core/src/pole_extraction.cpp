@@ -223,7 +223,10 @@ Status PoleExtraction::build(const VoxelLayer& layer, PoleStats* stats_out) {
     }
     const uint8_t kind = segments_[r].kind;
     const float height = hi[2] - lo[2] + vs;
-    if (levels < config_.min_levels || height < config_.min_height[kind]) { ++stats.rejected_short; continue; }
+    if (levels < config_.min_levels || points < config_.min_points || height < config_.min_height[kind]) {
+      ++stats.rejected_short;
+      continue;
+    }
     // Axis: least squares x = a + b z, y = c + d z about the voxel mean.
     const double mx = sx / sw, my = sy / sw, mz = sz / sw;
     double szz = 0, sxz = 0, syz = 0;
