@@ -49,6 +49,9 @@ namespace gsf {
 
 enum PoleKind : uint8_t { kPoleKind = 0, kTrunkKind = 1 };
 
+// The default hosts are the nuScenes-lidarseg situation. For a label set that has its own pole and
+// trunk classes (SemanticKITTI), set_hosts(semantic_kitti table) gives no hosts and no instances:
+// InstanceClustering already makes them from the labels.
 struct PoleConfig {
   ClassMask pole_hosts = class_bit(kBuilding);     // e.g. nuScenes static.manmade
   ClassMask trunk_hosts = class_bit(kVegetation);  // e.g. nuScenes static.vegetation
