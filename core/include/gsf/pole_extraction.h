@@ -1,0 +1,142 @@
+// Geometric pole / trunk instances from host classes: for label sets that have no pole or trunk class
+// (nuScenes-lidarseg keeps them inside static.manmade and static.vegetation), find thin, tall,
+// vertical and isolated structures among the voxels of the "host" classes and return them as Instance
+// records (instance_clustering.h) labelled kPole or kTrunk.
+//
+// Works on a VoxelLayer, so the same code serves a query (one scan in the sensor frame) and a map (the
+// map builder's world-frame layer of many accumulated scans). Steps, in voxel cells of the layer:
+//  1. Slices: per voxel level (z cell), 8-connected components of host voxels of one kind (pole hosts
+//     or trunk hosts). A slice segment is *thin* when the bounding box of its voxel centroids has a
+//     horizontal diagonal <= max_diameter[kind], and *isolated* when at most max_ring_voxels host
+//     voxels (either kind) of the same level lie outside it within ring_width of that box. A wall, a
+//     hedge or a canopy gives wide segments; a wall fragment or a pole beside a wall is not isolated.
+//  2. Chains: thin isolated segments of the same kind are linked upward when a voxel of one has a voxel
+//     of the other up to max_gap higher (empty levels in between, as a sparse beam pattern leaves) and
+//     within link_radius horizontally. Linked segments form a chain (union-find).
+//  3. Acceptance per chain: >= min_levels distinct levels, >= min_points points, and a vertical extent (centroid span + one
+//     voxel) >= min_height[kind]; an axis fitted by least squares of horizontal position on height
+//     (x = a + b z, y = c + d z, every voxel weight 1) tilted <= max_tilt_deg from vertical; and the
+//     residuals about that axis within a box of diagonal <= max_diameter[kind] (thickness, so a slightly
+//     tilted tall pole is judged by its thickness, not by its drift).
+//  4. Instances: centroid = point-weighted mean of the chain's voxel centroids, extent = axis-aligned
+//     centroid box + one voxel, stability = config.stability[kind], as InstanceClustering does.
+//     Quality score = vertical extent * cos(tilt) / (1 + mean ring voxels per segment): taller, more
+//     vertical, more isolated first. At most max_instances are kept: on overflow the lowest score is
+//     evicted (ties: fewer points, then later discovery), so the kept ones are the best max_instances
+//     whatever the storage order, and build() returns Status::CapacityExceeded with
+//     stats.dropped_capacity = the number of accepted chains not kept. The result is in discovery order
+//     (first voxel index), deterministic for a given layer.
+//
+// Memory: bind() takes everything from the arena: 24 bytes per max_voxels plus two records per
+// max_instances; build() does not allocate. Cost: per host voxel 8 lookups (slices), per thin voxel
+// (2 ceil(ring_width / voxel) + 3)^2 for the ring test and (2 ceil(link_radius / voxel) + 1)^2 *
+// (1 + floor(max_gap / voxel)) for linking, plus a sort of each chain's voxels by level.
+// Statuses: NotInitialized before a successful bind(); InvalidArgument from bind() for a bad config
+// (non-positive capacities or sizes, overlapping host masks, tilt outside (0, 90) degrees) and from
+// build() when the layer holds more than max_voxels voxels or when ring_width, link_radius or max_gap
+// span more than 16 voxel cells of this layer. Ok with zero instances when nothing qualifies.
+#pragma once
+#include <cstdint>
+
+#include "gsf/arena.h"
+#include "gsf/class_table.h"
+#include "gsf/instance_clustering.h"
+#include "gsf/semantic_classes.h"
+#include "gsf/status.h"
+#include "gsf/voxel_layer.h"
+
+namespace gsf {
+
+enum PoleKind : uint8_t { kPoleKind = 0, kTrunkKind = 1 };
+
+// The default hosts are the nuScenes-lidarseg situation. For a label set that has its own pole and
+// trunk classes (SemanticKITTI), set_hosts(semantic_kitti table) gives no hosts and no instances:
+// InstanceClustering already makes them from the labels.
+struct PoleConfig {
+  ClassMask pole_hosts = class_bit(kBuilding);     // e.g. nuScenes static.manmade
+  ClassMask trunk_hosts = class_bit(kVegetation);  // e.g. nuScenes static.vegetation
+  float max_diameter[2] = {0.8f, 1.2f};  // m, per kind: slice box diagonal and thickness about the axis
+  float min_height[2] = {2.0f, 2.0f};    // m, per kind: vertical extent of a chain
+  uint32_t min_levels = 4;               // distinct voxel levels in a chain
+  uint32_t min_points = 0;               // LiDAR points in a chain
+  float max_tilt_deg = 12.0f;            // axis from vertical
+  float ring_width = 1.0f;               // m, isolation ring around a slice segment
+  uint32_t max_ring_voxels = 0;          // host voxels tolerated in that ring
+  float link_radius = 0.6f;              // m, horizontal offset of linked voxels of stacked segments
+  float max_gap = 1.2f;                  // m, empty height bridged between stacked segments
+  float stability[2] = {1.0f, 1.0f};     // instance stability per kind (stability_weight(kPole/kTrunk))
+  uint32_t max_instances = 64;
+
+  // Hosts and stabilities from a label set's table (pole_host_classes, trunk_host_classes,
+  // stability(kPole), stability(kTrunk)).
+  void set_hosts(const ClassTable& table) {
+    pole_hosts = table.pole_host_classes();
+    trunk_hosts = table.trunk_host_classes();
+    stability[kPoleKind] = table.stability(kPole);
+    stability[kTrunkKind] = table.stability(kTrunk);
+  }
+};
+
+// Per kept instance: how it was judged.
+struct PoleInfo {
+  float score;
+  float height;     // m, vertical extent
+  float tilt_deg;   // axis from vertical
+  float thickness;  // m, residual box diagonal about the axis
+  float ring;       // mean ring voxels per segment
+  uint32_t levels;  // distinct voxel levels
+  uint32_t first_voxel;  // = instance(i).first_voxel
+  uint8_t kind;     // PoleKind
+  uint8_t pad[3];
+};
+
+struct PoleStats {
+  uint32_t host_voxels = 0;
+  uint32_t segments = 0;           // slice components of host voxels
+  uint32_t segments_wide = 0;      // not thin
+  uint32_t segments_crowded = 0;   // thin but not isolated
+  uint32_t chains = 0;             // linked thin isolated segments
+  uint32_t rejected_short = 0;     // too few levels or points, or too low
+  uint32_t rejected_tilt = 0;
+  uint32_t rejected_thick = 0;
+  uint32_t dropped_capacity = 0;   // accepted but not among the best max_instances
+  uint32_t instances = 0;
+};
+
+class PoleExtraction {
+ public:
+  static size_t required_bytes(const PoleConfig& config, uint32_t max_voxels);
+  Status bind(Arena& arena, const PoleConfig& config, uint32_t max_voxels);
+  Status build(const VoxelLayer& voxels, PoleStats* stats);
+
+  uint32_t size() const { return count_; }
+  const Instance& instance(uint32_t i) const { return instances_[i]; }
+  const Instance* instances() const { return instances_; }
+  const PoleInfo& info(uint32_t i) const { return info_[i]; }
+  // Instance id of each voxel after build (UINT32_MAX for voxels in no kept instance).
+  const uint32_t* voxel_instance() const { return voxel_seg_; }
+  const PoleConfig& config() const { return config_; }
+
+ private:
+  struct Segment {
+    uint32_t parent;  // union-find
+    int32_t level;    // z cell
+    uint16_t ring;    // host voxels in its isolation ring (saturating)
+    uint8_t kind;
+    uint8_t pad;
+  };
+  uint32_t find_root(uint32_t s);
+
+  PoleConfig config_{};
+  Instance* instances_ = nullptr;
+  PoleInfo* info_ = nullptr;
+  uint32_t* voxel_seg_ = nullptr;   // during build: segment id or a marker; after: kept instance id
+  uint32_t* queue_ = nullptr;       // slice BFS, then chain members grouped by root
+  uint32_t* offsets_ = nullptr;     // per segment (+1): chain member ranges, then root -> instance
+  Segment* segments_ = nullptr;
+  uint32_t max_voxels_ = 0;
+  uint32_t count_ = 0;
+  bool bound_ = false;
+};
+
+}  // namespace gsf
