@@ -113,8 +113,9 @@ size_t gsf_workspace_bytes(const gsf_config* config) GSF_NOEXCEPT;
 // Builds a localizer in `storage` over `map`, carving all per-scan memory from `workspace`. Rejects a NULL
 // or misaligned storage/workspace (GSF_STATUS_INVALID_ARGUMENT), a too small one (BUFFER_TOO_SMALL), an
 // invalid config (INVALID_ARGUMENT), a map not loaded by gsf_map_load (INVALID_ARGUMENT) or one built for
-// other map-side values (CONFIG_MISMATCH). On success *out is the handle (inside storage), else NULL and
-// any localizer previously built in this storage answers GSF_STATUS_NOT_INITIALIZED.
+// other map-side values (CONFIG_MISMATCH). On success *out is the handle (inside storage), else NULL;
+// a failure after the storage itself was accepted leaves a localizer previously built in it answering
+// GSF_STATUS_NOT_INITIALIZED.
 int gsf_localizer_init(void* storage, size_t storage_bytes, const gsf_config* config, const gsf_map* map,
                        void* workspace, size_t workspace_bytes, gsf_localizer** out) GSF_NOEXCEPT;
 
