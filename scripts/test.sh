@@ -1,10 +1,11 @@
 #!/usr/bin/env bash
-# The README's test command: builds and runs the test suite on the host (release and ASan+UBSan)
-# and on ARM64 under qemu. Pass preset names to run a subset, e.g. `scripts/test.sh release`.
+# The README's test command: builds and runs the test suite on the host (release and ASan+UBSan),
+# on ARM64 under qemu, and the two-thread test under ThreadSanitizer (the tsan presets build and run
+# test_threads only). Pass preset names to run a subset, e.g. `scripts/test.sh release`.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 presets=("$@")
-[ ${#presets[@]} -eq 0 ] && presets=(release asan aarch64)
+[ ${#presets[@]} -eq 0 ] && presets=(release asan aarch64 tsan)
 for p in "${presets[@]}"; do
   echo "=== [$p] configure + build"
   cmake --preset "$p" >/dev/null

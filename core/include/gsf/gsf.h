@@ -1,0 +1,145 @@
+// The C API of libgsf (C11; usable from C++, where every function is noexcept). It wraps the C++ facade
+// (gsf/localizer.h) with the same rules: the caller provides all memory, nothing is allocated, nothing
+// throws, every fallible call returns a status code (one of GSF_STATUS_*, the values of gsf::Status).
+//
+//   gsf_config cfg;       gsf_config_default(&cfg);            // then tune fields
+//   gsf_map map;          gsf_map_load(blob, blob_bytes, &map); // validates, then zero copy
+//   storage:   gsf_localizer_storage_bytes() bytes, 16-byte aligned (the handle lives here)
+//   workspace: gsf_workspace_bytes(&cfg) bytes, 16-byte aligned (all per-scan memory)
+//   gsf_localizer* loc;   gsf_localizer_init(storage, ..., &cfg, &map, workspace, ..., &loc);
+//   gsf_result r;         gsf_localize(loc, xyz, 4, n, labels, NULL, 0, &r);
+//
+// Lifetimes: the map blob, the gsf_map, the storage and the workspace must stay valid and unchanged
+// while the localizer is used. There is no teardown call: drop or reuse the memory. Threads: a loaded
+// gsf_map may be shared read-only by any number of localizers on any threads; one localizer (and its
+// workspace) must be used by one thread at a time.
+//
+// Linking: libgsf is C++. CMake consumers (find_package(gsf), gsf::gsf) get the C++ runtime linked
+// automatically; otherwise link with the C++ compiler driver (or add -lstdc++ -lm).
+#pragma once
+
+#include <stddef.h>
+#include <stdint.h>
+
+#ifdef __cplusplus
+#define GSF_NOEXCEPT noexcept
+extern "C" {
+#else
+#define GSF_NOEXCEPT
+#endif
+
+// Status codes: the values of gsf::Status (gsf/status.h), checked at compile time in c_api.cpp.
+enum {
+  GSF_STATUS_OK = 0,
+  GSF_STATUS_INVALID_ARGUMENT = 1,  // NULL pointer, misaligned buffer, value out of range
+  GSF_STATUS_INVALID_INPUT = 2,     // scan data unusable (NaN/Inf, empty after gating, ...)
+  GSF_STATUS_CAPACITY_EXCEEDED = 3,
+  GSF_STATUS_BUFFER_TOO_SMALL = 4,  // storage or workspace smaller than its *_bytes() query
+  GSF_STATUS_NOT_INITIALIZED = 5,   // localizer whose last init failed
+  GSF_STATUS_CORRUPT_DATA = 6,      // map blob failed a size, range or CRC check
+  GSF_STATUS_VERSION_MISMATCH = 7,
+  GSF_STATUS_CONFIG_MISMATCH = 8,  // map built with values the config disagrees with
+  GSF_STATUS_TRUNCATED = 9,        // map blob shorter than its header says
+  GSF_STATUS_IO_ERROR = 10,
+  GSF_STATUS_NOT_FOUND = 11,
+  GSF_STATUS_BUDGET_EXHAUSTED = 12,
+  GSF_STATUS_NO_SOLUTION = 13,  // no pose (too few instances or inliers)
+  GSF_STATUS_UNSUPPORTED = 14
+};
+
+// Alignment required of the map blob, the localizer storage and the workspace.
+#define GSF_ALIGNMENT 16
+// Logit dimension (SemanticKITTI's learning classes, gsf::kNumClasses).
+#define GSF_NUM_CLASSES 19
+
+// Name of a status code ("Ok", "InvalidArgument", ...); "Unknown" for other values. Never NULL.
+const char* gsf_status_string(int status) GSF_NOEXCEPT;
+
+// The commonly tuned values of gsf::LocalizerConfig; everything else keeps its C++ default. Names follow
+// the `gsf build-map/evaluate --set` names with '.' -> '_' (match_tau is match.tau). Flags are 0 or 1.
+typedef struct gsf_config {
+  uint32_t struct_bytes;  // sizeof(gsf_config); set by gsf_config_default (catches stale layouts)
+  // Query side: may differ from the values the map was built with.
+  uint32_t max_scan_points;                // larger scans: GSF_STATUS_CAPACITY_EXCEEDED
+  float voxel_min_range, voxel_max_range;  // m
+  uint32_t voxel_max_voxels;
+  uint32_t cluster_max_instances;
+  uint32_t match_use_gsf;  // 0: instance-only (no Gaussian semantic field filter)
+  float match_tau, match_min_similarity, match_observed_variance, match_normalize_mass;
+  float match_covariance_weight;
+  uint32_t match_yaw_bins, match_max_correspondences, match_max_matches_per_triangle;
+  float triangle_relative_side_tolerance;
+  uint64_t clique_node_budget, clique_second_budget;  // (placed for a struct without padding)
+  float clique_consistency_eps;                       // m
+  float pose_tls_threshold;                           // m
+  uint32_t pose_min_inliers;
+  uint32_t triangle_max_triangles;  // per scan (capacity)
+  uint32_t refine_enabled;          // uses the map's refinement layer (if any); grows the workspace
+  // Map side: must equal the values the map was built with (else GSF_STATUS_CONFIG_MISMATCH at init).
+  float voxel_size;  // m
+  float field_length_scale, field_radius, field_grid_spacing, field_noise_variance;
+  uint32_t field_inducing_points, field_grid_nx, field_grid_ny;
+  uint32_t triangle_neighbours;
+} gsf_config;
+
+// Fills the defaults (the evaluated settings, gsf::LocalizerConfig{}). No-op on NULL.
+void gsf_config_default(gsf_config* config) GSF_NOEXCEPT;
+
+// A validated, zero-copy view of a map blob. Caller storage; fill it with gsf_map_load only.
+typedef struct gsf_map {
+  uint64_t opaque[48];
+} gsf_map;
+
+typedef struct gsf_map_info {
+  uint32_t instances, triangles, refine_points;
+  float road_length_m;
+  uint64_t total_bytes;
+} gsf_map_info;
+
+// Validates `blob` (16-byte aligned, exactly `bytes` long) completely and points `out` into it. Never
+// reads outside the blob. On failure `out` is left unusable (gsf_localizer_init rejects it).
+int gsf_map_load(const void* blob, size_t bytes, gsf_map* out) GSF_NOEXCEPT;
+int gsf_map_get_info(const gsf_map* map, gsf_map_info* out) GSF_NOEXCEPT;
+
+// Opaque localizer handle; it lives inside the caller's storage.
+typedef struct gsf_localizer gsf_localizer;
+
+// Bytes of handle storage (a multiple of GSF_ALIGNMENT; the storage itself must be 16-byte aligned).
+size_t gsf_localizer_storage_bytes(void) GSF_NOEXCEPT;
+// Workspace bytes gsf_localizer_init needs for this config (independent of the map); 0 if the config is
+// NULL or invalid.
+size_t gsf_workspace_bytes(const gsf_config* config) GSF_NOEXCEPT;
+
+// Builds a localizer in `storage` over `map`, carving all per-scan memory from `workspace`. Rejects a NULL
+// or misaligned storage/workspace (GSF_STATUS_INVALID_ARGUMENT), a too small one (BUFFER_TOO_SMALL), an
+// invalid config (INVALID_ARGUMENT), a map not loaded by gsf_map_load (INVALID_ARGUMENT) or one built for
+// other map-side values (CONFIG_MISMATCH). On success *out is the handle (inside storage), else NULL;
+// a failure after the storage itself was accepted leaves a localizer previously built in it answering
+// GSF_STATUS_NOT_INITIALIZED.
+int gsf_localizer_init(void* storage, size_t storage_bytes, const gsf_config* config, const gsf_map* map,
+                       void* workspace, size_t workspace_bytes, gsf_localizer** out) GSF_NOEXCEPT;
+
+typedef struct gsf_result {
+  int status;             // also the return value of gsf_localize
+  uint32_t inliers;       // correspondences agreeing with the pose
+  double map_T_scan[12];  // row-major 3x4 [R | t]: p_map = R p_scan + t
+  double ambiguity;       // 0 = unambiguous ... 1 = decline (see gsf::LocalizeResult)
+  double score;           // sum of inlier weights
+  uint64_t clique_nodes;
+  uint32_t clique_size, query_instances, query_triangles, triangle_matches, gsf_survivors, correspondences;
+  uint32_t field_probes, field_comparisons;
+  uint32_t refined, budget_exhausted, capacity_truncated;  // 0 or 1
+  uint32_t reserved;                                       // 0 (no padding anywhere in the struct)
+} gsf_result;
+
+// One-shot global localization of one scan in the sensor frame. Point i is xyz_stride[i * stride + 0..2]
+// (stride >= 3 floats, e.g. 4 for x, y, z, intensity records); labels[i] is its SemanticKITTI label
+// word (required); logits is optional (NULL, or count x logit_dim with logit_dim = GSF_NUM_CLASSES, in the
+// dense class order of gsf/semantic_classes.h). Reads the scan only during the call. Always fills *out
+// when out != NULL.
+int gsf_localize(gsf_localizer* localizer, const float* xyz_stride, uint32_t stride, uint32_t count,
+                 const uint32_t* labels, const float* logits, uint32_t logit_dim, gsf_result* out) GSF_NOEXCEPT;
+
+#ifdef __cplusplus
+}  // extern "C"
+#endif
