@@ -87,7 +87,7 @@ static void test_sizes(void) {
   gsf_config_default(NULL);  // no-op
   CHECK(cfg.struct_bytes == sizeof(gsf_config));
   CHECK(cfg.match_use_gsf == 1 && cfg.refine_enabled == 0);
-  CHECK(cfg.max_scan_points > 0 && cfg.match_tau > 0.0f);
+  CHECK(cfg.max_scan_points > 0 && cfg.gsf_tau > 0.0f);
   const size_t storage = gsf_localizer_storage_bytes();
   CHECK(storage > 0 && storage % GSF_ALIGNMENT == 0);
   const size_t ws = gsf_workspace_bytes(&cfg);

@@ -56,7 +56,7 @@ enum {
 const char* gsf_status_string(int status) GSF_NOEXCEPT;
 
 // The commonly tuned values of gsf::LocalizerConfig; everything else keeps its C++ default. Names follow
-// the `gsf build-map/evaluate --set` names with '.' -> '_' (match_tau is match.tau). Flags are 0 or 1.
+// the `gsf build-map/evaluate --set` names with '.' -> '_' (gsf_tau is gsf.tau). Flags are 0 or 1.
 typedef struct gsf_config {
   uint32_t struct_bytes;  // sizeof(gsf_config); set by gsf_config_default (catches stale layouts)
   // Query side: may differ from the values the map was built with.
@@ -65,14 +65,16 @@ typedef struct gsf_config {
   uint32_t voxel_max_voxels;
   uint32_t cluster_max_instances;
   uint32_t match_use_gsf;  // 0: instance-only (no Gaussian semantic field filter)
-  float match_tau, match_min_similarity, match_observed_variance, match_normalize_mass;
-  float match_covariance_weight;
-  uint32_t match_yaw_bins, match_max_correspondences, match_max_matches_per_triangle;
+  float gsf_tau, match_min_similarity, gsf_observed_variance, gsf_normalize_mass;
+  float gsf_covariance_weight;
+  uint32_t gsf_yaw_bins, match_max_correspondences, match_max_matches_per_triangle;
   float triangle_relative_side_tolerance;
-  uint64_t clique_node_budget, clique_second_budget;  // (placed for a struct without padding)
-  float clique_consistency_eps;                       // m
-  float pose_tls_threshold;                           // m
-  uint32_t pose_min_inliers;
+  uint64_t hypotheses_first_budget, hypotheses_next_budget;  // (placed for a struct without padding)
+  float hypotheses_consistency_eps;                          // m
+  float hypotheses_tls_threshold;                            // m
+  uint32_t hypotheses_min_inliers;
+  uint32_t hypotheses_max_hypotheses;  // pose hypotheses peeled per query
+  uint32_t verify_enabled;             // whole-scan verification (needs the map's semantic layer)
   uint32_t triangle_max_triangles;  // per scan (capacity)
   uint32_t refine_enabled;          // uses the map's refinement layer (if any); grows the workspace
   // Map side: must equal the values the map was built with (else GSF_STATUS_CONFIG_MISMATCH at init).
