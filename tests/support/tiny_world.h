@@ -49,11 +49,12 @@ inline void make_scan(const gsf::sim::Raycaster& rc, const gsf::sim::SimConfig& 
   out->truth = pose;
 }
 
-inline const TinyWorld& tiny_world() {
-  static TinyWorld* w = [] {
+// Simulates `sc`, builds its map in memory and the query scans (map and query logits drawn
+// independently, as `gsf evaluate` does).
+inline TinyWorld* build_sim_world(const gsf::sim::SimConfig& sc) {
+  {
     auto* t = new TinyWorld();
     t->config.max_scan_points = 262144;
-    const gsf::sim::SimConfig sc = gsf::sim::SimConfig::tiny();
     const gsf::sim::World world = gsf::sim::generate_world(sc.world);
     const gsf::sim::World later = gsf::sim::apply_time_gap(world, sc.time_gap);
     const gsf::sim::Raycaster map_rc(world), query_rc(later);
@@ -76,7 +77,17 @@ inline const TinyWorld& tiny_world() {
       t->queries.push_back(std::move(s));
     }
     return t;
-  }();
+  }
+}
+
+inline const TinyWorld& tiny_world() {
+  static TinyWorld* w = build_sim_world(gsf::sim::SimConfig::tiny());
+  return *w;
+}
+
+// The tiny-lattice preset: a small city and a 2-D lattice car park of identical columns.
+inline const TinyWorld& tiny_lattice_world() {
+  static TinyWorld* w = build_sim_world(gsf::sim::SimConfig::tiny_lattice());
   return *w;
 }
 
