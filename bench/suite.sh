@@ -15,6 +15,8 @@
 #   --label-noise P           (default 0.03)    --instance-ids   keep instance ids (default: zeroed)
 #   --modes LIST              evaluate modes (default instance,gsf)
 #   --gsf PATH                gsf binary (default: build the release preset, use build/release/tools/gsf)
+#   --sim-gsf PATH            gsf binary for `simulate` only (default: --gsf), e.g. to run another
+#                             localizer build on exactly this branch's worlds
 #   --keep                    keep the simulated datasets (default: deleted after evaluation, ~100 MB each)
 # Per world OUT/<zone>-s<seed>/ holds meta.json, map.gsfmap, results.json, log.txt and seconds.txt.
 set -euo pipefail
@@ -29,6 +31,7 @@ label_noise=0.03
 ids_flag=--no-instance-ids
 modes=instance,gsf
 gsf=""
+sim_gsf=""
 keep=0
 while [ $# -gt 0 ]; do
   case "$1" in
@@ -42,8 +45,9 @@ while [ $# -gt 0 ]; do
     --instance-ids) ids_flag=""; shift ;;
     --modes) modes=$2; shift 2 ;;
     --gsf) gsf=$2; shift 2 ;;
+    --sim-gsf) sim_gsf=$2; shift 2 ;;
     --keep) keep=1; shift ;;
-    -h|--help) sed -n '2,21p' "$0" | sed 's/^# \{0,1\}//'; exit 0 ;;
+    -h|--help) awk 'NR > 1 && /^#/ { sub(/^# ?/, ""); print; next } NR > 1 { exit }' "$0"; exit 0 ;;
     *) echo "suite.sh: unknown option '$1' (see --help)" >&2; exit 2 ;;
   esac
 done
@@ -56,6 +60,9 @@ fi
 [ -x "$gsf" ] || { echo "suite.sh: no gsf binary at '$gsf'" >&2; exit 2; }
 mkdir -p "$out"
 gsf=$(cd "$(dirname "$gsf")" && pwd)/$(basename "$gsf")
+sim_gsf=${sim_gsf:-$gsf}
+[ -x "$sim_gsf" ] || { echo "suite.sh: no gsf binary at '$sim_gsf'" >&2; exit 2; }
+sim_gsf=$(cd "$(dirname "$sim_gsf")" && pwd)/$(basename "$sim_gsf")
 
 # One world: zone seed. Exit status non-zero (and log.txt kept) on any failure.
 run_world() {
@@ -65,7 +72,7 @@ run_world() {
   rm -rf "$d" && mkdir -p "$d"
   local t0=$SECONDS
   {
-    "$gsf" simulate --preset "$preset" --zone "$zone" --seed "$seed" --label-noise "$label_noise" $ids_flag \
+    "$sim_gsf" simulate --preset "$preset" --zone "$zone" --seed "$seed" --label-noise "$label_noise" $ids_flag \
       --out "$d/dataset" --quiet &&
     "$gsf" build-map --dataset "$d/dataset" --out "$d/map.gsfmap" "${set_args[@]}" --quiet &&
     "$gsf" evaluate --map "$d/map.gsfmap" --dataset "$d/dataset" --mode "$modes" --json "$d/results.json" \
@@ -77,7 +84,7 @@ run_world() {
   echo "suite: $zone seed $seed done in $((SECONDS - t0)) s" >&2
 }
 export -f run_world
-export out gsf preset label_noise ids_flag modes set_overrides keep
+export out gsf sim_gsf preset label_noise ids_flag modes set_overrides keep
 
 start=$SECONDS
 n=0

@@ -166,7 +166,9 @@ SimConfig fast_tiny_lattice() {
 }  // namespace
 
 TEST_CASE("Lattice columns lie exactly on a square lattice, symmetric under 180/90 degrees; hall pillars on theirs") {
-  const World w = generate_world(SimConfig::suite(ZoneType::Lattice).world);
+ for (uint64_t seed : {1u, 2u, 3u, 4u, 5u}) {  // the suite's zone sizes vary with the seed
+  INFO("seed " << seed);
+  const World w = generate_world(SimConfig::suite(ZoneType::Lattice, seed).world);
   const WorldParams& p = w.params;
   const float s = p.lattice_spacing;
   REQUIRE(w.zone_instances.size() == size_t(p.lattice_nx * p.lattice_ny));
@@ -204,7 +206,7 @@ TEST_CASE("Lattice columns lie exactly on a square lattice, symmetric under 180/
   for (const auto& q : w.prims)
     if (q.instance && w.in_zone(q.a[0], q.a[1])) CHECK(in_repeated(w, static_cast<uint32_t>(&q - w.prims.data())));
 
-  const World h = generate_world(SimConfig::suite(ZoneType::Hall).world);
+  const World h = generate_world(SimConfig::suite(ZoneType::Hall, seed).world);
   REQUIRE(h.zone_instances.size() == size_t(h.params.hall_nx * h.params.hall_ny));
   float hx = 1e9f, hy = 1e9f, hx1 = -1e9f, hy1 = -1e9f;
   for (const auto& zi : h.zone_instances) {
@@ -219,19 +221,21 @@ TEST_CASE("Lattice columns lie exactly on a square lattice, symmetric under 180/
     CHECK(mirrored);
   }
   CHECK(h.zone_structure_prims.size() == 8);  // four walls, each split by one entrance gap
+ }
 }
 
 TEST_CASE("Cue density: at the default at least a third of the repeated instances have nothing distinctive within 6 m") {
-  for (ZoneType z : kZones) {
-    WorldParams p = SimConfig::suite(z).world;
+  for (ZoneType z : kZones)
+   for (uint64_t seed : {1u, 3u, 5u}) {
+    WorldParams p = SimConfig::suite(z, seed).world;
     p.cue_density = -1.0f;  // the default
     if (z == ZoneType::Row) p.cue_density = 0.5f;  // row's default is the legacy layout (checked below)
     const World w = generate_world(p);
     const int n = static_cast<int>(w.zone_instances.size()), free = cue_free_instances(w);
-    INFO(zone_name(z) << ": " << free << " of " << n << " cue-free");
+    INFO(zone_name(z) << " seed " << seed << ": " << free << " of " << n << " cue-free");
     REQUIRE(n >= 20);
     CHECK(3 * free >= n);
-    CHECK(2 * free <= n + 2);  // and about half do have a cue: cues are really placed
+    CHECK(10 * free <= 6 * n);  // and most drawn ones do get a cue (a few find no free place)
     int cued = 0;
     for (const auto& zi : w.zone_instances) cued += zi.cued;
     CHECK(cued == n - free);  // the generator's bookkeeping agrees with the geometry
@@ -247,10 +251,11 @@ TEST_CASE("Cue density: at the default at least a third of the repeated instance
 }
 
 TEST_CASE("Approach roads: no other instance within 40 m of the zone's instances or along the approach") {
-  for (ZoneType z : kZones) {
-    const SimConfig sc = SimConfig::suite(z);
+  for (ZoneType z : kZones)
+   for (uint64_t seed : {1u, 3u, 5u}) {
+    const SimConfig sc = SimConfig::suite(z, seed);
     const World w = generate_world(sc.world);
-    INFO(zone_name(z));
+    INFO(zone_name(z) << " seed " << seed);
     REQUIRE(!w.zone_instances.empty());
     std::vector<char> repeated_id(w.next_instance, 0);
     for (const auto& zi : w.zone_instances) repeated_id[zi.id] = 1;
@@ -286,11 +291,12 @@ TEST_CASE("Approach roads: no other instance within 40 m of the zone's instances
 }
 
 TEST_CASE("Zone queries use other aisles / lanes than the mapping drive, in the other direction or crossing") {
-  for (ZoneType z : kZones) {
-    const SimConfig sc = SimConfig::suite(z);
+  for (ZoneType z : kZones)
+   for (uint64_t seed : {1u, 3u, 5u}) {
+    const SimConfig sc = SimConfig::suite(z, seed);
     const World w = generate_world(sc.world);
     const Drive m = mapping_drive(w, sc), q = query_drive(w, sc);
-    INFO(zone_name(z));
+    INFO(zone_name(z) << " seed " << seed);
     int zone = 0, crossing = 0, against = 0;
     for (size_t i = 0; i < q.poses.size(); ++i) {
       if (!q.in_zone[i]) continue;

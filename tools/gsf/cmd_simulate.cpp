@@ -38,7 +38,7 @@ int cmd_simulate(int argc, char** argv) {
   sim::SimConfig cfg;
   if (preset == "demo") cfg = sim::SimConfig::demo();
   else if (preset == "tiny") cfg = sim::SimConfig::tiny();
-  else if (preset == "suite") cfg = sim::SimConfig::suite(sim::ZoneType::Row);
+  else if (preset == "suite") cfg = sim::SimConfig::suite(sim::ZoneType::Row, 1);
   else if (preset == "tiny-lattice") cfg = sim::SimConfig::tiny_lattice();
   else return usage_error("simulate", "unknown preset '" + preset + "' (demo, tiny, suite or tiny-lattice)");
   uint64_t seed = cfg.world.seed;
@@ -46,18 +46,17 @@ int cmd_simulate(int argc, char** argv) {
     if (!args.get_int("seed", &v, &err) || v < 0) return usage_error("simulate", err.empty() ? "--seed must be >= 0" : err);
     seed = static_cast<uint64_t>(v);
   }
+  sim::ZoneType zone = cfg.world.zone;
   if (args.has("zone")) {
-    sim::ZoneType zone;
     const std::string z = args.get("zone");
     if (z == "auto") zone = static_cast<sim::ZoneType>(seed % 4);
     else if (!sim::parse_zone(z.c_str(), &zone))
       return usage_error("simulate", "--zone must be row, lattice, hall, avenue or auto");
-    if (preset == "suite") cfg = sim::SimConfig::suite(zone);  // the suite sizes its zone per type
-    cfg.world.zone = zone;
   }
+  if (preset == "suite") cfg = sim::SimConfig::suite(zone, seed);  // zone size and time gap by seed
+  cfg.world.zone = zone;
   cfg.world.seed = seed;
-  // Presets made for many seeds draw their time gap from the world seed too.
-  if (args.has("seed") && (preset == "suite" || preset == "tiny-lattice")) cfg.time_gap.seed = seed * 2654435761u + 7u;
+  if (args.has("seed") && preset == "tiny-lattice") cfg.time_gap.seed = seed * 2654435761u + 7u;
   double d;
   if (args.has("cue-density")) {
     if (!args.get_double("cue-density", &d, &err) || !(d >= 0.0 && d <= 1.0))

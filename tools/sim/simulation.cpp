@@ -1,5 +1,6 @@
 #include "sim/simulation.h"
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
@@ -51,20 +52,53 @@ SimConfig SimConfig::tiny() {
   return c;
 }
 
-SimConfig SimConfig::suite(ZoneType zone) {
+SimConfig SimConfig::suite(ZoneType zone, uint64_t seed) {
   SimConfig c;
-  c.world.seed = 1;
+  c.world.seed = seed;
   c.world.blocks_x = 2;
   c.world.blocks_y = 2;
   c.world.block_size = 100.0f;
   c.world.zone = zone;
   c.world.cue_density = 0.5f;
-  c.world.zone_length = 240.0f;  // row: 25 columns per row
+  c.world.zone_length = 240.0f;
   c.world.zone_margin = 60.0f;
-  c.time_gap.seed = 7;
+  c.time_gap.seed = seed * 2654435761u + 7u;
   c.query_spacing = 20.0f;
   c.near_query_spacing = 10.0f;
-  if (zone == ZoneType::Row) c.zone_query_spacing = 7.0f;
+  // Zone size by seed; the zone query spacing keeps about kZoneQueries queries in the zone.
+  constexpr float kZoneQueries = 40.0f;
+  gsf::Rng r(gsf::mix64(seed ^ 0x5017E5EEDULL));
+  WorldParams& w = c.world;
+  switch (zone) {
+    case ZoneType::Row:
+      w.zone_period = 8.0f + static_cast<float>(r.uniform(5));  // 8..12 m
+      c.zone_query_spacing = w.zone_length / kZoneQueries;
+      break;
+    case ZoneType::Lattice: {
+      w.lattice_nx = 6 + static_cast<int>(r.uniform(9));  // 6..14
+      w.lattice_ny = 4 + static_cast<int>(r.uniform(7));  // 4..10
+      w.lattice_spacing = 7.0f + 0.5f * static_cast<float>(r.uniform(5));  // 7..9 m
+      const float s = w.lattice_spacing;  // query aisles: odd x-aisles (zone width), odd y-aisles (height)
+      const float len = static_cast<float>((w.lattice_ny + 1) / 2) * (w.lattice_nx + 1) * s +
+                        static_cast<float>((w.lattice_nx + 1) / 2) * (w.lattice_ny + 1) * s;
+      c.zone_query_spacing = std::max(6.0f, len / kZoneQueries);
+      break;
+    }
+    case ZoneType::Hall: {
+      w.hall_nx = 8 + static_cast<int>(r.uniform(7));  // 8..14
+      w.hall_ny = 3 + static_cast<int>(r.uniform(4));  // 3..6
+      w.hall_dx = 9.0f + 0.5f * static_cast<float>(r.uniform(5));  // 9..11 m
+      w.hall_dy = 7.0f + 0.5f * static_cast<float>(r.uniform(3));  // 7..8 m
+      const float len = static_cast<float>((w.hall_ny + 1) / 2) * (w.hall_nx * w.hall_dx + 5.0f) +
+                        static_cast<float>((w.hall_nx + 1) / 2) * (w.hall_ny * w.hall_dy + 4.0f);
+      c.zone_query_spacing = std::max(6.0f, len / kZoneQueries);
+      break;
+    }
+    case ZoneType::Avenue:
+      w.avenue_period = 10.0f + static_cast<float>(r.uniform(5));  // 10..14 m
+      c.zone_query_spacing = w.avenue_length / kZoneQueries;
+      break;
+  }
   return c;
 }
 

@@ -39,8 +39,11 @@ struct SimConfig {
   bool instance_ids = true;
   static SimConfig demo();  // a few km of road, hundreds of map scans, 100+ queries
   static SimConfig tiny();  // seconds to generate, for tests
-  // bench/suite.sh: a 2 x 2-block city plus the zone, ~100-150 queries, >= 30 in the zone, cue density 0.5.
-  static SimConfig suite(ZoneType zone);
+  // bench/suite.sh: a 2 x 2-block city plus the zone, cue density 0.5, ~100-150 queries, ~40 in the zone.
+  // The zone's size varies with the seed (lattice 6..14 x 4..10 columns 7..9 m apart, hall 8..14 x 3..6
+  // pillars, row / avenue period) so that some zones are larger than the LiDAR's view; the time gap's
+  // seed follows the world seed.
+  static SimConfig suite(ZoneType zone, uint64_t seed = 1);
   // ctest end-to-end: a 4 x 3 lattice and a one-block city, <= 40 map scans, ~15 queries, half in the zone.
   static SimConfig tiny_lattice();
 };
