@@ -11,6 +11,8 @@
 #include "gsf/pose_solver.h"
 #include "gsf/triangle.h"
 #include "gsf/triangle_index.h"
+#include "gsf/triangle_matcher.h"
+#include "gsf/triangle_matcher.h"
 #include "arena_buffer.h"
 
 using namespace gsf;
@@ -135,21 +137,20 @@ TEST_CASE("Triangle index: lookup equals brute force, validate rejects bad array
   // Noisy copies (1% per side, under the 3% tolerance) match their originals; wrong labels do not.
   std::mt19937 rng(5);
   std::uniform_real_distribution<float> e(-0.01f, 0.01f);
-  Buffer mb(64 * sizeof(TriangleMatch) * 64 + 64);
-  FixedVector<TriangleMatch> matches;
-  REQUIRE(matches.bind(mb.arena, 4096));
+  Buffer mb(TriangleMatcher::required_bytes(4096) + 64);
+  TriangleMatcher matcher;
+  REQUIRE(matcher.bind(mb.arena, 4096) == Status::Ok);
   for (uint32_t t = 0; t < n; t += 11) {
     Triangle q = tris[t];
     for (float& s : q.side) s *= 1.0f + e(rng);
-    matches.clear();
-    REQUIRE(match_triangle(q, 0, idx, tris.data(), tc, 4096, matches) == Status::Ok);
+    const TriangleMatchStats st = matcher.match(q, idx, tris.data(), tc, 0.0f);
+    CHECK(st.dropped() == 0);
     bool found = false;
-    for (const auto& m : matches) found = found || m.map == t;
+    for (uint32_t k = 0; k < matcher.size(); ++k) found = found || matcher.match_at(k).map == t;
     CHECK(found);
     q.label[0] = static_cast<uint8_t>((q.label[0] + 1) % 4);
-    matches.clear();
-    match_triangle(q, 0, idx, tris.data(), tc, 4096, matches);
-    for (const auto& m : matches) CHECK(m.map != t);
+    matcher.match(q, idx, tris.data(), tc, 0.0f);
+    for (uint32_t k = 0; k < matcher.size(); ++k) CHECK(matcher.match_at(k).map != t);
   }
 }
 

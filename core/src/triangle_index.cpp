@@ -55,30 +55,4 @@ Status build_triangle_index(const Triangle* t, uint32_t n, float bin, uint64_t* 
   return Status::Ok;
 }
 
-Status match_triangle(const Triangle& q, uint32_t qid, const TriangleIndexView& index, const Triangle* map,
-                      const TriangleConfig& config, uint32_t per_query_cap, FixedVector<TriangleMatch>& out) {
-  int32_t qk[3];
-  for (int i = 0; i < 3; ++i) qk[i] = static_cast<int32_t>(std::floor(q.side[i] / config.side_bin));
-  uint32_t accepted = 0;
-  for (int d0 = -1; d0 <= 1; ++d0)
-    for (int d1 = -1; d1 <= 1; ++d1)
-      for (int d2 = -1; d2 <= 1; ++d2) {
-        uint32_t b, e;
-        if (!index.lookup(triangle_key(qk[0] + d0, qk[1] + d1, qk[2] + d2), &b, &e)) continue;
-        for (uint32_t it = b; it < e; ++it) {
-          const uint32_t mid = index.entries[it];
-          const Triangle& m = map[mid];
-          if (m.label[0] != q.label[0] || m.label[1] != q.label[1] || m.label[2] != q.label[2]) continue;
-          bool ok = true;
-          for (int s = 0; s < 3 && ok; ++s)
-            ok = std::fabs(q.side[s] - m.side[s]) < config.relative_side_tolerance * q.side[s];
-          if (!ok) continue;
-          if (accepted >= per_query_cap) return Status::CapacityExceeded;
-          if (!out.push_back(TriangleMatch{qid, mid})) return Status::CapacityExceeded;
-          ++accepted;
-        }
-      }
-  return Status::Ok;
-}
-
 }  // namespace gsf

@@ -1,11 +1,10 @@
 // The map's triangle hash index as plain CSR arrays (it lives in the map blob): sorted unique keys,
 // offsets (key_count + 1) and triangle ids grouped by key. Lookup is a binary search: O(log keys),
-// bounded. match_triangle() queries the 27 neighbouring keys of a query triangle and applies Outram's
-// acceptance rules (every side within the relative tolerance, the three labels equal in order).
+// bounded. TriangleMatcher (triangle_matcher.h) queries the 27 neighbouring keys of a query triangle,
+// applies Outram's acceptance rules and ranks what it accepts.
 #pragma once
 #include <cstdint>
 
-#include "gsf/fixed_vector.h"
 #include "gsf/status.h"
 #include "gsf/triangle.h"
 
@@ -29,15 +28,5 @@ struct TriangleIndexView {
 // uint32) and returns the number of unique keys in *key_count. Deterministic: entries sorted by (key, id).
 Status build_triangle_index(const Triangle* triangles, uint32_t n, float side_bin, uint64_t* keys, uint32_t* offsets,
                             uint32_t* entries, uint32_t* key_count, uint64_t* scratch_keys);
-
-struct TriangleMatch {
-  uint32_t query;  // query triangle id
-  uint32_t map;    // map triangle id
-};
-
-// Appends accepted map triangles for query triangle `qid` to `out`, at most `per_query_cap`.
-// Returns CapacityExceeded if `out` filled up (deterministic prefix kept) or the cap was hit.
-Status match_triangle(const Triangle& query, uint32_t qid, const TriangleIndexView& index, const Triangle* map_triangles,
-                      const TriangleConfig& config, uint32_t per_query_cap, FixedVector<TriangleMatch>& out);
 
 }  // namespace gsf
