@@ -29,6 +29,21 @@ struct ModeRun {
   uint64_t workspace_bytes = 0;
 };
 
+void write_stage_ms(JsonWriter& j, const char* key, const StageMs& t) {
+  j.key(key);
+  j.begin_object();
+  j.field("voxel", t.voxel);
+  j.field("cluster", t.cluster);
+  j.field("field", t.field);
+  j.field("triangle", t.triangle);
+  j.field("match", t.match);
+  j.field("gsf", t.gsf);
+  j.field("clique", t.clique);
+  j.field("pose", t.pose);
+  j.field("refine", t.refine);
+  j.end_object();
+}
+
 // The library's per-query counts: where candidates were dropped, what the hypotheses were.
 void write_diagnostics(JsonWriter& j, const QueryRecord& r) {
   const LocalizeResult& x = r.result;
@@ -56,18 +71,7 @@ void write_diagnostics(JsonWriter& j, const QueryRecord& r) {
   j.field("chosen_hypothesis", x.chosen_hypothesis);
   j.field("true_correspondences", r.true_correspondences);
   j.field("truth_verified_score", r.truth_verified_score);
-  j.key("stage_ms");
-  j.begin_object();
-  j.field("voxel", r.stages.voxel);
-  j.field("cluster", r.stages.cluster);
-  j.field("field", r.stages.field);
-  j.field("triangle", r.stages.triangle);
-  j.field("match", r.stages.match);
-  j.field("gsf", r.stages.gsf);
-  j.field("clique", r.stages.clique);
-  j.field("pose", r.stages.pose);
-  j.field("refine", r.stages.refine);
-  j.end_object();
+  write_stage_ms(j, "stage_ms", r.stages);
   j.key("hypotheses");
   j.begin_array();
   for (uint32_t h = 0; h < x.hypotheses && h < kMaxReportedHypotheses; ++h) {  // best verified first
@@ -135,18 +139,7 @@ void write_json(const std::string& path, const EvalOptions& o, const MapView& ma
     j.field("mean_ms", s.mean_ms);
     j.field("time_ratio_to_instance", s.time_ratio_to_gsf_off);
     j.field("workspace_bytes", static_cast<unsigned long long>(runs[m].workspace_bytes));
-    j.key("median_stage_ms");
-    j.begin_object();
-    j.field("voxel", s.median_stage.voxel);
-    j.field("cluster", s.median_stage.cluster);
-    j.field("field", s.median_stage.field);
-    j.field("triangle", s.median_stage.triangle);
-    j.field("match", s.median_stage.match);
-    j.field("gsf", s.median_stage.gsf);
-    j.field("clique", s.median_stage.clique);
-    j.field("pose", s.median_stage.pose);
-    j.field("refine", s.median_stage.refine);
-    j.end_object();
+    write_stage_ms(j, "median_stage_ms", s.median_stage);
     j.field("ambiguity_threshold", s.default_threshold);
     j.field("precision_at_threshold", s.precision_at_default);
     j.field("answered_at_threshold", s.answered_at_default);
