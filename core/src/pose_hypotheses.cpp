@@ -1,5 +1,6 @@
 #include "gsf/pose_hypotheses.h"
 
+#include <algorithm>
 #include <cmath>
 #include <new>
 
@@ -27,6 +28,10 @@ Status PoseHypotheses::bind(Arena& ar, uint32_t n, uint32_t k) {
   tls_w_ = ar.allocate<float>(n);
   mask_ = ar.allocate<uint8_t>(n);
   hyps_ = ar.allocate<PoseHypothesis>(k);
+  vote_key_ = ar.allocate<uint64_t>(n);
+  vote_order_ = ar.allocate<uint32_t>(n);
+  bin_first_ = ar.allocate<uint32_t>(n);
+  bin_weight_ = ar.allocate<float>(n);
   if (ar.counting()) return Status::Ok;
   if (ar.overflowed()) return Status::BufferTooSmall;
   for (uint32_t i = 0; i < k; ++i) new (&hyps_[i]) PoseHypothesis();
@@ -46,15 +51,64 @@ Status PoseHypotheses::generate(const float* a, const float* b, const float* w, 
     if (stats_out) *stats_out = st;
     return Status::NoSolution;
   }
+  const uint32_t K = c.max_hypotheses < max_h_ ? c.max_hypotheses : max_h_;
+  const double far2 = 4.0 * double(c.tls_threshold) * c.tls_threshold;
+  const double c2 = double(c.tls_threshold) * c.tls_threshold;
+  const double same_rad = double(c.same_pose_deg) * 3.14159265358979323846 / 180.0;
+  auto point = [](const float* p, uint32_t i) { return Eigen::Vector3d(p[3 * i], p[3 * i + 1], p[3 * i + 2]); };
+  auto residual2 = [&](const Eigen::Isometry3d& T, uint32_t i) { return (point(b, i) - T * point(a, i)).squaredNorm(); };
+  auto copy_to_sub = [&](uint32_t slot, uint32_t i) {
+    for (int d = 0; d < 3; ++d) { sub_a_[3 * slot + d] = a[3 * i + d]; sub_b_[3 * slot + d] = b[3 * i + d]; }
+    sub_w_[slot] = w[i] > 1e-6f ? w[i] : 1e-6f;
+  };
+  auto is_allowed = [&](uint32_t i) { return ((allowed_[i >> 6] >> (i & 63)) & 1u) != 0; };
+  auto disallow = [&](uint32_t i) { allowed_[i >> 6] &= ~(uint64_t(1) << (i & 63)); };
+  // Re-associate: every correspondence `pose` explains (within 2c) joins one TLS solve. A clique or a
+  // vote peak is a core; the pose of everything it explains is markedly more accurate, and
+  // verification compares poses at the 1 m scale of the semantic layer. False if too few agree.
+  auto refit = [&](const Eigen::Isometry3d& pose, TlsResult* out, uint32_t* used) {
+    uint32_t m = 0;
+    for (uint32_t i = 0; i < n; ++i)
+      if (residual2(pose, i) <= far2) copy_to_sub(m++, i);
+    *used = m;
+    return m >= c.min_inliers &&
+           solve_tls(sub_a_, sub_b_, sub_w_, m, c.tls_threshold, c.max_iterations, out, mask_, tls_w_) == Status::Ok &&
+           out->inliers >= c.min_inliers;
+  };
+  // Records a hypothesis unless it repeats an earlier one; mask_/sub_w_ describe its TLS solve (m rows).
+  const double max_tilt = double(c.max_tilt_deg) * 3.14159265358979323846 / 180.0;
+  auto record = [&](const TlsResult& tls, uint32_t core_size, uint32_t m) {
+    // Upright prior: a vehicle's sensor is within max_tilt of level; a pose tilted further is a
+    // degenerate solve (nearly collinear centroids), not an answer.
+    const double cos_tilt = tls.b_T_a.linear()(2, 2);
+    if (c.max_tilt_deg > 0 && cos_tilt < std::cos(max_tilt)) {
+      ++st.tilted;
+      return false;
+    }
+    for (uint32_t h = 0; h < count_; ++h) {
+      const Eigen::Isometry3d d = hyps_[h].map_T_scan.inverse() * tls.b_T_a;
+      if (d.translation().norm() < c.same_pose_m && Eigen::AngleAxisd(d.linear()).angle() < same_rad) {
+        ++st.merged;
+        return false;
+      }
+    }
+    PoseHypothesis& h = hyps_[count_++];
+    h = PoseHypothesis();
+    h.map_T_scan = tls.b_T_a;
+    h.clique_size = core_size;
+    h.inliers = tls.inliers;
+    for (uint32_t i = 0; i < m; ++i) h.support += mask_[i] ? sub_w_[i] : 0.0;
+    return true;
+  };
+
+  // 1. Peeled maximum cliques (the first is the paper's answer).
   graph_.build(a, b, n, c.consistency_eps, c.consistency_z_weight);
   const uint32_t words = (n + 63) / 64;
   for (uint32_t i = 0; i < words; ++i) allowed_[i] = 0;
   for (uint32_t i = 0; i < n; ++i) allowed_[i >> 6] |= uint64_t(1) << (i & 63);
-  const uint32_t K = c.max_hypotheses < max_h_ ? c.max_hypotheses : max_h_;
-  const double far2 = 4.0 * double(c.tls_threshold) * c.tls_threshold;
-  const double same_rad = double(c.same_pose_deg) * 3.14159265358979323846 / 180.0;
-  // Each search removes at least its clique, so K searches (plus K for failed TLS) bound the loop.
-  for (uint32_t attempt = 0; attempt < 2 * K && count_ < K; ++attempt) {
+  const uint32_t peel = c.max_peeled < K ? c.max_peeled : K;
+  // Each search removes at least one correspondence of its clique, so 2K searches bound the loop.
+  for (uint32_t attempt = 0; attempt < 2 * K && count_ < peel; ++attempt) {
     CliqueStats cs;
     const Status s = solver_.solve(graph_, st.searches == 0 ? c.first_budget : c.next_budget, clique_, &cs, allowed_);
     if (st.searches == 0 && s == Status::BudgetExhausted) st.budget_exhausted = true;
@@ -62,74 +116,107 @@ Status PoseHypotheses::generate(const float* a, const float* b, const float* w, 
     st.nodes += cs.nodes;
     const uint32_t q = clique_.size();
     if (q < c.min_inliers) break;
-    auto take_clique = [&]() {
-      for (uint32_t i = 0; i < q; ++i) {
-        const uint32_t id = clique_[i];
-        for (int d = 0; d < 3; ++d) { sub_a_[3 * i + d] = a[3 * id + d]; sub_b_[3 * i + d] = b[3 * id + d]; }
-        sub_w_[i] = w[id] > 1e-6f ? w[id] : 1e-6f;
+    for (uint32_t i = 0; i < q; ++i) copy_to_sub(i, clique_[i]);
+    TlsResult tls, wide;
+    uint32_t m = q;
+    const bool fitted = solve_tls(sub_a_, sub_b_, sub_w_, q, c.tls_threshold, c.max_iterations, &tls, mask_, tls_w_) ==
+                            Status::Ok && tls.inliers >= c.min_inliers;
+    if (fitted) {
+      uint32_t wm = 0;
+      if (refit(tls.b_T_a, &wide, &wm) && wm > q && wide.inliers >= tls.inliers) {
+        tls = wide;
+        m = wm;
+      } else {  // mask_ must describe the clique's own solve again
+        for (uint32_t i = 0; i < q; ++i) copy_to_sub(i, clique_[i]);
+        solve_tls(sub_a_, sub_b_, sub_w_, q, c.tls_threshold, c.max_iterations, &tls, mask_, tls_w_);
       }
-    };
-    take_clique();
-    TlsResult tls;
-    if (solve_tls(sub_a_, sub_b_, sub_w_, q, c.tls_threshold, c.max_iterations, &tls, mask_, tls_w_) != Status::Ok ||
-        tls.inliers < c.min_inliers) {
-      for (uint32_t i = 0; i < q; ++i) allowed_[clique_[i] >> 6] &= ~(uint64_t(1) << (clique_[i] & 63));
-      continue;
+      // Only what the final pose explains leaves the graph: a clique that mixed two lattice shifts must
+      // not take the other shift's correspondences with it (that is how true hypotheses were lost).
+      for (uint32_t i = 0; i < n; ++i)
+        if (residual2(tls.b_T_a, i) <= c2) disallow(i);
     }
-    // Re-associate: every correspondence the clique's pose explains (within 2c, clique or not) joins a
-    // second TLS solve. A clique is a minimal consistent core; the pose of everything it explains is
-    // markedly more accurate, and verification compares poses at the 1 m scale of the semantic layer.
-    uint32_t m = 0;
-    for (uint32_t i = 0; i < n; ++i) {
-      const Eigen::Vector3d pa(a[3 * i], a[3 * i + 1], a[3 * i + 2]), pb(b[3 * i], b[3 * i + 1], b[3 * i + 2]);
-      if ((pb - tls.b_T_a * pa).squaredNorm() > far2) continue;
-      for (int d = 0; d < 3; ++d) { sub_a_[3 * m + d] = a[3 * i + d]; sub_b_[3 * m + d] = b[3 * i + d]; }
-      sub_w_[m] = w[i] > 1e-6f ? w[i] : 1e-6f;
-      ++m;
-    }
-    TlsResult wide;
-    if (m > q && solve_tls(sub_a_, sub_b_, sub_w_, m, c.tls_threshold, c.max_iterations, &wide, mask_, tls_w_) == Status::Ok &&
-        wide.inliers >= tls.inliers) {
-      tls = wide;
-    } else {  // mask_ below must describe the clique solve: redo it
-      take_clique();
-      m = q;
-      solve_tls(sub_a_, sub_b_, sub_w_, q, c.tls_threshold, c.max_iterations, &tls, mask_, tls_w_);
-    }
-    // Only what the final pose explains (its inliers) leaves the graph. Clique members it does not
-    // explain stay: a clique that mixed one lattice shift's correspondences with another's must not take
-    // the other shift's correspondences with it (that is how a true hypothesis was lost). The final
-    // pose has >= min_inliers inliers among the correspondences, so every round removes something.
-    const double c2 = double(c.tls_threshold) * c.tls_threshold;
-    for (uint32_t i = 0; i < n; ++i) {
-      const Eigen::Vector3d pa(a[3 * i], a[3 * i + 1], a[3 * i + 2]), pb(b[3 * i], b[3 * i + 1], b[3 * i + 2]);
-      if ((pb - tls.b_T_a * pa).squaredNorm() <= c2) allowed_[i >> 6] &= ~(uint64_t(1) << (i & 63));
-    }
-    for (uint32_t i = 0; i < q; ++i)  // and the clique itself, so the same search cannot repeat
-      if (!((allowed_[clique_[i] >> 6] >> (clique_[i] & 63)) & 1u)) continue;
-      else {
-        bool any_removed = false;
-        for (uint32_t k = 0; k < q && !any_removed; ++k)
-          any_removed = !((allowed_[clique_[k] >> 6] >> (clique_[k] & 63)) & 1u);
-        if (!any_removed) allowed_[clique_[i] >> 6] &= ~(uint64_t(1) << (clique_[i] & 63));
-      }
-    bool repeated = false;
-    for (uint32_t h = 0; h < count_ && !repeated; ++h) {
-      const Eigen::Isometry3d d = hyps_[h].map_T_scan.inverse() * tls.b_T_a;
-      const double angle = Eigen::AngleAxisd(d.linear()).angle();
-      repeated = d.translation().norm() < c.same_pose_m && angle < same_rad;
-    }
-    if (repeated) { ++st.merged; continue; }
-    PoseHypothesis& h = hyps_[count_];
-    h = PoseHypothesis();
-    h.map_T_scan = tls.b_T_a;
-    h.clique_size = q;
-    h.inliers = tls.inliers;
-    double support = 0.0;
-    for (uint32_t i = 0; i < m; ++i) support += mask_[i] ? sub_w_[i] : 0.0;
-    h.support = support;
-    ++count_;
+    // The same clique must not come back: if none of its members left, all of them go.
+    bool progressed = false;
+    for (uint32_t i = 0; i < q && !progressed; ++i) progressed = !is_allowed(clique_[i]);
+    if (!progressed)
+      for (uint32_t i = 0; i < q; ++i) disallow(clique_[i]);
+    if (!fitted || !record(tls, q, m)) continue;
     for (uint32_t i = 0; i < q; ++i) owner_[clique_[i]] = count_;
+  }
+
+  // 2. Shift votes. In a repetitive layout the true answer is one translation among many that the
+  // cliques' headings allow, and peeling may never form it. For each distinct heading found, every
+  // correspondence votes for the translation b - R a (bins of shift_bin metres); the best-supported
+  // bins (ranked by summed weight, ties by bin key) become hypotheses until K are found.
+  const uint32_t peeled = count_;
+  uint32_t headings = 0;
+  for (uint32_t hp = 0; hp < peeled && headings < c.shift_headings && count_ < K; ++hp) {
+    const Eigen::Matrix3d R = hyps_[hp].map_T_scan.linear();
+    bool seen = false;
+    for (uint32_t e = 0; e < hp && !seen; ++e)
+      seen = Eigen::AngleAxisd(hyps_[e].map_T_scan.linear().transpose() * R).angle() < same_rad;
+    if (seen) continue;
+    ++headings;
+    for (uint32_t i = 0; i < n; ++i) {
+      const Eigen::Vector3d t = point(b, i) - R * point(a, i);
+      const int64_t kx = static_cast<int64_t>(std::floor(t.x() / c.shift_bin)) + (1 << 20);
+      const int64_t ky = static_cast<int64_t>(std::floor(t.y() / c.shift_bin)) + (1 << 20);
+      vote_key_[i] = (uint64_t(kx & 0x1FFFFF) << 21) | uint64_t(ky & 0x1FFFFF);
+      vote_order_[i] = i;
+    }
+    std::sort(vote_order_, vote_order_ + n, [this](uint32_t x, uint32_t y) {
+      return vote_key_[x] < vote_key_[y] || (vote_key_[x] == vote_key_[y] && x < y);
+    });
+    // Runs of equal keys are the bins: compact them to (first entry, weight) in place of the order.
+    uint32_t bins = 0;
+    for (uint32_t k = 0; k < n;) {
+      uint32_t e = k;
+      float weight = 0.0f;
+      while (e < n && vote_key_[vote_order_[e]] == vote_key_[vote_order_[k]]) weight += w[vote_order_[e++]];
+      if (e - k >= c.min_inliers) {
+        bin_first_[bins] = vote_order_[k];
+        bin_weight_[bins] = weight;
+        ++bins;
+      }
+      k = e;
+    }
+    // Best bins first (selection by weight; equal weights by key).
+    for (uint32_t taken = 0; taken < bins && count_ < K; ++taken) {
+      uint32_t best = taken;
+      for (uint32_t k = taken + 1; k < bins; ++k)
+        if (bin_weight_[k] > bin_weight_[best] ||
+            (bin_weight_[k] == bin_weight_[best] && vote_key_[bin_first_[k]] < vote_key_[bin_first_[best]]))
+          best = k;
+      std::swap(bin_first_[taken], bin_first_[best]);
+      std::swap(bin_weight_[taken], bin_weight_[best]);
+      // Translation-only fit under the heading R: a bin holds a few correspondences, too few (and
+      // too collinear) to re-estimate roll and pitch; the heading comes from a whole clique.
+      const uint32_t i0 = bin_first_[taken];
+      Eigen::Vector3d t = point(b, i0) - R * point(a, i0);
+      uint32_t m = 0;
+      for (int it = 0; it < 3; ++it) {
+        Eigen::Vector3d sum = Eigen::Vector3d::Zero();
+        double wsum = 0.0;
+        m = 0;
+        for (uint32_t i = 0; i < n; ++i) {
+          const Eigen::Vector3d ti = point(b, i) - R * point(a, i);
+          if ((ti - t).squaredNorm() > (it == 0 ? far2 : c2)) continue;
+          copy_to_sub(m, i);
+          mask_[m++] = 1;
+          sum += double(sub_w_[m - 1]) * ti;
+          wsum += sub_w_[m - 1];
+        }
+        if (m < c.min_inliers || !(wsum > 0)) break;
+        t = sum / wsum;
+      }
+      if (m < c.min_inliers) continue;
+      TlsResult tls;
+      tls.b_T_a.linear() = R;
+      tls.b_T_a.translation() = t;
+      tls.inliers = m;
+      ++st.voted;
+      record(tls, 0, m);
+    }
   }
   if (stats_out) *stats_out = st;
   return count_ > 0 ? Status::Ok : Status::NoSolution;

@@ -4,6 +4,10 @@
 // genuinely different answer (in a lattice: the next lattice shift or rotation). Up to K hypotheses,
 // each search with its own node budget, so the stage is bounded in memory and time.
 //
+// Peeling alone can miss the true shift of a lattice (its correspondences end up spread over mixed
+// cliques), so the headings the cliques found are then completed by translation votes: every
+// correspondence votes for b - R a, and the best-supported translations become hypotheses too.
+//
 // The first hypothesis is the paper's answer (the maximum clique); the verification stage
 // (semantic_grid.h) re-ranks them against the whole scan.
 #pragma once
@@ -20,7 +24,10 @@
 namespace gsf {
 
 struct HypothesisConfig {
-  uint32_t max_hypotheses = 32;    // K: cliques peeled per query (a 1-D row of 25 columns has ~50 shifts)
+  uint32_t max_hypotheses = 32;    // K: hypotheses per query (a 1-D row of 25 columns has ~50 shifts)
+  uint32_t max_peeled = 8;         // of which from peeled maximum cliques; the rest from shift votes
+  uint32_t shift_headings = 4;     // distinct clique headings whose translations are voted on
+  float shift_bin = 2.0f;          // m; translation vote bins
   uint64_t first_budget = 200000;  // branch-and-bound nodes for the first (maximum) clique
   uint64_t next_budget = 20000;    // nodes for each further clique
   float consistency_eps = 1.0f;    // m; | |a_i-a_j| - |b_i-b_j| | <= eps (Outram: 1.0 m)
@@ -32,6 +39,9 @@ struct HypothesisConfig {
   uint32_t min_inliers = 3;        // a clique or TLS solution with fewer is no hypothesis
   float same_pose_m = 2.0f;        // hypotheses closer than this and same_pose_deg are one answer
   float same_pose_deg = 5.0f;
+  // Upright prior: hypotheses whose z axis leans more than this from the map's are rejected (a
+  // vehicle-mounted sensor; Outram's own failures include upside-down poses). 0 disables.
+  float max_tilt_deg = 15.0f;
 };
 
 struct PoseHypothesis {
@@ -46,7 +56,9 @@ struct HypothesisStats {
   uint32_t searches = 0;       // clique searches run
   uint64_t nodes = 0;          // branch-and-bound nodes over all searches
   bool budget_exhausted = false;  // the first search ran out of nodes (best-so-far used)
-  uint32_t merged = 0;         // cliques whose pose repeated an earlier hypothesis
+  uint32_t merged = 0;         // cliques or vote peaks whose pose repeated an earlier hypothesis
+  uint32_t voted = 0;          // vote peaks that gave a pose
+  uint32_t tilted = 0;         // poses rejected by the upright prior
 };
 
 class PoseHypotheses {
@@ -76,6 +88,10 @@ class PoseHypotheses {
   float* tls_w_ = nullptr;
   uint8_t* mask_ = nullptr;
   PoseHypothesis* hyps_ = nullptr;
+  uint64_t* vote_key_ = nullptr;   // n: translation bin of each correspondence (shift votes)
+  uint32_t* vote_order_ = nullptr; // n
+  uint32_t* bin_first_ = nullptr;  // n: a correspondence of each bin
+  float* bin_weight_ = nullptr;    // n: the bin's summed weight
   uint32_t max_n_ = 0, max_h_ = 0, count_ = 0;
 };
 
