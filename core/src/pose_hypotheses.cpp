@@ -151,12 +151,16 @@ Status PoseHypotheses::generate(const float* a, const float* b, const float* w, 
   const uint32_t peeled = count_;
   uint32_t headings = 0;
   for (uint32_t hp = 0; hp < peeled && headings < c.shift_headings && count_ < K; ++hp) {
-    const Eigen::Matrix3d R = hyps_[hp].map_T_scan.linear();
     bool seen = false;
     for (uint32_t e = 0; e < hp && !seen; ++e)
-      seen = Eigen::AngleAxisd(hyps_[e].map_T_scan.linear().transpose() * R).angle() < same_rad;
+      seen = Eigen::AngleAxisd(hyps_[e].map_T_scan.linear().transpose() * hyps_[hp].map_T_scan.linear()).angle() < same_rad;
     if (seen) continue;
     ++headings;
+    // Upright at the clique's heading: any clique of this heading may carry degrees of roll or pitch
+    // (mid-height centroids constrain them poorly), and the bird's-eye verification cannot see tilt,
+    // so a vote hypothesis must not inherit it.
+    const Eigen::Matrix3d Rc = hyps_[hp].map_T_scan.linear();
+    const Eigen::Matrix3d R = Eigen::AngleAxisd(std::atan2(Rc(1, 0), Rc(0, 0)), Eigen::Vector3d::UnitZ()).toRotationMatrix();
     for (uint32_t i = 0; i < n; ++i) {
       const Eigen::Vector3d t = point(b, i) - R * point(a, i);
       const int64_t kx = static_cast<int64_t>(std::floor(t.x() / c.shift_bin)) + (1 << 20);
