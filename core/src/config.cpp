@@ -21,12 +21,13 @@ Status validate(const LocalizerConfig& c) {
       !(g.tau > 0) || !(g.observed_variance > 0) || !(g.covariance_weight >= 0) || !(g.normalize_mass >= 0))
     return Status::InvalidArgument;
   const HypothesisConfig& h = c.hypotheses;
-  if (h.max_hypotheses == 0 || h.max_hypotheses > 64 || h.first_budget == 0 || h.next_budget == 0 ||
+  if (h.max_hypotheses == 0 || h.max_hypotheses > PoseHypotheses::kMaxHypotheses || h.first_budget == 0 || h.next_budget == 0 ||
       !(h.consistency_eps > 0) || !(h.tls_threshold > 0) || h.min_inliers < 3 || h.max_iterations == 0 ||
       !(h.same_pose_m >= 0) || !(h.same_pose_deg >= 0) || h.max_peeled == 0 || !(h.shift_bin > 0) ||
       !(h.max_tilt_deg >= 0 && h.max_tilt_deg <= 180))
     return Status::InvalidArgument;
   if (c.verify.max_points == 0 || !(c.verify.margin_scale > 0) || c.verify.refine_top > 64 ||
+      c.verify.coarse_divisor == 0 || c.verify.full_top == 0 ||
       !(c.verify.refine_step_m >= 0) || !(c.verify.refine_step_deg >= 0) || c.verify.refine_rounds > 16)
     return Status::InvalidArgument;
   if (c.cluster.max_instances == 0 || c.cluster.max_instances >= (1u << 16)) return Status::InvalidArgument;

@@ -29,6 +29,23 @@ struct CorrespondenceAcc {
 
 constexpr double kRadToDeg = 57.29577951308232;
 
+// Indices of the best `cap` hypotheses by verification score (eligible[h] != 0, or all when null),
+// best first, ties to the earlier hypothesis. Returns how many (<= cap).
+uint32_t top_by_score(const PoseHypotheses& hyps, uint32_t H, const uint8_t* eligible, uint32_t cap, uint32_t* out) {
+  uint32_t n = 0;
+  for (uint32_t h = 0; h < H; ++h) {
+    if (eligible && !eligible[h]) continue;
+    const float sc = hyps[h].verification.score;
+    uint32_t pos = n < cap ? n++ : cap;
+    while (pos > 0 && hyps[out[pos - 1]].verification.score < sc) {
+      if (pos < cap) out[pos] = out[pos - 1];
+      --pos;
+    }
+    if (pos < cap) out[pos] = h;
+  }
+  return n;
+}
+
 }  // namespace
 
 struct Localizer::Impl {
@@ -366,33 +383,31 @@ Status Localizer::localize(const ScanView& scan, LocalizeResult* out_ptr) {
   const bool verify = cfg.verify.enabled && !im.semantic.empty();
   uint32_t best = 0, second = UINT32_MAX;
   if (verify) {
-    for (uint32_t h = 0; h < H; ++h)
-      im.hypotheses[h].verification = verify_pose(im.voxels, im.semantic, im.hypotheses[h].map_T_scan,
-                                                  cfg.verify.max_points, im.weights);
-    // Re-score the leading hypotheses at their best local alignment (ranked, then capped: the
-    // selection is by score, ties by peel order).
-    uint32_t top[64];
-    uint32_t nt = 0;
-    const uint32_t R = std::min(cfg.verify.refine_top, H);
+    // Coarse score for every hypothesis, the full score for the best `full_top`, then the best
+    // `refine_top` at their best local alignment. Each step ranks, then caps.
+    uint8_t full[PoseHypotheses::kMaxHypotheses];
+    uint32_t top[PoseHypotheses::kMaxHypotheses];
+    const uint32_t coarse_points = std::max<uint32_t>(1, cfg.verify.max_points / cfg.verify.coarse_divisor);
     for (uint32_t h = 0; h < H; ++h) {
-      uint32_t pos = nt < R ? nt++ : R;
-      while (pos > 0 && im.hypotheses[top[pos - 1]].verification.score < im.hypotheses[h].verification.score) {
-        if (pos < R) top[pos] = top[pos - 1];
-        --pos;
-      }
-      if (pos < R) top[pos] = h;
+      im.hypotheses[h].verification =
+          verify_pose(im.voxels, im.semantic, im.hypotheses[h].map_T_scan, coarse_points, im.weights);
+      full[h] = 0;
     }
-    for (uint32_t k = 0; k < nt && cfg.verify.refine_rounds > 0; ++k)
+    uint32_t nt = top_by_score(im.hypotheses, H, nullptr, cfg.verify.full_top, top);
+    for (uint32_t k = 0; k < nt; ++k) {
+      im.hypotheses[top[k]].verification =
+          verify_pose(im.voxels, im.semantic, im.hypotheses[top[k]].map_T_scan, cfg.verify.max_points, im.weights);
+      full[top[k]] = 1;
+    }
+    nt = cfg.verify.refine_rounds > 0 ? top_by_score(im.hypotheses, H, full, cfg.verify.refine_top, top) : 0;
+    for (uint32_t k = 0; k < nt; ++k)
       im.hypotheses[top[k]].verification =
           verify_pose_refined(im.voxels, im.semantic, im.hypotheses[top[k]].map_T_scan, cfg.verify.max_points,
                               im.weights, cfg.verify.refine_rounds, cfg.verify.refine_step_m,
                               cfg.verify.refine_step_deg, nullptr);
-    for (uint32_t h = 1; h < H; ++h)
-      if (im.hypotheses[h].verification.score > im.hypotheses[best].verification.score) best = h;
-    for (uint32_t h = 0; h < H; ++h)
-      if (h != best && (second == UINT32_MAX ||
-                        im.hypotheses[h].verification.score > im.hypotheses[second].verification.score))
-        second = h;
+    nt = top_by_score(im.hypotheses, H, full, 2, top);  // answer and runner-up among fully scored ones
+    best = nt > 0 ? top[0] : 0;
+    second = nt > 1 ? top[1] : UINT32_MAX;
   } else {
     second = H > 1 ? 1 : UINT32_MAX;
   }
@@ -404,17 +419,14 @@ Status Localizer::localize(const ScanView& scan, LocalizeResult* out_ptr) {
   out.chosen_hypothesis = best;
   out.verified = verify;
   im.chosen = best;
-  // Report the best hypotheses by verified score (peel order without verification).
-  uint32_t reported = 0;
-  for (uint32_t h = 0; h < H; ++h) {
-    const PoseHypothesis& p = im.hypotheses[h];
-    uint32_t pos = reported < kMaxReportedHypotheses ? reported++ : kMaxReportedHypotheses;
-    while (pos > 0 && verify && out.hypothesis[pos - 1].verified_score < p.verification.score) {
-      if (pos < kMaxReportedHypotheses) out.hypothesis[pos] = out.hypothesis[pos - 1];
-      --pos;
-    }
-    if (pos >= kMaxReportedHypotheses) continue;
-    HypothesisReport& r = out.hypothesis[pos];
+  // Report the best hypotheses by verified score (the order found without verification).
+  uint32_t shown[kMaxReportedHypotheses];
+  uint32_t reported = std::min(H, kMaxReportedHypotheses);
+  if (verify) reported = top_by_score(im.hypotheses, H, nullptr, kMaxReportedHypotheses, shown);
+  else for (uint32_t k = 0; k < reported; ++k) shown[k] = k;
+  for (uint32_t k = 0; k < reported; ++k) {
+    const PoseHypothesis& p = im.hypotheses[shown[k]];
+    HypothesisReport& r = out.hypothesis[k];
     r.x = static_cast<float>(p.map_T_scan.translation().x());
     r.y = static_cast<float>(p.map_T_scan.translation().y());
     const Eigen::Matrix3d R = p.map_T_scan.linear();

@@ -17,7 +17,7 @@ size_t PoseHypotheses::required_bytes(uint32_t max_correspondences, uint32_t max
 
 Status PoseHypotheses::bind(Arena& ar, uint32_t n, uint32_t k) {
   max_n_ = max_h_ = count_ = 0;
-  if (n == 0 || n > 4096 || k == 0 || k > 64) return Status::InvalidArgument;
+  if (n == 0 || n > 4096 || k == 0 || k > kMaxHypotheses) return Status::InvalidArgument;
   if (graph_.bind(ar, n) != Status::Ok || solver_.bind(ar, n) != Status::Ok) return Status::InvalidArgument;
   clique_.bind(ar, n);
   allowed_ = ar.allocate<uint64_t>((n + 63) / 64);
@@ -149,12 +149,21 @@ Status PoseHypotheses::generate(const float* a, const float* b, const float* w, 
   // correspondence votes for the translation b - R a (bins of shift_bin metres); the best-supported
   // bins (ranked by summed weight, ties by bin key) become hypotheses until K are found.
   const uint32_t peeled = count_;
+  auto new_heading = [&](uint32_t hp) {
+    for (uint32_t e = 0; e < hp; ++e)
+      if (Eigen::AngleAxisd(hyps_[e].map_T_scan.linear().transpose() * hyps_[hp].map_T_scan.linear()).angle() < same_rad)
+        return false;
+    return true;
+  };
+  uint32_t total_headings = 0;
+  for (uint32_t hp = 0; hp < peeled && total_headings < c.shift_headings; ++hp) total_headings += new_heading(hp);
   uint32_t headings = 0;
   for (uint32_t hp = 0; hp < peeled && headings < c.shift_headings && count_ < K; ++hp) {
-    bool seen = false;
-    for (uint32_t e = 0; e < hp && !seen; ++e)
-      seen = Eigen::AngleAxisd(hyps_[e].map_T_scan.linear().transpose() * hyps_[hp].map_T_scan.linear()).angle() < same_rad;
-    if (seen) continue;
+    if (!new_heading(hp)) continue;
+    // An even share of the remaining slots for each remaining heading: the true heading need not be
+    // the first clique's.
+    const uint32_t quota = (K - count_ + (total_headings - headings) - 1) / (total_headings - headings);
+    const uint32_t stop = count_ + quota;
     ++headings;
     // Upright at the clique's heading: any clique of this heading may carry degrees of roll or pitch
     // (mid-height centroids constrain them poorly), and the bird's-eye verification cannot see tilt,
@@ -185,7 +194,7 @@ Status PoseHypotheses::generate(const float* a, const float* b, const float* w, 
       k = e;
     }
     // Best bins first (selection by weight; equal weights by key).
-    for (uint32_t taken = 0; taken < bins && count_ < K; ++taken) {
+    for (uint32_t taken = 0; taken < bins && count_ < stop; ++taken) {
       uint32_t best = taken;
       for (uint32_t k = taken + 1; k < bins; ++k)
         if (bin_weight_[k] > bin_weight_[best] ||

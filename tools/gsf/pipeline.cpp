@@ -49,6 +49,8 @@ bool apply_override(LocalizerConfig* c, const std::string& a, std::string* error
       {"verify.max_points", nullptr, &c->verify.max_points},
       {"verify.margin_scale", &c->verify.margin_scale, nullptr},
       {"verify.refine_top", nullptr, &c->verify.refine_top},
+      {"verify.full_top", nullptr, &c->verify.full_top},
+      {"verify.coarse_divisor", nullptr, &c->verify.coarse_divisor},
       {"verify.refine_rounds", nullptr, &c->verify.refine_rounds},
       {"verify.refine_step_m", &c->verify.refine_step_m, nullptr},
       {"verify.refine_step_deg", &c->verify.refine_step_deg, nullptr},

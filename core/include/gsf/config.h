@@ -32,6 +32,8 @@ struct MatchConfig {
 struct VerifyConfig {
   bool enabled = true;         // off, or a map without the layer: the maximum clique's pose is the answer
   uint32_t max_points = 4096;  // query voxels scored per hypothesis (uniform stride over the scan)
+  uint32_t coarse_divisor = 8; // every hypothesis is first scored on max_points / coarse_divisor voxels,
+  uint32_t full_top = 16;      // and the best full_top of them on max_points
   // Ambiguity from verification: exp(-(best - second) / (margin_scale * scored voxels)). The margin is a
   // share of the scored voxels so the same setting serves sparse and dense scans.
   float margin_scale = 0.01f;

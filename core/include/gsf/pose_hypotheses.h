@@ -24,8 +24,9 @@
 namespace gsf {
 
 struct HypothesisConfig {
-  uint32_t max_hypotheses = 32;    // K: hypotheses per query (a 1-D row of 25 columns has ~50 shifts)
-  uint32_t max_peeled = 8;         // of which from peeled maximum cliques; the rest from shift votes
+  uint32_t max_hypotheses = 96;    // K: hypotheses per query (a 14 x 10 lattice has 140 shifts a heading)
+  uint32_t max_peeled = 8;         // of which from peeled maximum cliques; the rest from shift votes,
+                                   // shared evenly by the headings
   uint32_t shift_headings = 4;     // distinct clique headings whose translations are voted on
   float shift_bin = 2.0f;          // m; translation vote bins
   uint64_t first_budget = 200000;  // branch-and-bound nodes for the first (maximum) clique
@@ -63,6 +64,7 @@ struct HypothesisStats {
 
 class PoseHypotheses {
  public:
+  static constexpr uint32_t kMaxHypotheses = 256;
   static size_t required_bytes(uint32_t max_correspondences, uint32_t max_hypotheses);
   Status bind(Arena& arena, uint32_t max_correspondences, uint32_t max_hypotheses);
   // a, b: n x 3 query / map positions; w: n weights (> 0). Fills the hypotheses in the order found
