@@ -75,6 +75,8 @@ struct Localizer::Impl {
   float* gather_targets = nullptr;
   uint8_t* gather_labels = nullptr;
   float weights[kNumClasses];
+  uint32_t* heading_votes = nullptr;  // yaw bins
+  uint8_t* heading_allowed = nullptr; // yaw bins
   // Correspondences.
   CorrespondenceAcc* corr = nullptr;  // candidates (capacity corr_capacity)
   uint32_t corr_count = 0;
@@ -119,6 +121,8 @@ Status Localizer::bind_workspace(Arena& ar, const LocalizerConfig& config, Impl&
   im.labels = ar.allocate<uint8_t>(I);
   record(&b.triangle);
   if (im.matcher.bind(ar, config.match.max_matches_per_triangle) != Status::Ok) return Status::InvalidArgument;
+  im.heading_votes = ar.allocate<uint32_t>(config.gsf.yaw_bins);
+  im.heading_allowed = ar.allocate<uint8_t>(config.gsf.yaw_bins);
   record(&b.match);
   if (im.gsf.bind(ar, config.gsf, config.field, &im.solver) != Status::Ok && !ar.counting()) return Status::InvalidArgument;
   record(&b.gsf_cache);
@@ -283,7 +287,41 @@ Status Localizer::localize(const ScanView& scan, LocalizeResult* out_ptr) {
   const QueryFields qf{im.q_inputs, im.q_alpha, im.q_chol, im.q_m, M};
   uint64_t t_match = 0, t_gsf = 0;
   uint32_t survivors = 0;
-  for (uint32_t qt_id = 0; qt_id < im.triangles.size(); ++qt_id) {
+  const uint32_t T = im.triangles.size();
+  auto match_bin = [&](const Triangle& qt, const RankedTriangleMatch& rm, uint32_t* qv) {
+    const Triangle& mt = map_.triangles[rm.map];
+    for (int v = 0; v < 3; ++v) qv[v] = TriangleMatcher::query_vertex(qt, rm.order, v);
+    const float* qp[3] = {im.centroids + 3 * qv[0], im.centroids + 3 * qv[1], im.centroids + 3 * qv[2]};
+    const float* mp[3] = {map_.instances[mt.v[0]].centroid, map_.instances[mt.v[1]].centroid,
+                          map_.instances[mt.v[2]].centroid};
+    return triangle_yaw_bin(qp, mp, cfg.gsf.yaw_bins);
+  };
+  // 5a. Heading votes: the matches of an evenly spaced sample of query triangles vote for their yaw
+  // bin; only the best-supported headings (and their neighbour bins) go on. True matches agree on one
+  // heading (a lattice's symmetries add a few more), wrong ones spread over all of them; this bounds
+  // the distinct (instance, heading) probes of the GSF filter by instances x kept bins.
+  const uint32_t B = cfg.gsf.yaw_bins;
+  for (uint32_t b = 0; b < B; ++b) im.heading_allowed[b] = cfg.match.heading_bins == 0 ? 1 : 0;
+  if (cfg.match.heading_bins > 0 && T > 0) {
+    for (uint32_t b = 0; b < B; ++b) im.heading_votes[b] = 0;
+    const uint32_t stride = (T + cfg.match.heading_sample_triangles - 1) / cfg.match.heading_sample_triangles;
+    uint32_t qv[3];
+    for (uint32_t qt_id = 0; qt_id < T; qt_id += stride) {
+      const Triangle& qt = im.triangles[qt_id];
+      im.matcher.match(qt, im.index, map_.triangles, cfg.triangle, cfg.match.vertex_tie_tolerance);
+      for (uint32_t k = 0; k < im.matcher.size(); ++k) ++im.heading_votes[match_bin(qt, im.matcher.match_at(k), qv)];
+    }
+    for (uint32_t pick = 0; pick < cfg.match.heading_bins && pick < B; ++pick) {
+      uint32_t best = UINT32_MAX;
+      for (uint32_t b = 0; b < B; ++b)
+        if (im.heading_votes[b] > 0 && (best == UINT32_MAX || im.heading_votes[b] > im.heading_votes[best])) best = b;
+      if (best == UINT32_MAX) break;
+      im.heading_votes[best] = 0;
+      im.heading_allowed[best] = im.heading_allowed[(best + 1) % B] = im.heading_allowed[(best + B - 1) % B] = 1;
+    }
+  }
+  for (uint32_t b = 0; b < B; ++b) out.headings_kept += im.heading_allowed[b];
+  for (uint32_t qt_id = 0; qt_id < T; ++qt_id) {
     const Triangle& qt = im.triangles[qt_id];
     const uint64_t t0 = now(clock_);
     const TriangleMatchStats ms = im.matcher.match(qt, im.index, map_.triangles, cfg.triangle, cfg.match.vertex_tie_tolerance);
@@ -297,13 +335,13 @@ Status Localizer::localize(const ScanView& scan, LocalizeResult* out_ptr) {
       const RankedTriangleMatch& rm = im.matcher.match_at(k);
       const Triangle& mt = map_.triangles[rm.map];
       uint32_t qv[3];
-      for (int v = 0; v < 3; ++v) qv[v] = TriangleMatcher::query_vertex(qt, rm.order, v);
+      const uint32_t bin = match_bin(qt, rm, qv);
+      if (!im.heading_allowed[bin]) {
+        ++out.heading_dropped;
+        continue;
+      }
       float omega[3] = {1.0f, 1.0f, 1.0f};
       if (cfg.match.use_gsf) {
-        const float* qp[3] = {im.centroids + 3 * qv[0], im.centroids + 3 * qv[1], im.centroids + 3 * qv[2]};
-        const float* mp[3] = {map_.instances[mt.v[0]].centroid, map_.instances[mt.v[1]].centroid,
-                              map_.instances[mt.v[2]].centroid};
-        const uint32_t bin = triangle_yaw_bin(qp, mp, cfg.gsf.yaw_bins);
         bool keep = true;
         for (int v = 0; v < 3 && keep; ++v) {
           omega[v] = im.gsf.similarity(qf, qv[v], map_, mt.v[v], bin);
@@ -337,7 +375,7 @@ Status Localizer::localize(const ScanView& scan, LocalizeResult* out_ptr) {
   out.field_probes = im.gsf.probes();
   out.field_comparisons = im.gsf.comparisons();
   out.candidate_pairs = im.corr_count;
-  if (out.match_dropped > 0 || out.candidate_pairs_dropped > 0) out.capacity_truncated = true;
+  if (out.match_dropped > 0 || out.candidate_pairs_dropped > 0 || out.heading_dropped > 0) out.capacity_truncated = true;
 
   // 7. Keep the best-supported correspondences (votes x weight) up to the clique capacity; equal
   // support is broken by a hash of the pair, never by instance id (map ids follow map x order).

@@ -36,6 +36,8 @@ bool apply_override(LocalizerConfig* c, const std::string& a, std::string* error
       {"match.max_correspondences", nullptr, &c->match.max_correspondences},
       {"match.max_matches_per_triangle", nullptr, &c->match.max_matches_per_triangle},
       {"match.max_candidates", nullptr, &c->match.max_candidates},
+      {"match.heading_bins", nullptr, &c->match.heading_bins},
+      {"match.heading_sample_triangles", nullptr, &c->match.heading_sample_triangles},
       {"hypotheses.max_hypotheses", nullptr, &c->hypotheses.max_hypotheses},
       {"hypotheses.max_peeled", nullptr, &c->hypotheses.max_peeled},
       {"hypotheses.shift_headings", nullptr, &c->hypotheses.shift_headings},

@@ -54,6 +54,8 @@ void write_diagnostics(JsonWriter& j, const QueryRecord& r) {
   j.field("match_candidates", x.match_candidates);
   j.field("match_dropped", x.match_dropped);
   j.field("tie_ordered_triangles", x.tie_ordered_triangles);
+  j.field("headings_kept", x.headings_kept);
+  j.field("heading_dropped", x.heading_dropped);
   j.field("triangle_matches", x.triangle_matches);
   j.field("gsf_survivors", x.gsf_survivors);
   j.field("candidate_pairs", x.candidate_pairs);

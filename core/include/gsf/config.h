@@ -22,6 +22,11 @@ struct MatchConfig {
   bool use_gsf = true;                     // false: instance-only Outram behaviour (ablation)
   uint32_t max_matches_per_triangle = 256; // best map triangles kept per query triangle (by side residual)
   float vertex_tie_tolerance = 0.06f;      // relative; query sides closer than this are tried in both orders
+  // Heading votes (localizer.cpp, step 5a): the best `heading_bins` yaw bins (gsf.yaw_bins of them,
+  // each with its two neighbours) by the votes of an even sample of `heading_sample_triangles` query
+  // triangles' matches; matches at other headings are dropped and counted. 0 = off.
+  uint32_t heading_bins = 6;
+  uint32_t heading_sample_triangles = 256;
   float min_similarity = 0.3f;             // with GSF: a triangle match survives if all three omegas reach this
   uint32_t max_candidates = 24000;         // distinct (query, map) instance pairs accumulated (capacity)
   uint32_t max_correspondences = 512;      // vertices of the consistency graph (best by votes x weight)

@@ -49,6 +49,8 @@ struct LocalizeResult {
   uint32_t match_candidates = 0;        // map triangles accepted by labels and sides, before the per-triangle cap
   uint32_t match_dropped = 0;           // ... dropped by match.max_matches_per_triangle
   uint32_t tie_ordered_triangles = 0;   // query triangles also tried in a tied vertex order
+  uint32_t headings_kept = 0;           // yaw bins the heading votes let through (match.heading_bins)
+  uint32_t heading_dropped = 0;         // kept matches whose heading was not among them
   uint32_t candidate_pairs = 0;         // distinct (query, map) instance pairs from surviving matches
   uint32_t candidate_pairs_dropped = 0; // pairs refused because match.max_candidates was full
   uint32_t correspondences_dropped = 0; // pairs ranked out by match.max_correspondences
