@@ -26,7 +26,7 @@ Status validate(const LocalizerConfig& c) {
       !(h.same_pose_m >= 0) || !(h.same_pose_deg >= 0) || h.max_peeled == 0 || !(h.shift_bin > 0) ||
       !(h.max_tilt_deg >= 0 && h.max_tilt_deg <= 180))
     return Status::InvalidArgument;
-  if (c.verify.max_points == 0 || !(c.verify.margin_scale > 0) || c.verify.refine_top > 64 ||
+  if (c.verify.max_points == 0 || !(c.verify.margin_scale > 0) || !(c.verify.quality_high > c.verify.quality_low) || c.verify.refine_top > 64 ||
       c.verify.coarse_divisor == 0 || c.verify.full_top == 0 ||
       !(c.verify.refine_step_m >= 0) || !(c.verify.refine_step_deg >= 0) || c.verify.refine_rounds > 16)
     return Status::InvalidArgument;

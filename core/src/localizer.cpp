@@ -488,7 +488,15 @@ Status Localizer::localize(const ScanView& scan, LocalizeResult* out_ptr) {
       rival = answer.support > 0 ? im.hypotheses[second].support / answer.support : 1.0;
     }
   }
-  out.ambiguity = std::min(1.0, std::max(rival, support));
+  // A verified answer that agrees poorly with the map is doubtful even without a rival (its true
+  // competitor may simply not be among the hypotheses): agreement per scored voxel below
+  // quality_high adds ambiguity, reaching 1 at quality_low.
+  double quality = 0.0;
+  if (verify && answer.verification.scored > 0) {
+    const double q = double(answer.verification.score) / answer.verification.scored;
+    quality = (double(cfg.verify.quality_high) - q) / (double(cfg.verify.quality_high) - cfg.verify.quality_low);
+  }
+  out.ambiguity = std::min(1.0, std::max({rival, support, quality}));
   lap(&out.times.pose);
 
   // 10. Optional refinement against the map's point layer.

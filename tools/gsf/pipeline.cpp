@@ -50,6 +50,8 @@ bool apply_override(LocalizerConfig* c, const std::string& a, std::string* error
       {"verify.enabled", nullptr, &verify_enabled},
       {"verify.max_points", nullptr, &c->verify.max_points},
       {"verify.margin_scale", &c->verify.margin_scale, nullptr},
+      {"verify.quality_low", &c->verify.quality_low, nullptr},
+      {"verify.quality_high", &c->verify.quality_high, nullptr},
       {"verify.refine_top", nullptr, &c->verify.refine_top},
       {"verify.full_top", nullptr, &c->verify.full_top},
       {"verify.coarse_divisor", nullptr, &c->verify.coarse_divisor},
