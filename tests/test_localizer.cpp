@@ -256,3 +256,32 @@ TEST_CASE("Results agree with the x86-64 reference within tolerance (run on ever
   CHECK(same_verdict * 10 >= static_cast<int>(mine.size()) * 9);
   CHECK(close * 10 >= both_ok * 9);
 }
+
+TEST_CASE("The per-stage budget is the layout itself: its parts sum to required_bytes, with and without refinement") {
+  for (bool refine : {false, true}) {
+    LocalizerConfig cfg = tiny_world().config;
+    cfg.refine.enabled = refine;
+    const Localizer::Budget b = Localizer::budget(cfg);
+    const size_t parts = b.voxel + b.cluster + b.field + b.triangle + b.match + b.gsf_cache + b.correspondence +
+                         b.clique + b.refine;
+    INFO("refine " << refine << ": parts " << parts << ", other " << b.other << ", total " << b.total);
+    CHECK(b.total == Localizer::required_bytes(cfg));
+    CHECK(parts + b.other == b.total);
+    // `other` is only the Impl object and its alignment, not a stage's memory gone astray.
+    CHECK(b.other < 16384);
+    for (size_t stage : {b.voxel, b.cluster, b.field, b.triangle, b.match, b.gsf_cache, b.correspondence, b.clique})
+      CHECK(stage > 0);
+    CHECK((b.refine > 0) == refine);
+    // Growing one stage's capacity grows that stage's part and nothing else.
+    LocalizerConfig more = cfg;
+    more.match.max_correspondences *= 2;
+    const Localizer::Budget m = Localizer::budget(more);
+    CHECK(m.correspondence > b.correspondence);
+    CHECK(m.clique > b.clique);
+    CHECK(m.voxel == b.voxel);
+    CHECK(m.total == Localizer::required_bytes(more));
+  }
+  LocalizerConfig bad;
+  bad.match.max_correspondences = 1;
+  CHECK(Localizer::budget(bad).total == 0);
+}
