@@ -52,6 +52,7 @@ int cmd_inspect(int argc, char** argv) {
     j.field("road_length_m", map.counts.road_length_m);
     j.field("bytes_per_km", bytes_per_km);
     j.field("instances", map.counts.instances);
+    j.field("semantic_tiles", map.counts.semantic_tiles);
     j.field("triangles", map.counts.triangles);
     j.field("index_keys", map.counts.index_keys);
     j.field("refine_points", map.counts.refine_points);
@@ -73,6 +74,10 @@ int cmd_inspect(int argc, char** argv) {
     if (per_class[c]) std::printf("    %-14s %u\n", class_name(c), per_class[c]);
   std::printf("  triangles       %u in %u hash keys\n", map.counts.triangles, map.counts.index_keys);
   std::printf("  refine points   %u\n", map.counts.refine_points);
+  const uint64_t sem_cells = uint64_t(map.counts.semantic_tiles) * map.params.semantic_tile_cells * map.params.semantic_tile_cells;
+  std::printf("  semantic layer  %u tiles of %ux%u cells @ %.2f m (%.2f MB)\n", map.counts.semantic_tiles,
+              map.params.semantic_tile_cells, map.params.semantic_tile_cells, map.params.semantic_cell,
+              (sem_cells * 4 + uint64_t(map.counts.semantic_tiles) * 4) / 1e6);
   std::printf("  field           %uD inputs, M <= %u inducing, grid %ux%ux%u @ %.2f m, kappa %.2f, noise %.3f, r %.1f m\n",
               map.params.field_input_dims, map.params.inducing_stride, map.params.grid_nx, map.params.grid_ny,
               map.params.grid_layers, map.params.grid_spacing, map.params.length_scale, map.params.noise_variance,
@@ -87,8 +92,8 @@ int cmd_inspect(int argc, char** argv) {
   std::printf("localizer workspace with the default config (%s for this map):\n", fits == Status::Ok ? "matches" : "DOES NOT match");
   const struct { const char* name; size_t bytes; } rows[] = {
       {"voxel layer", b.voxel}, {"instances", b.cluster}, {"query fields", b.field}, {"triangles", b.triangle},
-      {"index matches", b.match}, {"GSF probe cache", b.gsf_cache}, {"correspondences", b.correspondence},
-      {"max clique", b.clique}, {"refinement", b.refine}, {"other", b.other}};
+      {"ranked matches", b.match}, {"GSF probe cache", b.gsf_cache}, {"correspondences", b.correspondence},
+      {"hypotheses", b.clique}, {"refinement", b.refine}, {"other", b.other}};
   for (const auto& r : rows) std::printf("    %-18s %10.2f MB\n", r.name, r.bytes / 1e6);
   std::printf("    %-18s %10.2f MB  (%.2f MB without refinement)\n", "total", b.total / 1e6, (b.total - b.refine) / 1e6);
   if (map.counts.refine_points > cfg.refine.max_map_points)
