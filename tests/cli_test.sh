@@ -60,6 +60,7 @@ assert modes["gsf+refine"]["summary"]["ate_m"] < g["ate_m"]
 assert json.load(open(f"{t}/inspect.json"))["instances"] > 50
 one = json.loads(open(f"{t}/one.json").read().splitlines()[0])
 assert one["frame"] == 3 and len(one["pose"]) == 12
+assert "match_dropped" in one["diagnostics"] and "hypotheses" in one["diagnostics"], one.keys()
 for f in ["map_trajectory.svg", "correspondences_instance.svg", "correspondences_gsf.svg"]:
     assert open(f"{t}/svg/{f}").read().startswith("<svg"), f
 print("cli ok:", g["successes"], "GSF successes,", i["successes"], "instance-only")

@@ -7,6 +7,7 @@
 #include "gsf/map_format.h"
 #include "gsf/port/clock.h"
 #include "json_writer.h"
+#include "result_json.h"
 #include "pipeline.h"
 
 namespace gsf::cli {
@@ -80,6 +81,7 @@ int cmd_localize(int argc, char** argv) {
     j.field("score", r.score);
     j.field("ambiguity", r.ambiguity);
     j.field("time_ms", double(r.times.total) / 1e6);
+    write_result_diagnostics(j, r, nullptr);
     j.end_object();
     std::printf("%s\n", j.str().c_str());
   }

@@ -14,6 +14,7 @@
 #include "gsf/map_format.h"
 #include "gsf/port/clock.h"
 #include "json_writer.h"
+#include "result_json.h"
 #include "scan_context.h"
 #include "svg.h"
 
@@ -46,58 +47,11 @@ void write_stage_ms(JsonWriter& j, const char* key, const StageMs& t) {
 
 // The library's per-query counts: where candidates were dropped, what the hypotheses were.
 void write_diagnostics(JsonWriter& j, const QueryRecord& r) {
-  const LocalizeResult& x = r.result;
-  j.key("diagnostics");
-  j.begin_object();
-  j.field("instances", x.query_instances);
-  j.field("triangles", x.query_triangles);
-  j.field("match_candidates", x.match_candidates);
-  j.field("match_dropped", x.match_dropped);
-  j.field("tie_ordered_triangles", x.tie_ordered_triangles);
-  j.field("headings_kept", x.headings_kept);
-  j.field("heading_dropped", x.heading_dropped);
-  j.field("triangle_matches", x.triangle_matches);
-  j.field("gsf_survivors", x.gsf_survivors);
-  j.field("candidate_pairs", x.candidate_pairs);
-  j.field("candidate_pairs_dropped", x.candidate_pairs_dropped);
-  j.field("correspondences", x.correspondences);
-  j.field("correspondences_dropped", x.correspondences_dropped);
-  j.field("clique_size", x.clique_size);
-  j.field("clique_searches", x.clique_searches);
-  j.field("clique_nodes", static_cast<unsigned long long>(x.clique_nodes));
-  j.field("budget_exhausted", x.budget_exhausted);
-  j.field("capacity_truncated", x.capacity_truncated);
-  j.field("field_probes", x.field_probes);
-  j.field("field_comparisons", x.field_comparisons);
-  j.field("verified", x.verified);
-  j.field("chosen_hypothesis", x.chosen_hypothesis);
-  j.field("true_correspondences", r.true_correspondences);
-  j.field("truth_verified_score", r.truth_verified_score);
-  write_stage_ms(j, "stage_ms", r.stages);
-  j.key("hypotheses");
-  j.begin_array();
-  for (uint32_t h = 0; h < x.hypotheses && h < kMaxReportedHypotheses; ++h) {  // best verified first
-    const HypothesisReport& p = x.hypothesis[h];
-    const double dx = p.x - r.truth.translation().x(), dy = p.y - r.truth.translation().y();
-    j.begin_object();
-    j.field("x", p.x);
-    j.field("y", p.y);
-    j.field("yaw_deg", p.yaw_deg);
-    j.field("clique_size", p.clique_size);
-    j.field("inliers", p.inliers);
-    j.field("support", p.support);
-    j.field("verified_score", p.verified_score);
-    j.field("verified_voxels", p.verified_voxels);
-    j.field("distance_to_truth_m", std::sqrt(dx * dx + dy * dy));
-    const Eigen::Matrix3d Rt = r.truth.linear();
-    double dyaw = p.yaw_deg - std::atan2(Rt(1, 0), Rt(0, 0)) * 57.29577951308232;
-    while (dyaw > 180) dyaw -= 360;
-    while (dyaw < -180) dyaw += 360;
-    j.field("yaw_error_deg", dyaw);
-    j.end_object();
-  }
-  j.end_array();
-  j.end_object();
+  QueryTruth t;
+  t.truth = r.truth;
+  t.true_correspondences = r.true_correspondences;
+  t.truth_verified_score = r.truth_verified_score;
+  write_result_diagnostics(j, r.result, &t);
 }
 
 void write_json(const std::string& path, const EvalOptions& o, const MapView& map, const std::vector<ModeRun>& runs,

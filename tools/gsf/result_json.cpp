@@ -1,0 +1,81 @@
+#include "result_json.h"
+
+#include <cmath>
+
+namespace gsf::cli {
+namespace {
+
+double ms(uint64_t ns) { return double(ns) / 1e6; }
+
+}  // namespace
+
+void write_result_diagnostics(JsonWriter& j, const LocalizeResult& x, const QueryTruth* truth) {
+  j.key("diagnostics");
+  j.begin_object();
+  j.field("instances", x.query_instances);
+  j.field("triangles", x.query_triangles);
+  j.field("match_candidates", x.match_candidates);
+  j.field("match_dropped", x.match_dropped);
+  j.field("tie_ordered_triangles", x.tie_ordered_triangles);
+  j.field("headings_kept", x.headings_kept);
+  j.field("heading_dropped", x.heading_dropped);
+  j.field("triangle_matches", x.triangle_matches);
+  j.field("gsf_survivors", x.gsf_survivors);
+  j.field("candidate_pairs", x.candidate_pairs);
+  j.field("candidate_pairs_dropped", x.candidate_pairs_dropped);
+  j.field("correspondences", x.correspondences);
+  j.field("correspondences_dropped", x.correspondences_dropped);
+  j.field("clique_size", x.clique_size);
+  j.field("clique_searches", x.clique_searches);
+  j.field("clique_nodes", static_cast<unsigned long long>(x.clique_nodes));
+  j.field("budget_exhausted", x.budget_exhausted);
+  j.field("capacity_truncated", x.capacity_truncated);
+  j.field("field_probes", x.field_probes);
+  j.field("field_comparisons", x.field_comparisons);
+  j.field("verified", x.verified);
+  j.field("chosen_hypothesis", x.chosen_hypothesis);
+  if (truth) {
+    j.field("true_correspondences", truth->true_correspondences);
+    j.field("truth_verified_score", truth->truth_verified_score);
+  }
+  j.key("stage_ms");
+  j.begin_object();
+  j.field("voxel", ms(x.times.voxel));
+  j.field("cluster", ms(x.times.cluster));
+  j.field("field", ms(x.times.field));
+  j.field("triangle", ms(x.times.triangle));
+  j.field("match", ms(x.times.match));
+  j.field("gsf", ms(x.times.gsf));
+  j.field("clique", ms(x.times.clique));
+  j.field("pose", ms(x.times.pose));
+  j.field("refine", ms(x.times.refine));
+  j.end_object();
+  j.key("hypotheses");
+  j.begin_array();
+  for (uint32_t h = 0; h < x.hypotheses && h < kMaxReportedHypotheses; ++h) {  // best verified first
+    const HypothesisReport& p = x.hypothesis[h];
+    j.begin_object();
+    j.field("x", p.x);
+    j.field("y", p.y);
+    j.field("yaw_deg", p.yaw_deg);
+    j.field("clique_size", p.clique_size);
+    j.field("inliers", p.inliers);
+    j.field("support", p.support);
+    j.field("verified_score", p.verified_score);
+    j.field("verified_voxels", p.verified_voxels);
+    if (truth) {
+      const double dx = p.x - truth->truth.translation().x(), dy = p.y - truth->truth.translation().y();
+      j.field("distance_to_truth_m", std::sqrt(dx * dx + dy * dy));
+      const Eigen::Matrix3d Rt = truth->truth.linear();
+      double dyaw = p.yaw_deg - std::atan2(Rt(1, 0), Rt(0, 0)) * 57.29577951308232;
+      while (dyaw > 180) dyaw -= 360;
+      while (dyaw < -180) dyaw += 360;
+      j.field("yaw_error_deg", dyaw);
+    }
+    j.end_object();
+  }
+  j.end_array();
+  j.end_object();
+}
+
+}  // namespace gsf::cli

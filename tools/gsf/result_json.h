@@ -1,0 +1,24 @@
+// The library's per-query counts as JSON ("diagnostics"), shared by `gsf evaluate --json` and
+// `gsf localize`: what each cap dropped, the headings kept, the hypotheses with their verified
+// scores, the stage times. With a ground truth (evaluation) each hypothesis also gets its distance and
+// heading error to the truth.
+#pragma once
+#include <cstdint>
+
+#include <Eigen/Geometry>
+
+#include "gsf/localizer.h"
+#include "json_writer.h"
+
+namespace gsf::cli {
+
+struct QueryTruth {
+  Eigen::Isometry3d truth = Eigen::Isometry3d::Identity();
+  uint32_t true_correspondences = 0;  // selected correspondences the truth agrees with
+  double truth_verified_score = 0;    // the truth's own whole-scan verification score
+};
+
+// Writes key "diagnostics" with an object; `truth` may be null.
+void write_result_diagnostics(JsonWriter& j, const LocalizeResult& x, const QueryTruth* truth);
+
+}  // namespace gsf::cli
