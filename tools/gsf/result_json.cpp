@@ -9,6 +9,26 @@ double ms(uint64_t ns) { return double(ns) / 1e6; }
 
 }  // namespace
 
+StageMs stage_ms(const StageTimes& t) {
+  return StageMs{ms(t.voxel), ms(t.cluster), ms(t.field), ms(t.triangle), ms(t.match),
+                 ms(t.gsf),   ms(t.clique),  ms(t.pose),  ms(t.refine)};
+}
+
+void write_stage_ms(JsonWriter& j, const char* key, const StageMs& t) {
+  j.key(key);
+  j.begin_object();
+  j.field("voxel", t.voxel);
+  j.field("cluster", t.cluster);
+  j.field("field", t.field);
+  j.field("triangle", t.triangle);
+  j.field("match", t.match);
+  j.field("gsf", t.gsf);
+  j.field("clique", t.clique);
+  j.field("pose", t.pose);
+  j.field("refine", t.refine);
+  j.end_object();
+}
+
 void write_result_diagnostics(JsonWriter& j, const LocalizeResult& x, const QueryTruth* truth) {
   j.key("diagnostics");
   j.begin_object();
@@ -38,18 +58,7 @@ void write_result_diagnostics(JsonWriter& j, const LocalizeResult& x, const Quer
     j.field("true_correspondences", truth->true_correspondences);
     j.field("truth_verified_score", truth->truth_verified_score);
   }
-  j.key("stage_ms");
-  j.begin_object();
-  j.field("voxel", ms(x.times.voxel));
-  j.field("cluster", ms(x.times.cluster));
-  j.field("field", ms(x.times.field));
-  j.field("triangle", ms(x.times.triangle));
-  j.field("match", ms(x.times.match));
-  j.field("gsf", ms(x.times.gsf));
-  j.field("clique", ms(x.times.clique));
-  j.field("pose", ms(x.times.pose));
-  j.field("refine", ms(x.times.refine));
-  j.end_object();
+  write_stage_ms(j, "stage_ms", stage_ms(x.times));
   j.key("hypotheses");
   j.begin_array();
   for (uint32_t h = 0; h < x.hypotheses && h < kMaxReportedHypotheses; ++h) {  // best verified first

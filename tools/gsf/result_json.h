@@ -7,6 +7,7 @@
 
 #include <Eigen/Geometry>
 
+#include "evaluation.h"
 #include "gsf/localizer.h"
 #include "json_writer.h"
 
@@ -17,6 +18,11 @@ struct QueryTruth {
   uint32_t true_correspondences = 0;  // selected correspondences the truth agrees with
   double truth_verified_score = 0;    // the truth's own whole-scan verification score
 };
+
+// A result's stage times in milliseconds.
+StageMs stage_ms(const StageTimes& times);
+// Writes `key` with the nine stage times.
+void write_stage_ms(JsonWriter& j, const char* key, const StageMs& t);
 
 // Writes key "diagnostics" with an object; `truth` may be null.
 void write_result_diagnostics(JsonWriter& j, const LocalizeResult& x, const QueryTruth* truth);

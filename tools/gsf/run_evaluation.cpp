@@ -30,21 +30,6 @@ struct ModeRun {
   uint64_t workspace_bytes = 0;
 };
 
-void write_stage_ms(JsonWriter& j, const char* key, const StageMs& t) {
-  j.key(key);
-  j.begin_object();
-  j.field("voxel", t.voxel);
-  j.field("cluster", t.cluster);
-  j.field("field", t.field);
-  j.field("triangle", t.triangle);
-  j.field("match", t.match);
-  j.field("gsf", t.gsf);
-  j.field("clique", t.clique);
-  j.field("pose", t.pose);
-  j.field("refine", t.refine);
-  j.end_object();
-}
-
 // The library's per-query counts: where candidates were dropped, what the hypotheses were.
 void write_diagnostics(JsonWriter& j, const QueryRecord& r) {
   QueryTruth t;
@@ -284,8 +269,7 @@ int run_evaluation(const EvalOptions& o) {
       r.inliers = res.inliers;
       r.result = res;
       r.time_ms = ms(res.times.total);
-      r.stages = StageMs{ms(res.times.voxel), ms(res.times.cluster), ms(res.times.field), ms(res.times.triangle),
-                         ms(res.times.match), ms(res.times.gsf), ms(res.times.clique), ms(res.times.pose), ms(res.times.refine)};
+      r.stages = stage_ms(res.times);
       if (r.answered) {
         r.error = pose_error(r.estimate, r.truth);
         r.success = is_success(r.error);
