@@ -27,11 +27,12 @@ TEST_CASE("localize() never allocates after init") {
   CHECK(ok > 500);  // the calls did real work
 }
 
-// The other paths: refinement on (the tiny world), and a lattice whose queries run the shift votes,
-// the coarse/full/refined verification and the heading votes at full tilt (tiny-lattice world).
-TEST_CASE("localize() never allocates after init with refinement on, nor on a lattice") {
-  for (int which = 0; which < 2; ++which) {
-    const auto& w = which == 0 ? gsf_test::tiny_world() : gsf_test::tiny_lattice_world();
+// The other paths: refinement on (the tiny world), a lattice whose queries run the shift votes,
+// the coarse/full/refined verification and the heading votes at full tilt (tiny-lattice world), and
+// a nuScenes-labelled world (class-table lookups, geometric pole extraction).
+TEST_CASE("localize() never allocates after init with refinement on, on a lattice, nor with geometric poles") {
+  for (int which = 0; which < 3; ++which) {
+    const auto& w = which == 0 ? gsf_test::tiny_world() : which == 1 ? gsf_test::tiny_lattice_world() : gsf_test::tiny_nuscenes_world();
     LocalizerConfig cfg = w.config;
     cfg.refine.enabled = which == 0;
     cfg.refine.max_map_points = w.map.counts.refine_points + 1;
@@ -39,7 +40,7 @@ TEST_CASE("localize() never allocates after init with refinement on, nor on a la
     Localizer loc;
     REQUIRE(loc.init(cfg, w.map, ws.data(), ws.size() * 8) == Status::Ok);
     LocalizeResult r;
-    uint32_t calls = 0, ok = 0, refined = 0, voted = 0;
+    uint32_t calls = 0, ok = 0, refined = 0, voted = 0, poles = 0;
     gsf_test::AllocationScope scope;
     for (int pass = 0; pass < 2; ++pass)
       for (const auto& q : w.queries) {
@@ -47,13 +48,16 @@ TEST_CASE("localize() never allocates after init with refinement on, nor on a la
         ok += loc.localize(q.view(), &r) == Status::Ok;
         refined += r.refined;
         voted += r.hypotheses > r.clique_searches;  // more hypotheses than cliques: shift votes ran
+        poles += r.pole_instances > 0;
         ++calls;
       }
     const uint64_t allocations = scope.allocations();  // before INFO, which allocates its message
-    INFO((which == 0 ? "tiny world, refinement" : "tiny lattice") << ": " << ok << " of " << calls << " answered");
+    INFO((which == 0 ? "tiny world, refinement" : which == 1 ? "tiny lattice" : "tiny nuScenes-labelled world") << ": "
+         << ok << " of " << calls << " answered");
     CHECK(allocations == 0);
     CHECK(ok * 2 > calls);
     if (which == 0) CHECK(refined > 0);
-    else CHECK(voted > 0);
+    else if (which == 1) CHECK(voted > 0);
+    else CHECK(poles == calls);
   }
 }

@@ -34,10 +34,36 @@ Status validate(const LocalizerConfig& c) {
   return Status::Ok;
 }
 
+const ClassTable& label_set(const LocalizerConfig& c) {
+  if (c.classes) return *c.classes;
+  // Built once on first use (static storage, no heap); read-only afterwards.
+  static const ClassTable kitti = [] {
+    ClassTable t;
+    semantic_kitti_class_table(&t);
+    return t;
+  }();
+  return kitti;
+}
+
+ClassMask instance_label_mask(const LocalizerConfig& c) {
+  if (!c.classes) return c.cluster.instance_classes;
+  // Only classes some raw id maps to can label an instance (unlisted classes keep their default role).
+  ClassMask m = c.classes->instance_classes() & c.classes->mapped_classes();
+  if (c.classes->pole_host_classes()) m |= class_bit(kPole);
+  if (c.classes->trunk_host_classes()) m |= class_bit(kTrunk);
+  return m;
+}
+
+PoleConfig effective_pole_config(const LocalizerConfig& c) {
+  PoleConfig p = c.poles;
+  p.set_hosts(label_set(c));
+  return p;
+}
+
 MapParams map_params_from(const LocalizerConfig& c) {
   MapParams p{};
   p.num_classes = kNumClasses;
-  p.instance_class_mask = c.cluster.instance_classes;
+  p.instance_class_mask = instance_label_mask(c);
   p.field_input_dims = c.field.input_dims;
   p.inducing_stride = c.field.inducing_points;
   p.grid_nx = c.field.grid_nx;

@@ -9,6 +9,7 @@
 #include "gsf/gaussian_field.h"
 #include "gsf/gsf_filter.h"
 #include "gsf/instance_clustering.h"
+#include "gsf/pole_extraction.h"
 #include "gsf/pose_hypotheses.h"
 #include "gsf/refine.h"
 #include "gsf/semantic_grid.h"
@@ -49,8 +50,12 @@ uint32_t top_by_score(const PoseHypotheses& hyps, uint32_t H, const uint8_t* eli
 }  // namespace
 
 struct Localizer::Impl {
+  ClassTable classes;  // the label set in effect (a copy: the caller's table need not outlive init)
   VoxelLayer voxels;
   InstanceClustering clusters;
+  PoleExtraction poles;  // bound only when the label set has pole / trunk hosts
+  bool poles_on = false;
+  uint32_t* pole_order = nullptr;  // poles.max_instances: kept poles by score
   FieldSolver solver;
   TriangleBuilder triangle_builder;
   FixedVector<Triangle> triangles;
@@ -103,8 +108,17 @@ Status Localizer::bind_workspace(Arena& ar, const LocalizerConfig& config, Impl&
   };
   if (im.voxels.bind(ar, config.voxel) != Status::Ok) return Status::InvalidArgument;
   record(&b.voxel);
-  if (im.clusters.bind(ar, config.cluster, config.voxel.max_voxels) != Status::Ok) return Status::InvalidArgument;
+  ClusterConfig cluster = config.cluster;
+  cluster.instance_classes = config.classes ? config.classes->instance_classes() : config.cluster.instance_classes;
+  if (im.clusters.bind(ar, cluster, config.voxel.max_voxels) != Status::Ok) return Status::InvalidArgument;
   record(&b.cluster);
+  const PoleConfig poles = effective_pole_config(config);
+  im.poles_on = (poles.pole_hosts | poles.trunk_hosts) != 0;
+  if (im.poles_on) {
+    if (im.poles.bind(ar, poles, config.voxel.max_voxels) != Status::Ok) return Status::InvalidArgument;
+    im.pole_order = ar.allocate<uint32_t>(poles.max_instances);
+  }
+  record(&b.poles);
   if (im.solver.bind(ar, config.field, P) != Status::Ok) return Status::InvalidArgument;
   im.q_inputs = ar.allocate<float>(size_t(I) * M * 3);
   im.q_alpha = ar.allocate<float>(size_t(I) * M * kNumClasses);
@@ -155,7 +169,7 @@ Localizer::Budget Localizer::budget(const LocalizerConfig& c) {
   Impl scratch;
   if (bind_workspace(counting, c, scratch, &b) != Status::Ok) return Budget{};
   b.total = counting.used();
-  const size_t parts = b.voxel + b.cluster + b.field + b.triangle + b.match + b.gsf_cache + b.correspondence + b.clique + b.refine;
+  const size_t parts = b.voxel + b.cluster + b.poles + b.field + b.triangle + b.match + b.gsf_cache + b.correspondence + b.clique + b.refine;
   b.other = b.total - parts;  // the Impl object and its alignment
   return b;
 }
@@ -193,7 +207,16 @@ Status Localizer::init(const LocalizerConfig& config, const MapView& map, void* 
     s = im.refiner.set_map(map.refine_points, map.counts.refine_points);
     if (s != Status::Ok) return s;
   }
-  stability_weights(im.weights);
+  im.classes = label_set(config);
+  if (config.classes) {
+    // Stages read the label set from the workspace copy; config() must not point at the caller's table.
+    config_.classes = &im.classes;
+    im.voxels.set_classes(&im.classes);
+    im.clusters.set_classes(&im.classes);
+    im.refiner.set_classes(&im.classes);
+  }
+  for (int c = 0; c < kNumClasses; ++c) im.weights[c] = im.classes.stability(c);
+  im.gsf.set_class_weights(im.weights);
   im.index.keys = map.index_keys;
   im.index.offsets = map.index_offsets;
   im.index.entries = map.index_entries;
@@ -245,13 +268,40 @@ Status Localizer::localize(const ScanView& scan, LocalizeResult* out_ptr) {
   s = im.clusters.build(im.voxels, nullptr);
   if (s == Status::CapacityExceeded) out.capacity_truncated = true;
   else if (s != Status::Ok) return finish(s);
-  const uint32_t n = im.clusters.size();
-  out.query_instances = n;
+  uint32_t n = im.clusters.size();
   for (uint32_t i = 0; i < n; ++i) {
     const Instance& in = im.clusters.instance(i);
     for (int k = 0; k < 3; ++k) im.centroids[3 * i + k] = in.centroid[k];
     im.labels[i] = in.label;
   }
+  // 2b. Geometric pole / trunk instances (label sets without pole and trunk classes), best score first
+  // into the instance slots clustering left free; the rest are counted, never cut in storage order.
+  if (im.poles_on) {
+    s = im.poles.build(im.voxels, nullptr);
+    if (s == Status::CapacityExceeded) out.capacity_truncated = true;
+    else if (s != Status::Ok) return finish(s);
+    const uint32_t np = im.poles.size();
+    for (uint32_t i = 0; i < np; ++i) {  // insertion sort by score (np <= poles.max_instances, small)
+      uint32_t pos = i;
+      while (pos > 0 && im.poles.info(im.pole_order[pos - 1]).score < im.poles.info(i).score) {
+        im.pole_order[pos] = im.pole_order[pos - 1];
+        --pos;
+      }
+      im.pole_order[pos] = i;
+    }
+    for (uint32_t k = 0; k < np; ++k) {
+      if (n >= cfg.cluster.max_instances) {
+        ++out.pole_instances_dropped;
+        out.capacity_truncated = true;
+        continue;
+      }
+      const Instance& in = im.poles.instance(im.pole_order[k]);
+      for (int c = 0; c < 3; ++c) im.centroids[3 * n + c] = in.centroid[c];
+      im.labels[n++] = in.label;
+      ++out.pole_instances;
+    }
+  }
+  out.query_instances = n;
   lap(&out.times.cluster);
   if (n < 3) return finish(Status::NoSolution);
 

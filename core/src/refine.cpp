@@ -98,12 +98,12 @@ Status Refiner::refine(const VoxelLayer& layer, const Eigen::Isometry3d& initial
   if (n_ == 0) return Status::Unsupported;
   // Query points: long-term voxels, deterministic stride subsample.
   uint32_t eligible = 0;
-  for (uint32_t i = 0; i < layer.size(); ++i) eligible += stability_weight(layer.voxel(i).label) >= 1.0f;
+  for (uint32_t i = 0; i < layer.size(); ++i) eligible += long_term(layer.voxel(i).label);
   const uint32_t stride = eligible > config_.max_points ? (eligible + config_.max_points - 1) / config_.max_points : 1;
   uint32_t q = 0, seen = 0;
   for (uint32_t i = 0; i < layer.size() && q < config_.max_points; ++i) {
     const Voxel& v = layer.voxel(i);
-    if (stability_weight(v.label) < 1.0f) continue;
+    if (!long_term(v.label)) continue;
     if (seen++ % stride) continue;
     for (int k = 0; k < 3; ++k) query_[3 * q + k] = v.centroid[k];
     ++q;

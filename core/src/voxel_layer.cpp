@@ -103,7 +103,7 @@ Status VoxelLayer::build(const ScanView& scan, VoxelStats* stats_out) {
     if (!std::isfinite(p[0]) || !std::isfinite(p[1]) || !std::isfinite(p[2])) { ++stats.non_finite; continue; }
     const float r2 = p[0] * p[0] + p[1] * p[1] + p[2] * p[2];
     if (!(r2 >= min_r2 && r2 <= max_r2)) { ++stats.out_of_range; continue; }
-    const int c = class_from_kitti(scan.labels[i]);
+    const int c = classes_ ? classes_->library_class(scan.labels[i]) : class_from_kitti(scan.labels[i]);
     if (c == kUnknownClass) { ++stats.unknown_label; continue; }
     if (c == kIgnoredClass) { ++stats.ignored; continue; }
     if (use_logits) {

@@ -35,7 +35,15 @@ int confusion_partner_count(int c) { return confusion_of(c).n; }
 int confusion_partner(int c, int k) { return confusion_of(c).partners[k]; }
 
 void synthesize_logits(const LogitModel& m, uint64_t scan_id, const uint32_t* labels, uint32_t count, float* out,
-                       uint32_t* relabel) {
+                       uint32_t* relabel, const ClassTable* classes) {
+  // Library class -> the label set's lowest raw id of it (UINT32_MAX: none), for relabelling.
+  uint32_t raw_of[kNumClasses];
+  for (int c = 0; c < kNumClasses; ++c) raw_of[c] = classes ? UINT32_MAX : kitti_from_class(c);
+  if (classes)
+    for (uint32_t e = classes->size(); e-- > 0;) {  // raw-id order, backwards: the lowest id wins
+      const ClassTableEntry& en = classes->entry(e);
+      if (en.library_class >= 0) raw_of[en.library_class] = en.raw_id;
+    }
   for (uint32_t i = 0; i < count; ++i) {
     gsf::Rng rng(gsf::mix64(m.seed ^ gsf::mix64(scan_id * 0x9E3779B97F4A7C15ULL + i)));
     float* l = out + size_t(i) * kNumClasses;
@@ -45,7 +53,7 @@ void synthesize_logits(const LogitModel& m, uint64_t scan_id, const uint32_t* la
       l[k] = r * std::cos(6.2831853f * u2);
       if (k + 1 < kNumClasses) l[k + 1] = r * std::sin(6.2831853f * u2);
     }
-    const int c = class_from_kitti(labels[i]);
+    const int c = classes ? classes->library_class(labels[i]) : class_from_kitti(labels[i]);
     int predicted = c;
     if (c >= 0) {
       const Confusion conf = confusion_of(c);
@@ -58,7 +66,7 @@ void synthesize_logits(const LogitModel& m, uint64_t scan_id, const uint32_t* la
       int best = 0;
       for (int k = 1; k < kNumClasses; ++k)
         if (l[k] > l[best]) best = k;
-      relabel[i] = c >= 0 ? (kitti_from_class(best) | (labels[i] & 0xFFFF0000u)) : labels[i];
+      relabel[i] = c >= 0 && raw_of[best] != UINT32_MAX ? (raw_of[best] | (labels[i] & 0xFFFF0000u)) : labels[i];
     }
   }
 }

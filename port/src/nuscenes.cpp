@@ -2,6 +2,7 @@
 
 #include <cmath>
 #include <cstring>
+#include <filesystem>
 
 #include "scan_files.h"
 
@@ -27,6 +28,57 @@ uint16_t nuscenes_to_kitti(uint8_t c) {
     case 30: return 70;
     default: return 0;
   }
+}
+
+uint8_t kitti_to_nuscenes(uint32_t label) {
+  switch (label & 0xFFFFu) {
+    case 10: case 252: return 17;
+    case 11: return 14;
+    case 13: return 16;
+    case 15: return 21;
+    case 16: case 20: case 256: case 257: case 259: return 18;
+    case 18: case 258: return 23;
+    case 30: case 31: case 32: case 253: case 254: case 255: return 2;
+    case 40: case 60: return 24;
+    case 44: case 49: return 25;
+    case 48: return 26;
+    case 50: case 51: case 52: case 80: case 81: return 28;
+    case 70: case 71: return 30;
+    case 72: return 27;
+    case 99: return 29;
+    default: return 0;
+  }
+}
+
+Status NuScenesLidarsegWriter::open(const std::string& root, const std::string& seq) {
+  namespace fs = std::filesystem;
+  dir_.clear();
+  const std::string dir = root + "/sequences/" + seq;
+  std::error_code ec;
+  fs::create_directories(fs::path(dir) / "velodyne", ec);
+  if (!ec) fs::create_directories(fs::path(dir) / "lidarseg", ec);
+  if (ec) return Status::IoError;
+  dir_ = dir;
+  return Status::Ok;
+}
+
+Status NuScenesLidarsegWriter::write_scan(uint32_t frame, const float* xyzi, const uint8_t* lidarseg, uint32_t count) {
+  if (dir_.empty()) return Status::NotInitialized;
+  if (frame > 999999) return Status::InvalidInput;
+  if (count > 0 && (xyzi == nullptr || lidarseg == nullptr)) return Status::InvalidInput;
+  for (uint32_t i = 0; i < count; ++i)
+    if (lidarseg[i] > 31) return Status::InvalidInput;
+  char path[detail::kMaxPathBytes];
+  if (!detail::frame_path(path, dir_, "velodyne", frame, ".bin") || !detail::write_file(path, {{xyzi, size_t(count) * 16}}))
+    return Status::IoError;
+  if (!detail::frame_path(path, dir_, "lidarseg", frame, ".label") || !detail::write_file(path, {{lidarseg, size_t(count)}}))
+    return Status::IoError;
+  return Status::Ok;
+}
+
+Status NuScenesLidarsegWriter::write_poses(const std::vector<Eigen::Isometry3d>& poses) {
+  if (dir_.empty()) return Status::NotInitialized;
+  return detail::write_pose_files(dir_, poses);
 }
 
 Status NuScenesLidarsegSource::open(const std::string& root, const std::string& seq, const KittiReadOptions& options) {
@@ -93,7 +145,7 @@ Status NuScenesLidarsegSource::read(uint32_t index, ScanBuffer& out) {
       }
       if (w >= out.capacity) return Status::CapacityExceeded;
       std::memcpy(out.points + 4 * size_t(w), p, 16);
-      out.labels[w] = nuscenes_to_kitti(lab[i]);
+      out.labels[w] = options_.raw_labels ? lab[i] : nuscenes_to_kitti(lab[i]);
       ++w;
     }
     done += m;

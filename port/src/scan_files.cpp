@@ -1,5 +1,7 @@
 #include "scan_files.h"
 
+#include <cmath>
+
 #include <fcntl.h>
 #include <sys/stat.h>
 #include <unistd.h>
@@ -91,6 +93,33 @@ Status InputFile::read_exact(void* dst, size_t bytes) {
     done += static_cast<size_t>(r);
   }
   return Status::Ok;
+}
+
+bool write_file(const std::string& path, std::initializer_list<std::pair<const void*, size_t>> parts) {
+  std::ofstream f(path, std::ios::binary | std::ios::trunc);
+  for (const auto& p : parts)
+    if (p.second) f.write(static_cast<const char*>(p.first), static_cast<std::streamsize>(p.second));
+  f.close();
+  return !f.fail();
+}
+
+Status write_pose_files(const std::string& dir, const std::vector<Eigen::Isometry3d>& poses) {
+  std::string text;
+  char b[64];
+  for (const auto& p : poses) {
+    for (int r = 0; r < 3; ++r)
+      for (int c = 0; c < 4; ++c) {
+        const double v = p.matrix()(r, c);
+        if (!std::isfinite(v)) return Status::InvalidInput;
+        std::snprintf(b, sizeof(b), "%.17g%c", v, (r == 2 && c == 3) ? '\n' : ' ');  // %.17g: exact round trip
+        text += b;
+      }
+  }
+  static const char kIdentityTr[] = "Tr: 1 0 0 0 0 1 0 0 0 0 1 0\n";
+  return write_file(dir + "/poses.txt", {{text.data(), text.size()}}) &&
+                 write_file(dir + "/calib.txt", {{kIdentityTr, sizeof(kIdentityTr) - 1}})
+             ? Status::Ok
+             : Status::IoError;
 }
 
 }  // namespace gsf::port::detail

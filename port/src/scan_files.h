@@ -5,8 +5,12 @@
 #pragma once
 #include <cstddef>
 #include <cstdint>
+#include <initializer_list>
+#include <utility>
 #include <string>
 #include <vector>
+
+#include <Eigen/Geometry>
 
 #include "gsf/status.h"
 
@@ -25,6 +29,12 @@ Status list_frames(const std::string& dir, const char* sub, const char* ext, std
 
 // Reads a whole text file (open() time only: allocates). Missing file -> NotFound.
 Status read_text(const std::string& path, std::string* text);
+
+// Writers (host tools: allocate). Writes `parts` to `path`; false unless every byte reached the file.
+bool write_file(const std::string& path, std::initializer_list<std::pair<const void*, size_t>> parts);
+// <dir>/poses.txt (3x4 row-major LiDAR poses, %.17g so they read back exactly, line i = frame i) and
+// <dir>/calib.txt with an identity Tr. InvalidInput for a non-finite pose, IoError for a failed write.
+Status write_pose_files(const std::string& dir, const std::vector<Eigen::Isometry3d>& world_T_lidar);
 
 // One open file, closed on destruction. No allocation.
 class InputFile {

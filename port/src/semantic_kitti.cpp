@@ -224,16 +224,6 @@ Status SemanticKittiWriter::open(const std::string& root, const std::string& seq
   return Status::Ok;
 }
 
-namespace {
-// Writes `parts` to `path` and reports whether every byte reached the file (close included).
-bool write_file(const std::string& path, std::initializer_list<std::pair<const void*, size_t>> parts) {
-  std::ofstream f(path, std::ios::binary | std::ios::trunc);
-  for (const auto& p : parts)
-    if (p.second) f.write(static_cast<const char*>(p.first), static_cast<std::streamsize>(p.second));
-  f.close();
-  return !f.fail();
-}
-}  // namespace
 
 Status SemanticKittiWriter::write_scan(uint32_t frame, const float* xyzi, const uint32_t* labels, const float* logits,
                                        uint32_t count) {
@@ -241,9 +231,9 @@ Status SemanticKittiWriter::write_scan(uint32_t frame, const float* xyzi, const 
   if (frame > 999999) return Status::InvalidInput;  // file names have six digits
   if (count > 0 && (xyzi == nullptr || labels == nullptr)) return Status::InvalidInput;
   char path[detail::kMaxPathBytes];
-  if (!detail::frame_path(path, dir_, "velodyne", frame, ".bin") || !write_file(path, {{xyzi, size_t(count) * 16}}))
+  if (!detail::frame_path(path, dir_, "velodyne", frame, ".bin") || !detail::write_file(path, {{xyzi, size_t(count) * 16}}))
     return Status::IoError;
-  if (!detail::frame_path(path, dir_, "labels", frame, ".label") || !write_file(path, {{labels, size_t(count) * 4}}))
+  if (!detail::frame_path(path, dir_, "labels", frame, ".label") || !detail::write_file(path, {{labels, size_t(count) * 4}}))
     return Status::IoError;
   if (logits) {
     std::error_code ec;
@@ -255,7 +245,7 @@ Status SemanticKittiWriter::write_scan(uint32_t frame, const float* xyzi, const 
     std::memcpy(header + 6, &d, 2);
     std::memcpy(header + 8, &count, 4);
     if (ec || !detail::frame_path(path, dir_, "logits", frame, ".bin") ||
-        !write_file(path, {{header, sizeof(header)}, {logits, size_t(count) * kNumClasses * 4}}))
+        !detail::write_file(path, {{header, sizeof(header)}, {logits, size_t(count) * kNumClasses * 4}}))
       return Status::IoError;
   }
   return Status::Ok;
@@ -263,22 +253,7 @@ Status SemanticKittiWriter::write_scan(uint32_t frame, const float* xyzi, const 
 
 Status SemanticKittiWriter::write_poses(const std::vector<Eigen::Isometry3d>& poses) {
   if (dir_.empty()) return Status::NotInitialized;
-  std::string text;
-  char b[64];
-  for (const auto& p : poses) {
-    for (int r = 0; r < 3; ++r)
-      for (int c = 0; c < 4; ++c) {
-        const double v = p.matrix()(r, c);
-        if (!std::isfinite(v)) return Status::InvalidInput;
-        std::snprintf(b, sizeof(b), "%.17g%c", v, (r == 2 && c == 3) ? '\n' : ' ');  // %.17g: exact round trip
-        text += b;
-      }
-  }
-  static const char kIdentityTr[] = "Tr: 1 0 0 0 0 1 0 0 0 0 1 0\n";
-  return write_file(dir_ + "/poses.txt", {{text.data(), text.size()}}) &&
-                 write_file(dir_ + "/calib.txt", {{kIdentityTr, sizeof(kIdentityTr) - 1}})
-             ? Status::Ok
-             : Status::IoError;
+  return detail::write_pose_files(dir_, poses);
 }
 
 }  // namespace gsf::port

@@ -7,6 +7,7 @@
 #include "gsf/config.h"
 #include "gsf/map_format.h"
 #include "gsf/port/logit_synthesis.h"
+#include "gsf/port/nuscenes.h"
 #include "mapping/map_builder.h"
 #include "sim/simulation.h"
 
@@ -30,31 +31,45 @@ struct QueryScan {
 };
 
 struct TinyWorld {
+  gsf::ClassTable classes;  // the label set of the scans (config.classes points here, or is nullptr)
   gsf::LocalizerConfig config;
   std::vector<uint64_t> blob;
   size_t bytes = 0;
   gsf::MapView map;
   std::vector<QueryScan> queries;
+  gsf::mapping::MapBuildStats build_stats;
 };
 
+// classes == nullptr: SemanticKITTI labels; else the scan is relabelled as nuScenes-lidarseg would
+// label it (gsf::port::kitti_to_nuscenes) and `classes` must be the nuScenes-lidarseg table.
 inline void make_scan(const gsf::sim::Raycaster& rc, const gsf::sim::SimConfig& sc, const Eigen::Isometry3d& pose,
-                      uint64_t seed, uint64_t scan_id, QueryScan* out) {
+                      uint64_t seed, uint64_t scan_id, QueryScan* out, const gsf::ClassTable* classes = nullptr) {
   gsf::sim::SimScan s;
   rc.scan(pose, sc.lidar, seed, &s);
   out->xyzi = s.xyzi;
   out->labels = s.labels;
+  if (classes)
+    for (uint32_t& l : out->labels) l = gsf::port::kitti_to_nuscenes(l);
   out->logits.assign(s.labels.size() * gsf::kNumClasses, 0.0f);
   gsf::port::LogitModel model;
-  gsf::port::synthesize_logits(model, scan_id, out->labels.data(), s.size(), out->logits.data(), out->labels.data());
+  gsf::port::synthesize_logits(model, scan_id, out->labels.data(), s.size(), out->logits.data(), out->labels.data(),
+                               classes);
   out->truth = pose;
 }
 
 // Simulates `sc`, builds its map in memory and the query scans (map and query logits drawn
 // independently, as `gsf evaluate` does).
-inline TinyWorld* build_sim_world(const gsf::sim::SimConfig& sc) {
+// nuscenes_table != nullptr: the scans are labelled as nuScenes-lidarseg would label them, and this
+// table (of lidarseg ids) is the label set of map and queries.
+inline TinyWorld* build_sim_world(const gsf::sim::SimConfig& sc, const gsf::ClassTable* nuscenes_table = nullptr) {
   {
     auto* t = new TinyWorld();
     t->config.max_scan_points = 262144;
+    const gsf::ClassTable* classes = nullptr;
+    if (nuscenes_table) {
+      t->classes = *nuscenes_table;
+      t->config.classes = classes = &t->classes;
+    }
     const gsf::sim::World world = gsf::sim::generate_world(sc.world);
     const gsf::sim::World later = gsf::sim::apply_time_gap(world, sc.time_gap);
     const gsf::sim::Raycaster map_rc(world), query_rc(later);
@@ -63,16 +78,15 @@ inline TinyWorld* build_sim_world(const gsf::sim::SimConfig& sc) {
     gsf::mapping::MapBuilder builder(t->config);
     for (uint32_t f = 0; f < md.poses.size(); ++f) {
       QueryScan s;
-      make_scan(map_rc, sc, md.poses[f], gsf::sim::scan_seed(sc.world.seed, 0, f), 1000000u + f, &s);
+      make_scan(map_rc, sc, md.poses[f], gsf::sim::scan_seed(sc.world.seed, 0, f), 1000000u + f, &s, classes);
       builder.add_scan(s.view(), md.poses[f]);
     }
     builder.set_road_length(world.road_length());
-    gsf::mapping::MapBuildStats st;
-    builder.build(&t->blob, &t->bytes, &st);
+    builder.build(&t->blob, &t->bytes, &t->build_stats);
     gsf::load_map(t->blob.data(), t->bytes, &t->map);
     for (uint32_t f = 0; f < qd.poses.size(); ++f) {
       QueryScan s;
-      make_scan(query_rc, sc, qd.poses[f], gsf::sim::scan_seed(sc.world.seed, 1, f), 2000000u + f, &s);
+      make_scan(query_rc, sc, qd.poses[f], gsf::sim::scan_seed(sc.world.seed, 1, f), 2000000u + f, &s, classes);
       s.in_zone = qd.in_zone[f];
       t->queries.push_back(std::move(s));
     }
@@ -82,6 +96,17 @@ inline TinyWorld* build_sim_world(const gsf::sim::SimConfig& sc) {
 
 inline const TinyWorld& tiny_world() {
   static TinyWorld* w = build_sim_world(gsf::sim::SimConfig::tiny());
+  return *w;
+}
+
+// The tiny world labelled as nuScenes-lidarseg would label it (no pole, trunk, sign or fence class),
+// with the built-in nuScenes-lidarseg label set: poles and trunks come from geometry.
+inline const TinyWorld& tiny_nuscenes_world() {
+  static TinyWorld* w = [] {
+    gsf::ClassTable t;
+    gsf::nuscenes_lidarseg_class_table(&t);
+    return build_sim_world(gsf::sim::SimConfig::tiny(), &t);
+  }();
   return *w;
 }
 

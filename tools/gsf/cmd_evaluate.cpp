@@ -36,6 +36,7 @@ int cmd_evaluate(int argc, char** argv) {
       {"logits", "synthetic or none (see build-map)", "synthetic"},
       {"threshold", "ambiguity threshold for answering (precision vs answered)", "0.5"},
       {"limit", "evaluate only the first N queries", "0"},
+      {"classes", "label set of the dataset's labels: auto, semantic-kitti, nuscenes or a class-table file (docs/data-formats.md)", "auto"},
       {"set", "config overrides name=value[,name=value] (see pipeline.cpp), e.g. gsf.tau=0.1", ""},
       {"quiet", "no progress on stderr", "", true},
   };
@@ -56,6 +57,7 @@ int cmd_evaluate(int argc, char** argv) {
   o.svg_dir = args.get("svg");
   o.progress = !args.flag("quiet");
   o.overrides = args.get("set");
+  o.classes = args.get("classes");
   if (!parse_modes(args.get("mode"), &o.modes)) return usage_error("evaluate", "bad --mode '" + args.get("mode") + "'");
   if (!parse_logit_mode(args.get("logits"), &o.logits)) return usage_error("evaluate", "--logits must be synthetic or none");
   long long lim;

@@ -91,7 +91,7 @@ int cmd_inspect(int argc, char** argv) {
   const Status fits = check_map_params(cfg, map.params);
   std::printf("localizer workspace with the default config (%s for this map):\n", fits == Status::Ok ? "matches" : "DOES NOT match");
   const struct { const char* name; size_t bytes; } rows[] = {
-      {"voxel layer", b.voxel}, {"instances", b.cluster}, {"query fields", b.field}, {"triangles", b.triangle},
+      {"voxel layer", b.voxel}, {"instances", b.cluster}, {"geometric poles", b.poles}, {"query fields", b.field}, {"triangles", b.triangle},
       {"ranked matches", b.match}, {"GSF probe cache", b.gsf_cache}, {"correspondences", b.correspondence},
       {"hypotheses", b.clique}, {"refinement", b.refine}, {"other", b.other}};
   for (const auto& r : rows) std::printf("    %-18s %10.2f MB\n", r.name, r.bytes / 1e6);

@@ -20,6 +20,7 @@ int cmd_localize(int argc, char** argv) {
       {"frame", "localize only the scan with this file number (default: all)", ""},
       {"mode", "gsf or instance (GSF filter off)", "gsf"},
       {"logits", "synthetic or none", "synthetic"},
+      {"classes", "label set of the dataset's labels: auto, semantic-kitti, nuscenes or a class-table file (docs/data-formats.md)", "auto"},
   };
   if (wants_help(argc, argv)) {
     std::printf("%s", usage_text("localize", "Localize scans against a map; prints one JSON object per scan.", specs).c_str());
@@ -44,12 +45,16 @@ int cmd_localize(int argc, char** argv) {
     std::fprintf(stderr, "gsf localize: invalid map: %s\n", to_string(s));
     return 1;
   }
-  auto src = open_source(args.get("dataset"), args.get("sequence"), &s);
+  LabelSet labels;
+  if (!resolve_label_set(args.get("classes"), args.get("dataset"), args.get("sequence"), &labels, &err))
+    return usage_error("localize", err);
+  auto src = open_source(args.get("dataset"), args.get("sequence"), &s, &labels);
   if (s != Status::Ok) {
     std::fprintf(stderr, "gsf localize: cannot open sequence: %s\n", to_string(s));
     return 1;
   }
   LocalizerConfig cfg = default_config();
+  cfg.classes = labels.config_table();
   cfg.match.use_gsf = args.get("mode") == "gsf";
   std::vector<uint64_t> workspace(Localizer::required_bytes(cfg) / 8 + 2);
   port::SteadyClock clock;
@@ -65,7 +70,7 @@ int cmd_localize(int argc, char** argv) {
     if (frame >= 0 && src->frame_id(i) != frame) continue;
     found = true;
     LocalizeResult r;
-    s = read_scan(*src, i, buf.buffer(), logits, 2000000u + src->frame_id(i));
+    s = read_scan(*src, i, buf.buffer(), logits, 2000000u + src->frame_id(i), cfg.classes);
     if (s == Status::Ok) loc.localize(buf.buffer().view(), &r);
     else r.status = s;
     JsonWriter j;

@@ -1,5 +1,5 @@
 // gsf simulate --out DIR [--preset demo|tiny|suite|tiny-lattice] [--zone row|lattice|hall|avenue|auto]
-//              [--cue-density X] [--seed N] [--beams N] [--label-noise P] [--no-instance-ids]
+//              [--cue-density X] [--seed N] [--beams N] [--label-noise P] [--no-instance-ids] [--label-set semantic-kitti|nuscenes]
 #include <cstdio>
 
 #include "args.h"
@@ -20,6 +20,7 @@ int cmd_simulate(int argc, char** argv) {
       {"seed", "world seed (overrides the preset's)", ""},
       {"label-noise", "share 0..1 of points written with a confused label (pole<->trunk, terrain<->vegetation, ...)", "0"},
       {"no-instance-ids", "write labels with the instance id bits zeroed", "", true},
+      {"label-set", "labels written: semantic-kitti (labels/, uint32) or nuscenes (lidarseg/, uint8: poles, signs and trunks only as static.manmade / static.vegetation)", "semantic-kitti"},
       {"beams", "LiDAR beams (e.g. 32 or 64)", ""},
       {"blocks-x", "city blocks along x (overrides the preset)", ""},
       {"blocks-y", "city blocks along y (overrides the preset)", ""},
@@ -67,6 +68,9 @@ int cmd_simulate(int argc, char** argv) {
     return usage_error("simulate", "--label-noise must be a number in 0..1");
   cfg.label_noise = static_cast<float>(d);
   cfg.instance_ids = !args.flag("no-instance-ids");
+  if (args.get("label-set") != "semantic-kitti" && args.get("label-set") != "nuscenes")
+    return usage_error("simulate", "--label-set must be semantic-kitti or nuscenes");
+  cfg.nuscenes_labels = args.get("label-set") == "nuscenes";
   if (args.has("beams")) {
     if (!args.get_int("beams", &v, &err) || v < 2 || v > 256) return usage_error("simulate", "--beams must be 2..256");
     cfg.lidar.beams = static_cast<int>(v);

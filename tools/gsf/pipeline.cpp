@@ -6,6 +6,7 @@
 #include <memory>
 #include <sstream>
 
+#include "gsf/port/class_table_file.h"
 #include "gsf/port/nuscenes.h"
 
 namespace gsf::cli {
@@ -95,12 +96,42 @@ bool parse_logit_mode(const std::string& s, LogitMode* out) {
   return false;
 }
 
-std::unique_ptr<port::ScanSource> open_source(const std::string& root, const std::string& seq, Status* status) {
-  namespace fs = std::filesystem;
+namespace {
+bool is_nuscenes(const std::string& root, const std::string& seq) {
   std::error_code ec;
-  if (fs::is_directory(fs::path(root) / "sequences" / seq / "lidarseg", ec)) {
+  return std::filesystem::is_directory(std::filesystem::path(root) / "sequences" / seq / "lidarseg", ec);
+}
+}  // namespace
+
+bool resolve_label_set(const std::string& spec, const std::string& root, const std::string& seq, LabelSet* out,
+                       std::string* error) {
+  const bool nuscenes_data = is_nuscenes(root, seq);
+  out->name = spec == "auto" ? (nuscenes_data ? "nuscenes" : "semantic-kitti") : spec;
+  out->semantic_kitti = out->name == "semantic-kitti";
+  if (out->semantic_kitti) {
+    semantic_kitti_class_table(&out->table);
+  } else if (out->name == "nuscenes") {
+    nuscenes_lidarseg_class_table(&out->table);
+  } else {
+    port::ClassTableParseError pe;
+    const Status s = port::load_class_table(out->name, &out->table, &pe);
+    if (s != Status::Ok) {
+      *error = "class table '" + out->name + "': " + to_string(s) + " at line " + std::to_string(pe.line) +
+               ", field " + std::to_string(pe.field) + (pe.message ? std::string(": ") + pe.message : "");
+      return false;
+    }
+  }
+  out->nuscenes_raw = nuscenes_data && !out->semantic_kitti;
+  return true;
+}
+
+std::unique_ptr<port::ScanSource> open_source(const std::string& root, const std::string& seq, Status* status,
+                                              const LabelSet* labels) {
+  if (is_nuscenes(root, seq)) {
     auto src = std::make_unique<port::NuScenesLidarsegSource>();
-    *status = src->open(root, seq);
+    port::KittiReadOptions opt;
+    opt.raw_labels = labels && labels->nuscenes_raw;
+    *status = src->open(root, seq, opt);
     return src;
   }
   auto src = std::make_unique<port::SemanticKittiSource>();
@@ -108,12 +139,13 @@ std::unique_ptr<port::ScanSource> open_source(const std::string& root, const std
   return src;
 }
 
-Status read_scan(port::ScanSource& src, uint32_t index, port::ScanBuffer& buf, LogitMode mode, uint64_t scan_id) {
+Status read_scan(port::ScanSource& src, uint32_t index, port::ScanBuffer& buf, LogitMode mode, uint64_t scan_id,
+                 const ClassTable* classes) {
   const Status s = src.read(index, buf);
   if (s != Status::Ok) return s;
   if (mode == LogitMode::Synthetic && buf.logits && !buf.has_logits) {
     port::LogitModel model;
-    port::synthesize_logits(model, scan_id, buf.labels, buf.count, buf.logits, buf.labels);
+    port::synthesize_logits(model, scan_id, buf.labels, buf.count, buf.logits, buf.labels, classes);
     buf.has_logits = true;
   }
   return Status::Ok;
@@ -174,7 +206,7 @@ Status build_map(port::ScanSource& src, const LocalizerConfig& config, LogitMode
     Eigen::Isometry3d pose;
     Status s = src.pose(i, &pose);
     if (s != Status::Ok) return s;
-    s = read_scan(src, i, buf.buffer(), logits, 1000000u + src.frame_id(i));
+    s = read_scan(src, i, buf.buffer(), logits, 1000000u + src.frame_id(i), config.classes);
     if (s != Status::Ok) return s;
     s = builder.add_scan(buf.buffer().view(), pose);
     if (s != Status::Ok) return s;

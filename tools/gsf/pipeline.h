@@ -22,12 +22,29 @@ bool apply_overrides(LocalizerConfig* config, const std::string& comma_list, std
 enum class LogitMode { None, Synthetic };
 bool parse_logit_mode(const std::string& s, LogitMode* out);
 
+// The label set of a dataset's labels (--classes): "auto" (nuScenes-lidarseg for a dataset with a
+// lidarseg/ folder, else SemanticKITTI), "semantic-kitti", "nuscenes", or a class-table file
+// (port/class_table_file.h). With any set but SemanticKITTI, nuScenes scans are read with their raw
+// lidarseg ids, which the table maps.
+struct LabelSet {
+  std::string name;
+  ClassTable table;
+  bool semantic_kitti = true;  // the library default: config.classes stays nullptr
+  bool nuscenes_raw = false;
+  const ClassTable* config_table() const { return semantic_kitti ? nullptr : &table; }
+};
+bool resolve_label_set(const std::string& spec, const std::string& dataset_root, const std::string& sequence,
+                       LabelSet* out, std::string* error);
+
 // Opens a dataset sequence: SemanticKITTI layout, or nuScenes-lidarseg (lidarseg/ folder) automatically.
-std::unique_ptr<port::ScanSource> open_source(const std::string& root, const std::string& sequence, Status* status);
+std::unique_ptr<port::ScanSource> open_source(const std::string& root, const std::string& sequence, Status* status,
+                                              const LabelSet* labels = nullptr);
 
 // Reads scan `index` and, for LogitMode::Synthetic, replaces labels by the confusion model's argmax
 // ("what a network predicted") and fills logits. scan_id keeps map and query draws independent.
-Status read_scan(port::ScanSource& src, uint32_t index, port::ScanBuffer& buf, LogitMode mode, uint64_t scan_id);
+// `classes`: the label set of the scan's ids (nullptr: SemanticKITTI).
+Status read_scan(port::ScanSource& src, uint32_t index, port::ScanBuffer& buf, LogitMode mode, uint64_t scan_id,
+                 const ClassTable* classes = nullptr);
 
 struct Meta {
   bool present = false;
@@ -42,6 +59,7 @@ Meta read_meta(const std::string& dataset_root);
 // Length of a drive from its poses (sum of steps shorter than 50 m, so jumps between roads do not count).
 double path_length(port::ScanSource& src);
 
+// config.classes is the label set of src's labels.
 Status build_map(port::ScanSource& src, const LocalizerConfig& config, LogitMode logits, float road_length,
                  std::vector<uint64_t>* blob, size_t* bytes, mapping::MapBuildStats* stats, bool progress);
 

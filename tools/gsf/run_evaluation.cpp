@@ -194,7 +194,13 @@ int run_evaluation(const EvalOptions& o) {
     std::fprintf(stderr, "gsf evaluate: invalid map '%s': %s\n", o.map_path.c_str(), to_string(s));
     return 1;
   }
-  auto src = open_source(o.dataset, o.sequence, &s);
+  LabelSet labels;
+  std::string lerr;
+  if (!resolve_label_set(o.classes, o.dataset, o.sequence, &labels, &lerr)) {
+    std::fprintf(stderr, "gsf evaluate: %s\n", lerr.c_str());
+    return 2;
+  }
+  auto src = open_source(o.dataset, o.sequence, &s, &labels);
   if (s != Status::Ok || src->size() == 0) {
     std::fprintf(stderr, "gsf evaluate: cannot open query sequence '%s' under '%s': %s\n", o.sequence.c_str(),
                  o.dataset.c_str(), s == Status::Ok ? "no scans" : to_string(s));
@@ -226,6 +232,7 @@ int run_evaluation(const EvalOptions& o) {
         std::fprintf(stderr, "gsf evaluate: %s\n", oerr.c_str());
         return 2;
       }
+      lm.cfg.classes = labels.config_table();
       lm.cfg.match.use_gsf = mode != "instance";
       lm.cfg.refine.enabled = mode == "gsf+refine";
       const size_t need = Localizer::required_bytes(lm.cfg);
@@ -248,7 +255,7 @@ int run_evaluation(const EvalOptions& o) {
   for (uint32_t q = 0; q < nq && !locs.empty(); ++q) {
     Eigen::Isometry3d truth;
     src->pose(q, &truth);
-    const Status rs = read_scan(*src, q, buf.buffer(), o.logits, 2000000u + src->frame_id(q));
+    const Status rs = read_scan(*src, q, buf.buffer(), o.logits, 2000000u + src->frame_id(q), labels.config_table());
     for (LocalizerMode& lm : locs) {
       QueryRecord r;
       r.index = q;
@@ -290,7 +297,7 @@ int run_evaluation(const EvalOptions& o) {
   for (ModeRun& run : runs) {
     if (run.mode != "scan-context") continue;
     {
-      auto map_src = open_source(o.dataset, o.map_sequence, &s);
+      auto map_src = open_source(o.dataset, o.map_sequence, &s, &labels);
       if (s != Status::Ok) {
         std::fprintf(stderr, "gsf evaluate: scan-context needs the map sequence '%s': %s\n", o.map_sequence.c_str(), to_string(s));
         return 1;

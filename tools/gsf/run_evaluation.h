@@ -20,6 +20,7 @@ struct EvalOptions {
   std::string svg_dir;               // empty: no pictures
   uint32_t limit = 0;                // evaluate only the first N queries (0 = all)
   bool progress = true;
+  std::string classes = "auto";      // label set (pipeline.h resolve_label_set)
   std::string overrides;             // config overrides (name=value,...) applied to every localizer mode
 };
 

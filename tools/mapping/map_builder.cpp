@@ -9,6 +9,7 @@
 #include "gsf/fixed_vector.h"
 #include "gsf/gaussian_field.h"
 #include "gsf/instance_clustering.h"
+#include "gsf/pole_extraction.h"
 #include "gsf/map_format.h"
 #include "gsf/triangle.h"
 #include "gsf/triangle_index.h"
@@ -37,7 +38,9 @@ struct Workspace {
 
 }  // namespace
 
-MapBuilder::MapBuilder(const LocalizerConfig& config, float refine_voxel) : config_(config), refine_voxel_(refine_voxel) {
+MapBuilder::MapBuilder(const LocalizerConfig& config, float refine_voxel)
+    : config_(config), classes_(label_set(config)), refine_voxel_(refine_voxel) {
+  if (config_.classes) config_.classes = &classes_;
   scan_arena_.resize(VoxelLayer::required_bytes(config_.voxel) + 64);
 }
 
@@ -48,6 +51,7 @@ Status MapBuilder::add_scan(const ScanView& scan, const Eigen::Isometry3d& world
   VoxelLayer layer;
   Status s = layer.bind(arena, config_.voxel);
   if (s != Status::Ok) return s;
+  layer.set_classes(config_.classes);
   s = layer.build(scan, nullptr);
   if (s != Status::Ok && s != Status::CapacityExceeded) return s;
   const double vs = config_.voxel.voxel_size;
@@ -101,12 +105,21 @@ Status MapBuilder::build(std::vector<uint64_t>* blob, size_t* bytes_out, MapBuil
   vc.max_columns = nv + 16;
   ClusterConfig cc = config_.cluster;
   cc.max_instances = 65535;
+  cc.instance_classes = classes_.instance_classes();
+  if (!config_.classes) cc.instance_classes = config_.cluster.instance_classes;
+  PoleConfig pc = effective_pole_config(config_);
+  pc.max_instances = 65535;
+  const bool poles_on = (pc.pole_hosts | pc.trunk_hosts) != 0;
   const auto t_cluster = std::chrono::steady_clock::now();
-  Workspace ws(VoxelLayer::required_bytes(vc) + InstanceClustering::required_bytes(cc, vc.max_voxels) + 4096);
-  VoxelLayer layer;
+  Workspace ws(VoxelLayer::required_bytes(vc) + InstanceClustering::required_bytes(cc, vc.max_voxels) +
+               (poles_on ? PoleExtraction::required_bytes(pc, vc.max_voxels) : 0) + 4096);
+  VoxelLayer layer;  // reads the accumulated voxels' library classes as SemanticKITTI ids (below)
   InstanceClustering clusters;
-  if (layer.bind(ws.arena, vc) != Status::Ok || clusters.bind(ws.arena, cc, vc.max_voxels) != Status::Ok)
+  PoleExtraction poles;
+  if (layer.bind(ws.arena, vc) != Status::Ok || clusters.bind(ws.arena, cc, vc.max_voxels) != Status::Ok ||
+      (poles_on && poles.bind(ws.arena, pc, vc.max_voxels) != Status::Ok))
     return Status::InvalidArgument;
+  clusters.set_classes(&classes_);
   ScanView sv;
   sv.points = pts.data();
   sv.stride = 4;
@@ -118,7 +131,15 @@ Status MapBuilder::build(std::vector<uint64_t>* blob, size_t* bytes_out, MapBuil
   if (s != Status::Ok) return s;
   s = clusters.build(layer, nullptr);
   if (s != Status::Ok && s != Status::CapacityExceeded) return s;
-  const uint32_t ni = clusters.size();
+  // All map instances: the clustered ones, then the geometric poles / trunks in discovery order.
+  std::vector<Instance> found(clusters.instances(), clusters.instances() + clusters.size());
+  if (poles_on) {
+    s = poles.build(layer, nullptr);
+    if (s != Status::Ok && s != Status::CapacityExceeded) return s;
+    found.insert(found.end(), poles.instances(), poles.instances() + poles.size());
+    st.pole_instances = poles.size();
+  }
+  const uint32_t ni = static_cast<uint32_t>(found.size());
   st.instances = ni;
   st.seconds_cluster = seconds_since(t_cluster);
   if (progress) progress("clustered instances", ni, ni);
@@ -141,7 +162,7 @@ Status MapBuilder::build(std::vector<uint64_t>* blob, size_t* bytes_out, MapBuil
   std::vector<uint8_t> inst_labels(ni);
   make_probe_grid(fc, 0.0f, grid.data());
   for (uint32_t i = 0; i < ni; ++i) {
-    const Instance& in = clusters.instance(i);
+    const Instance& in = found[i];
     MapInstance& mi = instances[i];
     std::memset(&mi, 0, sizeof(mi));
     for (int k = 0; k < 3; ++k) mi.centroid[k] = centroids[3 * i + k] = in.centroid[k];
@@ -192,7 +213,7 @@ Status MapBuilder::build(std::vector<uint64_t>* blob, size_t* bytes_out, MapBuil
     std::vector<uint64_t> order;
     for (uint32_t i = 0; i < layer.size(); ++i) {
       const Voxel& v = layer.voxel(i);
-      if (stability_weight(v.label) < 1.0f) continue;
+      if (classes_.stability(v.label) < 1.0f) continue;
       const Eigen::Vector3d p(v.centroid[0], v.centroid[1], v.centroid[2]);
       const uint64_t k = world_key(p, refine_voxel_);
       auto it = cells.find(k);

@@ -25,6 +25,7 @@ struct MapBuildStats {
   uint64_t points = 0;
   uint32_t map_voxels = 0;
   uint32_t instances = 0;
+  uint32_t pole_instances = 0;  // of which geometric poles / trunks (pole_extraction.h)
   uint32_t instances_by_class[kNumClasses] = {};
   uint32_t triangles = 0;
   uint32_t index_keys = 0;
@@ -39,7 +40,9 @@ using Progress = std::function<void(const char* stage, uint64_t done, uint64_t t
 
 class MapBuilder {
  public:
-  // `config` supplies the stages' settings; its per-scan capacities are raised for the whole map.
+  // `config` supplies the stages' settings; its per-scan capacities are raised for the whole map. Its
+  // label set (config.classes, copied) maps the scans' raw labels and decides instance classes,
+  // geometric pole / trunk hosts and stabilities, as in the localizer.
   explicit MapBuilder(const LocalizerConfig& config, float refine_voxel = 1.0f);
   Status add_scan(const ScanView& scan, const Eigen::Isometry3d& world_T_lidar);
   void set_road_length(float metres) { road_length_ = metres; }
@@ -55,6 +58,7 @@ class MapBuilder {
     uint64_t count = 0;
   };
   LocalizerConfig config_;
+  ClassTable classes_;  // copy of the label set; config_.classes points here
   float refine_voxel_;
   float road_length_ = 0.0f;
   SemanticLayerConfig semantic_;

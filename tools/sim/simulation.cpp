@@ -7,6 +7,7 @@
 #include <fstream>
 
 #include "gsf/bounded_hash_map.h"
+#include "gsf/port/nuscenes.h"
 #include "gsf/port/semantic_kitti.h"
 #include "gsf/rng.h"
 
@@ -257,7 +258,9 @@ Status run_simulation(const SimConfig& c, const std::string& root, SimSummary* s
   const Raycaster* casters[2] = {&cast_map, &cast_query};
   for (int seq = 0; seq < 2; ++seq) {
     gsf::port::SemanticKittiWriter writer;
-    Status s = writer.open(root, seq == 0 ? "00" : "01");
+    gsf::port::NuScenesLidarsegWriter nus_writer;
+    std::vector<uint8_t> lidarseg;
+    Status s = c.nuscenes_labels ? nus_writer.open(root, seq == 0 ? "00" : "01") : writer.open(root, seq == 0 ? "00" : "01");
     if (s != Status::Ok) return s;
     const Drive& d = *drives[seq];
     for (uint32_t f = 0; f < d.poses.size(); ++f) {
@@ -266,12 +269,18 @@ Status run_simulation(const SimConfig& c, const std::string& root, SimSummary* s
         apply_label_noise(scan.labels.data(), scan.size(), c.label_noise,
                           gsf::mix64(scan_seed(c.world.seed, seq, f) ^ 0x4C4142454C4E4F49ULL));
       if (!c.instance_ids) strip_instance_ids(scan.labels.data(), scan.size());
-      s = writer.write_scan(f, scan.xyzi.data(), scan.labels.data(), nullptr, scan.size());
+      if (c.nuscenes_labels) {
+        lidarseg.resize(scan.size());
+        for (uint32_t i = 0; i < scan.size(); ++i) lidarseg[i] = gsf::port::kitti_to_nuscenes(scan.labels[i]);
+        s = nus_writer.write_scan(f, scan.xyzi.data(), lidarseg.data(), scan.size());
+      } else {
+        s = writer.write_scan(f, scan.xyzi.data(), scan.labels.data(), nullptr, scan.size());
+      }
       if (s != Status::Ok) return s;
       sum.points += scan.size();
       if (progress) progress(seq == 0 ? "mapping drive" : "query drive", f + 1, static_cast<uint32_t>(d.poses.size()));
     }
-    s = writer.write_poses(d.poses);
+    s = c.nuscenes_labels ? nus_writer.write_poses(d.poses) : writer.write_poses(d.poses);
     if (s != Status::Ok) return s;
   }
   sum.map_scans = static_cast<uint32_t>(map.poses.size());
@@ -318,6 +327,7 @@ Status run_simulation(const SimConfig& c, const std::string& root, SimSummary* s
        << ", \"cued_instances\": " << sum.cued_instances << ", \"zone_queries\": " << sum.zone_queries
        << ", \"near_zone_queries\": " << sum.near_zone_queries << ", \"near_zone_m\": " << kNearZone << "},\n";
   meta << "  \"sensing\": {\"label_noise\": " << c.label_noise << ", \"instance_ids\": " << (c.instance_ids ? "true" : "false")
+       << ", \"label_set\": \"" << (c.nuscenes_labels ? "nuscenes" : "semantic-kitti") << "\""
        << "},\n";
   meta << "  \"query_near_zone\": [";
   for (size_t i = 0; i < queries.near_zone.size(); ++i) meta << (i ? "," : "") << (queries.near_zone[i] ? 1 : 0);

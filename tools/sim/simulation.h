@@ -37,6 +37,10 @@ struct SimConfig {
   // mistakes), and whether labels keep the instance id in their high 16 bits.
   float label_noise = 0.0f;
   bool instance_ids = true;
+  // Label set of the written scans: false = SemanticKITTI (labels/, uint32); true = nuScenes-lidarseg
+  // (lidarseg/, uint8, kitti_to_nuscenes): poles, signs, fences and trunks lose their classes inside
+  // static.manmade / static.vegetation, as in real nuScenes data.
+  bool nuscenes_labels = false;
   static SimConfig demo();  // a few km of road, hundreds of map scans, 100+ queries
   static SimConfig tiny();  // seconds to generate, for tests
   // bench/suite.sh: a 2 x 2-block city plus the zone, cue density 0.5, ~100-150 queries, ~40 in the zone.

@@ -4,10 +4,12 @@
 #pragma once
 #include <cstdint>
 
+#include "gsf/class_table.h"
 #include "gsf/gaussian_field.h"
 #include "gsf/gsf_filter.h"
 #include "gsf/instance_clustering.h"
 #include "gsf/map_format.h"
+#include "gsf/pole_extraction.h"
 #include "gsf/pose_hypotheses.h"
 #include "gsf/refine.h"
 #include "gsf/status.h"
@@ -56,8 +58,18 @@ struct VerifyConfig {
 
 struct LocalizerConfig {
   uint32_t max_scan_points = 262144;  // larger scans are rejected with CapacityExceeded
+  // The label set of the scans' raw label ids (class_table.h). nullptr: SemanticKITTI, with
+  // cluster.instance_classes as the instance classes. With a table, its roles decide: instance classes
+  // (cluster.instance_classes is ignored), pole / trunk hosts (poles.pole_hosts / trunk_hosts are
+  // replaced) and class stabilities. Read during required_bytes(), budget() and init() only: init()
+  // copies the table into the workspace, so the caller's table need not outlive it. The map records
+  // the table's id; a localizer with another table gets ConfigMismatch.
+  const ClassTable* classes = nullptr;
   VoxelConfig voxel;
   ClusterConfig cluster;
+  // Geometric pole / trunk instances (pole_extraction.h); runs only when the label set has host
+  // classes (nuScenes-lidarseg: static.manmade, static.vegetation), else costs nothing.
+  PoleConfig poles;
   FieldConfig field;
   TriangleConfig triangle;
   MatchConfig match;
@@ -68,6 +80,13 @@ struct LocalizerConfig {
 };
 
 Status validate(const LocalizerConfig& config);
+// The label set in effect: *config.classes, or the built-in SemanticKITTI table.
+const ClassTable& label_set(const LocalizerConfig& config);
+// Instance labels a map built with this config can hold: the label set's instance classes, plus kPole /
+// kTrunk when it has pole / trunk hosts.
+ClassMask instance_label_mask(const LocalizerConfig& config);
+// The pole-extraction settings in effect (hosts and stabilities from the label set).
+PoleConfig effective_pole_config(const LocalizerConfig& config);
 // The parameters a map built for this config records (and a localizer checks).
 MapParams map_params_from(const LocalizerConfig& config);
 // Ok if a map built with `params` can serve a localizer with `config`.

@@ -50,6 +50,9 @@ class GsfFilter {
   // that fits them and must outlive the filter.
   Status bind(Arena& arena, const GsfFilterConfig& config, const FieldConfig& field, FieldSolver* solver);
   void reset();  // forget the caches (a new scan)
+  // Class weights of the W2 sum (default after bind: stability_weight(), paper Table III); a label set
+  // with its own stabilities sets them here (copied).
+  void set_class_weights(const float* weights) { for (int c = 0; c < kNumClasses; ++c) weights_[c] = weights[c]; }
   float similarity(const QueryFields& fields, uint32_t qi, const MapView& map, uint32_t mi, uint32_t yaw_bin);
 
   uint32_t probes() const { return probe_used_ + probe_overflow_; }

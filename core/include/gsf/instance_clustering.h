@@ -16,6 +16,7 @@
 #include <cstdint>
 
 #include "gsf/arena.h"
+#include "gsf/class_table.h"
 #include "gsf/semantic_classes.h"
 #include "gsf/status.h"
 #include "gsf/voxel_layer.h"
@@ -55,6 +56,9 @@ class InstanceClustering {
   static size_t required_bytes(const ClusterConfig& config, uint32_t max_voxels);
   Status bind(Arena& arena, const ClusterConfig& config, uint32_t max_voxels);
   Status build(const VoxelLayer& voxels, ClusterStats* stats);
+  // Stability of each instance's class from this label set (not copied); nullptr (the default):
+  // stability_weight(), the library's Table III.
+  void set_classes(const ClassTable* table) { classes_ = table; }
 
   uint32_t size() const { return count_; }
   const Instance& instance(uint32_t i) const { return instances_[i]; }
@@ -64,6 +68,7 @@ class InstanceClustering {
 
  private:
   ClusterConfig config_{};
+  const ClassTable* classes_ = nullptr;
   Instance* instances_ = nullptr;
   uint32_t* queue_ = nullptr;
   uint32_t* voxel_instance_ = nullptr;  // during build: component id; after: kept instance id

@@ -1,6 +1,6 @@
 // The Localizer facade: init(config, map, buffer) once, then localize(scan) -> LocalizeResult, with no
 // heap use, no exceptions and bounded work per call. Stages (one file each) run in a fixed order:
-//   voxel layer -> instances -> query fields -> triangles -> ranked index matches -> GSF filter ->
+//   voxel layer -> instances (+ geometric poles) -> query fields -> triangles -> ranked index matches -> GSF filter ->
 //   correspondences (ranked) -> pose hypotheses (peeled max cliques + TLS) -> whole-scan verification
 //   -> ambiguity -> optional refinement
 #pragma once
@@ -44,6 +44,8 @@ struct LocalizeResult {
   // the answer's score, and at least min_inliers / inliers (weak support). 0 = unambiguous, 1 = a
   // different pose is as well supported, or the answer rests on the bare minimum (decline to answer).
   double ambiguity = 1.0;
+  uint32_t pole_instances = 0;          // geometric pole / trunk instances among query_instances
+  uint32_t pole_instances_dropped = 0;  // ... not kept because cluster.max_instances was full
   uint32_t query_instances = 0, query_triangles = 0, triangle_matches = 0, gsf_survivors = 0, correspondences = 0;
   // What each cap dropped (all ranked before cutting), so a failure can be traced to a cap.
   uint32_t match_candidates = 0;        // map triangles accepted by labels and sides, before the per-triangle cap
@@ -76,7 +78,7 @@ class Localizer {
   // The same total broken down by stage (for memory budgets). Recorded by the one layout function while
   // it binds, so the parts always sum to required_bytes (other = the Impl object and its alignment).
   struct Budget {
-    size_t voxel, cluster, field, triangle, match, gsf_cache, correspondence, clique, refine, other, total;
+    size_t voxel, cluster, poles, field, triangle, match, gsf_cache, correspondence, clique, refine, other, total;
   };
   static Budget budget(const LocalizerConfig& config);
 

@@ -15,6 +15,7 @@
 
 #include "gsf/arena.h"
 #include "gsf/bounded_hash_map.h"
+#include "gsf/class_table.h"
 #include "gsf/status.h"
 #include "gsf/voxel_layer.h"
 
@@ -45,11 +46,16 @@ class Refiner {
   // Indexes the map points (x, y, z, label) x n and estimates normals. InvalidArgument if n exceeds capacity.
   Status set_map(const float* points, uint32_t n);
   Status refine(const VoxelLayer& query, const Eigen::Isometry3d& initial, Eigen::Isometry3d* refined, RefineStats* stats);
+  // Which classes are long-term (stability 1) from this label set (not copied); nullptr (the default):
+  // stability_weight().
+  void set_classes(const ClassTable* table) { classes_ = table; }
 
  private:
+  bool long_term(int label) const { return (classes_ ? classes_->stability(label) : stability_weight(label)) >= 1.0f; }
   struct Cell { uint32_t begin, count; };
   uint64_t cell_key(float x, float y, float z) const;
   RefineConfig config_{};
+  const ClassTable* classes_ = nullptr;
   BoundedHashMap<Cell> cells_;
   uint32_t* order_ = nullptr;   // map point ids grouped by cell
   float* points_ = nullptr;     // n x 3 (copied for locality)

@@ -3,7 +3,8 @@
 // 2-D column index for radius gathers (the neighbourhood each instance's field is trained on).
 //
 // Per point: non-finite -> counted and skipped; range outside [min_range, max_range] -> skipped;
-// label -> class_from_kitti: ignored classes skipped, unknown ids counted and skipped; probability =
+// label -> library class through the label set's ClassTable (set_classes; without one,
+// class_from_kitti, i.e. SemanticKITTI): ignored classes skipped, unknown ids counted and skipped; probability =
 // softmax(logits) when the scan carries logits, else one-hot of the label.
 // Voxels are stored densely in order of first insertion (scan point order), so the layer is deterministic.
 // Capacity: when max_voxels is reached, points that fall into existing voxels still accumulate and
@@ -20,6 +21,7 @@
 
 #include "gsf/arena.h"
 #include "gsf/bounded_hash_map.h"
+#include "gsf/class_table.h"
 #include "gsf/scan.h"
 #include "gsf/semantic_classes.h"
 #include "gsf/status.h"
@@ -54,6 +56,9 @@ class VoxelLayer {
   static size_t required_bytes(const VoxelConfig& config);
   Status bind(Arena& arena, const VoxelConfig& config);
   Status build(const ScanView& scan, VoxelStats* stats);
+  // The label set of the scans' raw label ids (not copied: it must outlive the layer's use); nullptr
+  // (the default) means SemanticKITTI ids through class_from_kitti().
+  void set_classes(const ClassTable* table) { classes_ = table; }
 
   uint32_t size() const { return count_; }
   const Voxel& voxel(uint32_t i) const { return voxels_[i]; }
@@ -82,6 +87,7 @@ class VoxelLayer {
   uint32_t build_columns();  // returns the number of voxels left unindexed
 
   VoxelConfig config_{};
+  const ClassTable* classes_ = nullptr;
   Voxel* voxels_ = nullptr;
   BoundedHashMap<uint32_t> index_;     // voxel key -> voxel index
   BoundedHashMap<ColumnCell> columns_; // column key -> range in column_members_

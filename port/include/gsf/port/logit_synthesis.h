@@ -10,6 +10,8 @@
 #pragma once
 #include <cstdint>
 
+#include "gsf/class_table.h"
+
 namespace gsf::port {
 
 struct LogitModel {
@@ -25,7 +27,10 @@ float confusion_probability(int dense_class);
 int confusion_partner_count(int dense_class);
 int confusion_partner(int dense_class, int k);
 
+// `labels` are raw ids of `classes` (nullptr: SemanticKITTI ids). The relabelled ids are raw ids of the
+// same label set: the predicted library class's lowest raw id (the label is kept when no raw id maps
+// to the predicted class, or for ignored and unknown labels); high 16 bits (instance ids) are kept.
 void synthesize_logits(const LogitModel& model, uint64_t scan_id, const uint32_t* labels, uint32_t count,
-                       float* out_logits, uint32_t* relabel_out_or_null);
+                       float* out_logits, uint32_t* relabel_out_or_null, const ClassTable* classes = nullptr);
 
 }  // namespace gsf::port

@@ -17,6 +17,9 @@ struct KittiReadOptions {
   bool require_labels = true;
   bool load_logits = true;        // when logits/ exists
   bool drop_non_finite = false;   // false: a NaN/Inf point rejects the scan with InvalidInput
+  // nuScenes-lidarseg only: keep the raw lidarseg class (0..30) as the label instead of mapping it to
+  // a SemanticKITTI id; use with nuscenes_lidarseg_class_table() (or a user table of lidarseg ids).
+  bool raw_labels = false;
 };
 
 // Parses one scan from memory (what read() does after loading the files): .bin bytes, .label bytes
