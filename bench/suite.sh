@@ -13,6 +13,8 @@
 #   --jobs N                  worlds in parallel (env SUITE_JOBS; default 2)
 #   --preset NAME             simulate preset (default suite; tiny-lattice for a smoke run)
 #   --label-noise P           (default 0.03)    --instance-ids   keep instance ids (default: zeroed)
+#   --label-set NAME          labels the worlds are written with: semantic-kitti (default) or nuscenes
+#                             (no pole, trunk, sign or fence class; build-map/evaluate pick the table)
 #   --modes LIST              evaluate modes (default instance,gsf)
 #   --gsf PATH                gsf binary (default: build the release preset, use build/release/tools/gsf)
 #   --sim-gsf PATH            gsf binary for `simulate` only (default: --gsf), e.g. to run another
@@ -28,6 +30,7 @@ set_overrides=${SUITE_SET:-}
 jobs=${SUITE_JOBS:-2}
 preset=suite
 label_noise=0.03
+label_set=semantic-kitti
 ids_flag=--no-instance-ids
 modes=instance,gsf
 gsf=""
@@ -42,6 +45,7 @@ while [ $# -gt 0 ]; do
     --jobs) jobs=$2; shift 2 ;;
     --preset) preset=$2; shift 2 ;;
     --label-noise) label_noise=$2; shift 2 ;;
+    --label-set) label_set=$2; shift 2 ;;
     --instance-ids) ids_flag=""; shift ;;
     --modes) modes=$2; shift 2 ;;
     --gsf) gsf=$2; shift 2 ;;
@@ -72,7 +76,7 @@ run_world() {
   rm -rf "$d" && mkdir -p "$d"
   local t0=$SECONDS
   {
-    "$sim_gsf" simulate --preset "$preset" --zone "$zone" --seed "$seed" --label-noise "$label_noise" $ids_flag \
+    "$sim_gsf" simulate --preset "$preset" --zone "$zone" --seed "$seed" --label-noise "$label_noise" $ids_flag $label_set_flag \
       --out "$d/dataset" --quiet &&
     "$gsf" build-map --dataset "$d/dataset" --out "$d/map.gsfmap" "${set_args[@]}" --quiet &&
     "$gsf" evaluate --map "$d/map.gsfmap" --dataset "$d/dataset" --mode "$modes" --json "$d/results.json" \
@@ -84,12 +88,14 @@ run_world() {
   echo "suite: $zone seed $seed done in $((SECONDS - t0)) s" >&2
 }
 export -f run_world
-export out gsf sim_gsf preset label_noise ids_flag modes set_overrides keep
+label_set_flag=""
+[ "$label_set" != semantic-kitti ] && label_set_flag="--label-set $label_set"
+export out gsf sim_gsf preset label_noise label_set_flag ids_flag modes set_overrides keep
 
 start=$SECONDS
 n=0
 for z in $zones; do for s in $seeds; do n=$((n + 1)); done; done
-echo "suite: $n worlds ($zones) x seeds ($seeds), preset $preset, label noise $label_noise${ids_flag:+, no instance ids}${set_overrides:+, --set $set_overrides}, $jobs in parallel -> $out" >&2
+echo "suite: $n worlds ($zones) x seeds ($seeds), preset $preset, label noise $label_noise, $label_set labels${ids_flag:+, no instance ids}${set_overrides:+, --set $set_overrides}, $jobs in parallel -> $out" >&2
 status=0
 for z in $zones; do for s in $seeds; do printf '%s %s\n' "$z" "$s"; done; done |
   xargs -P "$jobs" -n 2 bash -c 'run_world "$0" "$1"' || status=1

@@ -470,10 +470,11 @@ Status Localizer::localize(const ScanView& scan, LocalizeResult* out_ptr) {
   const uint32_t H = im.hypotheses.size();
   const bool verify = cfg.verify.enabled && !im.semantic.empty();
   uint32_t best = 0, second = UINT32_MAX;
+  uint8_t full_scored[PoseHypotheses::kMaxHypotheses] = {};
   if (verify) {
     // Coarse score for every hypothesis, the full score for the best `full_top`, then the best
     // `refine_top` at their best local alignment. Each step ranks, then caps.
-    uint8_t full[PoseHypotheses::kMaxHypotheses];
+    uint8_t* full = full_scored;
     uint32_t top[PoseHypotheses::kMaxHypotheses];
     const uint32_t coarse_points = std::max<uint32_t>(1, cfg.verify.max_points / cfg.verify.coarse_divisor);
     for (uint32_t h = 0; h < H; ++h) {
@@ -524,6 +525,10 @@ Status Localizer::localize(const ScanView& scan, LocalizeResult* out_ptr) {
     r.support = static_cast<float>(p.support);
     r.verified_score = p.verification.score;
     r.verified_voxels = p.verification.scored;
+    r.verified_agree = p.verification.agree;
+    r.verified_disagree = p.verification.disagree;
+    r.verified_unknown = p.verification.unknown;
+    r.fully_verified = verify && full_scored[shown[k]];
   }
   // Weak support is ambiguity too: an answer resting on k inliers is at least min_inliers / k ambiguous
   // (a bare-minimum clique with nothing competing is still a guess).

@@ -72,6 +72,10 @@ void write_result_diagnostics(JsonWriter& j, const LocalizeResult& x, const Quer
     j.field("support", p.support);
     j.field("verified_score", p.verified_score);
     j.field("verified_voxels", p.verified_voxels);
+    j.field("verified_agree", p.verified_agree);
+    j.field("verified_disagree", p.verified_disagree);
+    j.field("verified_unknown", p.verified_unknown);
+    j.field("fully_verified", p.fully_verified);
     if (truth) {
       const double dx = p.x - truth->truth.translation().x(), dy = p.y - truth->truth.translation().y();
       j.field("distance_to_truth_m", std::sqrt(dx * dx + dy * dy));

@@ -31,6 +31,9 @@ struct HypothesisReport {
   float support = 0;                 // sum of inlier weights
   float verified_score = 0;          // agree - disagree (semantic_grid.h); 0 without verification
   uint32_t verified_voxels = 0;      // voxels that landed on known cells
+  float verified_agree = 0, verified_disagree = 0;  // the score's two stability-weighted parts
+  uint32_t verified_unknown = 0;     // sampled voxels that landed outside the map's semantic layer
+  bool fully_verified = false;       // scored on verify.max_points (else only the coarse sample)
 };
 constexpr uint32_t kMaxReportedHypotheses = 16;  // the best by verified score (all of them when fewer)
 
