@@ -92,6 +92,7 @@ struct Localizer::Impl {
   float* w = nullptr;                 // C weights
   uint32_t selected = 0;              // correspondences given to the hypothesis stage in the last call
   uint32_t chosen = 0;                // the answer's hypothesis in the last call (UINT32_MAX: none)
+  uint32_t instance_count = 0;        // query instances of the last call
 };
 
 // The one layout of the workspace: run on a counting arena by required_bytes and budget, and on the
@@ -244,6 +245,7 @@ Status Localizer::localize(const ScanView& scan, LocalizeResult* out_ptr) {
   const LocalizerConfig& cfg = config_;
   im.selected = 0;
   im.chosen = UINT32_MAX;
+  im.instance_count = 0;
   const uint64_t t_start = now(clock_);
   uint64_t t = t_start;
   auto lap = [&](uint64_t* field) {
@@ -301,7 +303,7 @@ Status Localizer::localize(const ScanView& scan, LocalizeResult* out_ptr) {
       ++out.pole_instances;
     }
   }
-  out.query_instances = n;
+  out.query_instances = im.instance_count = n;
   lap(&out.times.cluster);
   if (n < 3) return finish(Status::NoSolution);
 
@@ -494,9 +496,21 @@ Status Localizer::localize(const ScanView& scan, LocalizeResult* out_ptr) {
           verify_pose_refined(im.voxels, im.semantic, im.hypotheses[top[k]].map_T_scan, cfg.verify.max_points,
                               im.weights, cfg.verify.refine_rounds, cfg.verify.refine_step_m,
                               cfg.verify.refine_step_deg, nullptr);
-    nt = top_by_score(im.hypotheses, H, full, 2, top);  // answer and runner-up among fully scored ones
+    // The answer, and as runner-up the best fully scored hypothesis at another place or heading: a
+    // near-twin of the answer (within hypotheses.same_pose_m and same_pose_deg in the bird's-eye view
+    // the verification sees) is the same answer, not a rival.
+    nt = top_by_score(im.hypotheses, H, full, H, top);
     best = nt > 0 ? top[0] : 0;
-    second = nt > 1 ? top[1] : UINT32_MAX;
+    const Eigen::Isometry3d& a = im.hypotheses[best].map_T_scan;
+    const double yaw_a = std::atan2(a.linear()(1, 0), a.linear()(0, 0));
+    const double same_rad = double(cfg.hypotheses.same_pose_deg) / kRadToDeg;
+    for (uint32_t k = 1; k < nt && second == UINT32_MAX; ++k) {
+      const Eigen::Isometry3d& b = im.hypotheses[top[k]].map_T_scan;
+      const double dx = b.translation().x() - a.translation().x(), dy = b.translation().y() - a.translation().y();
+      double dyaw = std::fabs(std::atan2(b.linear()(1, 0), b.linear()(0, 0)) - yaw_a);
+      if (dyaw > 3.14159265358979323846) dyaw = 2.0 * 3.14159265358979323846 - dyaw;
+      if (std::sqrt(dx * dx + dy * dy) > cfg.hypotheses.same_pose_m || dyaw > same_rad) second = top[k];
+    }
   } else {
     second = H > 1 ? 1 : UINT32_MAX;
   }
@@ -544,11 +558,14 @@ Status Localizer::localize(const ScanView& scan, LocalizeResult* out_ptr) {
     }
   }
   // A verified answer that agrees poorly with the map is doubtful even without a rival (its true
-  // competitor may simply not be among the hypotheses): agreement per scored voxel below
-  // quality_high adds ambiguity, reaching 1 at quality_low.
+  // competitor may simply not be among the hypotheses): its agreement below quality_high adds
+  // ambiguity, reaching 1 at quality_low. Agreement is (agree - disagree) / (agree + disagree) of the
+  // stability weights, 1 when every scored voxel agrees: a share, so a scan of mostly half-weight
+  // classes (vegetation, cars, terrain) is not judged worse than one of buildings and road.
   double quality = 0.0;
+  const double weight = double(answer.verification.agree) + answer.verification.disagree;
   if (verify && answer.verification.scored > 0) {
-    const double q = double(answer.verification.score) / answer.verification.scored;
+    const double q = weight > 0 ? (double(answer.verification.agree) - answer.verification.disagree) / weight : -1.0;
     quality = (double(cfg.verify.quality_high) - q) / (double(cfg.verify.quality_high) - cfg.verify.quality_low);
   }
   out.ambiguity = std::min(1.0, std::max({rival, support, quality}));
@@ -570,6 +587,16 @@ Status Localizer::localize(const ScanView& scan, LocalizeResult* out_ptr) {
 PoseVerification Localizer::score_pose(const Eigen::Isometry3d& map_T_scan) const {
   if (!impl_) return PoseVerification();
   return verify_pose(impl_->voxels, impl_->semantic, map_T_scan, config_.verify.max_points, impl_->weights);
+}
+
+uint32_t Localizer::last_instances(float* xyz, uint8_t* labels, uint32_t max) const {
+  if (!impl_) return 0;
+  const Impl& im = *impl_;
+  for (uint32_t i = 0; i < im.instance_count && i < max; ++i) {
+    for (int k = 0; k < 3; ++k) xyz[3 * i + k] = im.centroids[3 * i + k];
+    labels[i] = im.labels[i];
+  }
+  return im.instance_count;
 }
 
 uint32_t Localizer::last_correspondences(Correspondence* out, uint32_t max) const {

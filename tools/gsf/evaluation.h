@@ -45,6 +45,7 @@ struct QueryRecord {
   Eigen::Isometry3d estimate = Eigen::Isometry3d::Identity();
   Eigen::Isometry3d truth = Eigen::Isometry3d::Identity();
   LocalizeResult result;     // the library's own counts for this query (diagnostics)
+  uint32_t repeatable_instances = 0;  // query instances with a same-label map instance < 2 m under the truth
   uint32_t true_correspondences = 0;  // selected correspondences the ground truth agrees with (< 2 m)
   double truth_verified_score = 0;    // the ground-truth pose's whole-scan verification score
 };

@@ -56,6 +56,7 @@ void write_result_diagnostics(JsonWriter& j, const LocalizeResult& x, const Quer
   j.field("chosen_hypothesis", x.chosen_hypothesis);
   if (truth) {
     j.field("true_correspondences", truth->true_correspondences);
+    j.field("repeatable_instances", truth->repeatable_instances);
     j.field("truth_verified_score", truth->truth_verified_score);
   }
   write_stage_ms(j, "stage_ms", stage_ms(x.times));

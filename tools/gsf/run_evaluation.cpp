@@ -35,6 +35,7 @@ void write_diagnostics(JsonWriter& j, const QueryRecord& r) {
   QueryTruth t;
   t.truth = r.truth;
   t.true_correspondences = r.true_correspondences;
+  t.repeatable_instances = r.repeatable_instances;
   t.truth_verified_score = r.truth_verified_score;
   write_result_diagnostics(j, r.result, &t);
 }
@@ -286,6 +287,21 @@ int run_evaluation(const EvalOptions& o) {
         const Eigen::Vector3d qw = truth * Eigen::Vector3d(corr[k].query_xyz[0], corr[k].query_xyz[1], corr[k].query_xyz[2]);
         const float* m = map.instances[corr[k].map_instance].centroid;
         if ((qw - Eigen::Vector3d(m[0], m[1], m[2])).norm() < 2.0) ++r.true_correspondences;
+      }
+      {
+        float qxyz[3 * 1024];
+        uint8_t qlab[1024];
+        const uint32_t ni = std::min<uint32_t>(lm.loc->last_instances(qxyz, qlab, 1024), 1024);
+        for (uint32_t i = 0; i < ni; ++i) {
+          const Eigen::Vector3d qw = truth * Eigen::Vector3d(qxyz[3 * i], qxyz[3 * i + 1], qxyz[3 * i + 2]);
+          for (uint32_t m = 0; m < map.counts.instances; ++m) {  // host tool: a linear scan is fine
+            const float* c = map.instances[m].centroid;
+            if (map.instances[m].label == qlab[i] && (qw - Eigen::Vector3d(c[0], c[1], c[2])).norm() < 2.0) {
+              ++r.repeatable_instances;
+              break;
+            }
+          }
+        }
       }
       if (res.status == Status::Ok) r.truth_verified_score = lm.loc->score_pose(truth).score;
       runs[lm.run].corr.emplace_back(corr.begin(), corr.begin() + std::min<size_t>(nc, corr.size()));

@@ -102,6 +102,9 @@ class Localizer {
     bool in_clique;
   };
   uint32_t last_correspondences(Correspondence* out, uint32_t max) const;
+  // The query instances of the last localize() (clustered, then geometric poles): up to `max`
+  // centroids (x, y, z in the scan frame) and labels; returns how many there were.
+  uint32_t last_instances(float* xyz, uint8_t* labels, uint32_t max) const;
   // Whole-scan verification of any pose against the last scan (diagnostics: how the ground truth would
   // have scored). Zero scores without a map semantic layer or before the first localize().
   PoseVerification score_pose(const Eigen::Isometry3d& map_T_scan) const;
