@@ -80,6 +80,7 @@ struct Localizer::Impl {
   float* gather_targets = nullptr;
   uint8_t* gather_labels = nullptr;
   float weights[kNumClasses];
+  float verify_weights[kNumClasses];  // weights with this scan's rarity weighting (verification)
   uint32_t* heading_votes = nullptr;  // yaw bins
   uint8_t* heading_allowed = nullptr; // yaw bins
   // Correspondences.
@@ -93,6 +94,8 @@ struct Localizer::Impl {
   uint32_t selected = 0;              // correspondences given to the hypothesis stage in the last call
   uint32_t chosen = 0;                // the answer's hypothesis in the last call (UINT32_MAX: none)
   uint32_t instance_count = 0;        // query instances of the last call
+  Eigen::Isometry3d* refined_pose = nullptr;  // verify.refine_top: poses the pattern search chose
+  uint32_t* refined_id = nullptr;             // verify.refine_top: their hypotheses
 };
 
 // The one layout of the workspace: run on a counting arena by required_bytes and budget, and on the
@@ -150,6 +153,8 @@ Status Localizer::bind_workspace(Arena& ar, const LocalizerConfig& config, Impl&
   im.w = ar.allocate<float>(C);
   record(&b.correspondence);
   if (im.hypotheses.bind(ar, C, config.hypotheses.max_hypotheses) != Status::Ok) return Status::InvalidArgument;
+  im.refined_pose = ar.allocate<Eigen::Isometry3d>(config.verify.refine_top);
+  im.refined_id = ar.allocate<uint32_t>(config.verify.refine_top);
   record(&b.clique);
   if (config.refine.enabled && im.refiner.bind(ar, config.refine) != Status::Ok) return Status::InvalidArgument;
   record(&b.refine);
@@ -216,7 +221,7 @@ Status Localizer::init(const LocalizerConfig& config, const MapView& map, void* 
     im.clusters.set_classes(&im.classes);
     im.refiner.set_classes(&im.classes);
   }
-  for (int c = 0; c < kNumClasses; ++c) im.weights[c] = im.classes.stability(c);
+  for (int c = 0; c < kNumClasses; ++c) im.verify_weights[c] = im.weights[c] = im.classes.stability(c);
   im.gsf.set_class_weights(im.weights);
   im.index.keys = map.index_keys;
   im.index.offsets = map.index_offsets;
@@ -473,6 +478,25 @@ Status Localizer::localize(const ScanView& scan, LocalizeResult* out_ptr) {
   const bool verify = cfg.verify.enabled && !im.semantic.empty();
   uint32_t best = 0, second = UINT32_MAX;
   uint8_t full_scored[PoseHypotheses::kMaxHypotheses] = {};
+  Eigen::Isometry3d* refined_pose = im.refined_pose;  // verify.refine_top of them
+  uint32_t* refined_id = im.refined_id;
+  uint32_t refined_count = 0;
+  for (int c = 0; c < kNumClasses; ++c) im.verify_weights[c] = im.weights[c];
+  if (verify && cfg.verify.rarity_exponent > 0.0f) {
+    uint32_t counts[kNumClasses] = {};
+    const uint32_t nv = im.voxels.size(), stride = (nv + cfg.verify.max_points - 1) / cfg.verify.max_points;
+    uint32_t total = 0;
+    for (uint32_t i = 0; i < nv; i += stride, ++total) ++counts[im.voxels.voxel(i).label];
+    double mass = 0.0, scaled = 0.0;
+    for (int c = 0; c < kNumClasses; ++c) {
+      if (counts[c] == 0) continue;
+      im.verify_weights[c] = im.weights[c] * static_cast<float>(std::pow(double(counts[c]) / total, -double(cfg.verify.rarity_exponent)));
+      mass += double(im.weights[c]) * counts[c];
+      scaled += double(im.verify_weights[c]) * counts[c];
+    }
+    if (scaled > 0.0)
+      for (int c = 0; c < kNumClasses; ++c) im.verify_weights[c] = static_cast<float>(im.verify_weights[c] * (mass / scaled));
+  }
   if (verify) {
     // Coarse score for every hypothesis, the full score for the best `full_top`, then the best
     // `refine_top` at their best local alignment. Each step ranks, then caps.
@@ -481,21 +505,24 @@ Status Localizer::localize(const ScanView& scan, LocalizeResult* out_ptr) {
     const uint32_t coarse_points = std::max<uint32_t>(1, cfg.verify.max_points / cfg.verify.coarse_divisor);
     for (uint32_t h = 0; h < H; ++h) {
       im.hypotheses[h].verification =
-          verify_pose(im.voxels, im.semantic, im.hypotheses[h].map_T_scan, coarse_points, im.weights);
+          verify_pose(im.voxels, im.semantic, im.hypotheses[h].map_T_scan, coarse_points, im.verify_weights);
       full[h] = 0;
     }
     uint32_t nt = top_by_score(im.hypotheses, H, nullptr, cfg.verify.full_top, top);
     for (uint32_t k = 0; k < nt; ++k) {
       im.hypotheses[top[k]].verification =
-          verify_pose(im.voxels, im.semantic, im.hypotheses[top[k]].map_T_scan, cfg.verify.max_points, im.weights);
+          verify_pose(im.voxels, im.semantic, im.hypotheses[top[k]].map_T_scan, cfg.verify.max_points, im.verify_weights);
       full[top[k]] = 1;
     }
     nt = cfg.verify.refine_rounds > 0 ? top_by_score(im.hypotheses, H, full, cfg.verify.refine_top, top) : 0;
-    for (uint32_t k = 0; k < nt; ++k)
+    refined_count = nt;
+    for (uint32_t k = 0; k < nt; ++k) {
+      refined_id[k] = top[k];
       im.hypotheses[top[k]].verification =
           verify_pose_refined(im.voxels, im.semantic, im.hypotheses[top[k]].map_T_scan, cfg.verify.max_points,
-                              im.weights, cfg.verify.refine_rounds, cfg.verify.refine_step_m,
-                              cfg.verify.refine_step_deg, nullptr);
+                              im.verify_weights, cfg.verify.refine_rounds, cfg.verify.refine_step_m,
+                              cfg.verify.refine_step_deg, &refined_pose[k]);
+    }
     // The answer, and as runner-up the best fully scored hypothesis at another place or heading: a
     // near-twin of the answer (within hypotheses.same_pose_m and same_pose_deg in the bird's-eye view
     // the verification sees) is the same answer, not a rival.
@@ -562,10 +589,19 @@ Status Localizer::localize(const ScanView& scan, LocalizeResult* out_ptr) {
   // ambiguity, reaching 1 at quality_low. Agreement is (agree - disagree) / (agree + disagree) of the
   // stability weights, 1 when every scored voxel agrees: a share, so a scan of mostly half-weight
   // classes (vegetation, cars, terrain) is not judged worse than one of buildings and road.
+  // With rarity weighting the agreement is taken with the plain stability weights (at the pose the
+  // verification chose), so rare classes' label noise does not read as disagreement.
   double quality = 0.0;
-  const double weight = double(answer.verification.agree) + answer.verification.disagree;
-  if (verify && answer.verification.scored > 0) {
-    const double q = weight > 0 ? (double(answer.verification.agree) - answer.verification.disagree) / weight : -1.0;
+  PoseVerification plain = answer.verification;
+  if (verify && cfg.verify.rarity_exponent > 0.0f) {
+    const Eigen::Isometry3d* at = &answer.map_T_scan;
+    for (uint32_t k = 0; k < refined_count; ++k)
+      if (refined_id[k] == best) at = &refined_pose[k];
+    plain = verify_pose(im.voxels, im.semantic, *at, cfg.verify.max_points, im.weights);
+  }
+  const double weight = double(plain.agree) + plain.disagree;
+  if (verify && plain.scored > 0) {
+    const double q = weight > 0 ? (double(plain.agree) - plain.disagree) / weight : -1.0;
     quality = (double(cfg.verify.quality_high) - q) / (double(cfg.verify.quality_high) - cfg.verify.quality_low);
   }
   out.ambiguity = std::min(1.0, std::max({rival, support, quality}));
@@ -586,7 +622,7 @@ Status Localizer::localize(const ScanView& scan, LocalizeResult* out_ptr) {
 
 PoseVerification Localizer::score_pose(const Eigen::Isometry3d& map_T_scan) const {
   if (!impl_) return PoseVerification();
-  return verify_pose(impl_->voxels, impl_->semantic, map_T_scan, config_.verify.max_points, impl_->weights);
+  return verify_pose(impl_->voxels, impl_->semantic, map_T_scan, config_.verify.max_points, impl_->verify_weights);
 }
 
 uint32_t Localizer::last_instances(float* xyz, uint8_t* labels, uint32_t max) const {

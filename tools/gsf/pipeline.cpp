@@ -53,6 +53,7 @@ bool apply_override(LocalizerConfig* c, const std::string& a, std::string* error
       {"verify.margin_scale", &c->verify.margin_scale, nullptr},
       {"verify.quality_low", &c->verify.quality_low, nullptr},
       {"verify.quality_high", &c->verify.quality_high, nullptr},
+      {"verify.rarity_exponent", &c->verify.rarity_exponent, nullptr},
       {"verify.refine_top", nullptr, &c->verify.refine_top},
       {"verify.full_top", nullptr, &c->verify.full_top},
       {"verify.coarse_divisor", nullptr, &c->verify.coarse_divisor},

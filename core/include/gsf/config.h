@@ -55,6 +55,10 @@ struct VerifyConfig {
   // (semantic_grid.h: verify_pose_refined), so a near-truth clique pose is compared at its best.
   uint32_t refine_top = 4;
   uint32_t refine_rounds = 3;
+  // Rarity weighting: each class's weight is scaled by (its share of the scan's sampled voxels)^-e, then
+  // all are rescaled to keep the total weight, so the few voxels of rare classes (the cues beside
+  // repeated objects) count for more than the road and rows that agree at every lattice shift. 0 = off.
+  float rarity_exponent = 0.5f;
   float refine_step_m = 0.4f;
   float refine_step_deg = 0.8f;
 };
