@@ -77,13 +77,25 @@ Status PoseHypotheses::generate(const float* a, const float* b, const float* w, 
   };
   // Records a hypothesis unless it repeats an earlier one; mask_/sub_w_ describe its TLS solve (m rows).
   const double max_tilt = double(c.max_tilt_deg) * 3.14159265358979323846 / 180.0;
-  auto record = [&](const TlsResult& tls, uint32_t core_size, uint32_t m) {
-    // Upright prior: a vehicle's sensor is within max_tilt of level; a pose tilted further is a
-    // degenerate solve (nearly collinear centroids), not an answer.
+  auto record = [&](const TlsResult& tls_in, uint32_t core_size, uint32_t m) {
+    // Upright prior: a vehicle's sensor is within max_tilt of level.
+    TlsResult tls = tls_in;
     const double cos_tilt = tls.b_T_a.linear()(2, 2);
     if (c.max_tilt_deg > 0 && cos_tilt < std::cos(max_tilt)) {
+      // Re-solved upright (yaw and translation) on the solve's inliers, then its inliers recounted:
+      // a clique of few mid-height centroids fixes heading and place well but tilt poorly, and
+      // rejecting it lost the right place; an upside-down solve rarely survives the recount.
       ++st.tilted;
-      return false;
+      if (fit_upright(sub_a_, sub_b_, sub_w_, mask_, m, &tls.b_T_a) != Status::Ok) return false;
+      const double c2 = double(c.tls_threshold) * c.tls_threshold;
+      tls.inliers = 0;
+      for (uint32_t i = 0; i < m; ++i) {
+        const Eigen::Vector3d pa(sub_a_[3 * i], sub_a_[3 * i + 1], sub_a_[3 * i + 2]);
+        const Eigen::Vector3d pb(sub_b_[3 * i], sub_b_[3 * i + 1], sub_b_[3 * i + 2]);
+        mask_[i] = (pb - tls.b_T_a * pa).squaredNorm() <= c2;
+        tls.inliers += mask_[i];
+      }
+      if (tls.inliers < c.min_inliers) return false;
     }
     for (uint32_t h = 0; h < count_; ++h) {
       const Eigen::Isometry3d d = hyps_[h].map_T_scan.inverse() * tls.b_T_a;

@@ -41,6 +41,39 @@ Status kabsch(const float* a, const float* b, const float* w, uint32_t n, Eigen:
   return Status::Ok;
 }
 
+Status fit_upright(const float* a, const float* b, const float* w, const uint8_t* mask, uint32_t n,
+                   Eigen::Isometry3d* out) {
+  double wsum = 0.0;
+  uint32_t rows = 0;
+  Eigen::Vector3d ca = Eigen::Vector3d::Zero(), cb = Eigen::Vector3d::Zero();
+  for (uint32_t i = 0; i < n; ++i) {
+    if (mask && !mask[i]) continue;
+    const double wi = w ? w[i] : 1.0;
+    const Eigen::Vector3d pa(a[3 * i], a[3 * i + 1], a[3 * i + 2]), pb(b[3 * i], b[3 * i + 1], b[3 * i + 2]);
+    if (!(wi >= 0.0) || !std::isfinite(wi) || !pa.allFinite() || !pb.allFinite()) return Status::InvalidInput;
+    wsum += wi;
+    ca += wi * pa;
+    cb += wi * pb;
+    ++rows;
+  }
+  if (rows < 2 || !(wsum > 0.0)) return Status::InvalidInput;
+  ca /= wsum;
+  cb /= wsum;
+  double sc = 0.0, ss = 0.0;  // sum w (a . b) and sum w (a x b)_z over centred x, y
+  for (uint32_t i = 0; i < n; ++i) {
+    if (mask && !mask[i]) continue;
+    const double wi = w ? w[i] : 1.0;
+    const double ax = a[3 * i] - ca.x(), ay = a[3 * i + 1] - ca.y(), bx = b[3 * i] - cb.x(), by = b[3 * i + 1] - cb.y();
+    sc += wi * (ax * bx + ay * by);
+    ss += wi * (ax * by - ay * bx);
+  }
+  if (!(std::fabs(sc) + std::fabs(ss) > 1e-12)) return Status::InvalidInput;
+  out->setIdentity();
+  out->linear() = Eigen::AngleAxisd(std::atan2(ss, sc), Eigen::Vector3d::UnitZ()).toRotationMatrix();
+  out->translation() = cb - out->linear() * ca;
+  return Status::Ok;
+}
+
 static double residual2(const Eigen::Isometry3d& t, const float* a, const float* b, uint32_t i) {
   const Eigen::Vector3d pa(a[3 * i], a[3 * i + 1], a[3 * i + 2]), pb(b[3 * i], b[3 * i + 1], b[3 * i + 2]);
   return (pb - t * pa).squaredNorm();

@@ -40,9 +40,12 @@ struct HypothesisConfig {
   uint32_t min_inliers = 3;        // a clique or TLS solution with fewer is no hypothesis
   float same_pose_m = 2.0f;        // hypotheses closer than this and same_pose_deg are one answer
   float same_pose_deg = 5.0f;
-  // Upright prior: hypotheses whose z axis leans more than this from the map's are rejected (a
-  // vehicle-mounted sensor; Outram's own failures include upside-down poses). 0 disables.
-  float max_tilt_deg = 15.0f;
+  // Upright prior: a hypothesis whose z axis leans more than this from the map's is re-solved upright
+  // (yaw and translation on its inliers, which are then recounted; fewer than min_inliers: dropped).
+  // A vehicle-mounted sensor is near level (Outram's own failures include upside-down poses). 8 deg: a
+  // road's grade (<= ~10%, 5.7 deg) plus mounting; clique poses of few mid-height centroids came out
+  // tilted 8-12 deg at the right place. 0 disables.
+  float max_tilt_deg = 8.0f;
 };
 
 struct PoseHypothesis {
@@ -59,7 +62,7 @@ struct HypothesisStats {
   bool budget_exhausted = false;  // the first search ran out of nodes (best-so-far used)
   uint32_t merged = 0;         // cliques or vote peaks whose pose repeated an earlier hypothesis
   uint32_t voted = 0;          // vote peaks that gave a pose
-  uint32_t tilted = 0;         // poses rejected by the upright prior
+  uint32_t tilted = 0;         // poses the upright prior re-solved upright (max_tilt_deg)
 };
 
 class PoseHypotheses {

@@ -17,6 +17,13 @@ namespace gsf {
 // points are degenerate (total weight <= 0, fewer than 3 points, or all collinear).
 Status kabsch(const float* a, const float* b, const float* w, uint32_t n, Eigen::Isometry3d* b_T_a);
 
+// Weighted upright fit: rotation about z only (yaw) and a 3-D translation, in closed form (2-D
+// Procrustes on x, y; z from the weighted means). Rows with mask[i] == 0 are left out (mask nullptr:
+// all). InvalidInput when fewer than 2 rows or no positive weight remain, or the rows' horizontal
+// spread is zero (yaw undetermined).
+Status fit_upright(const float* a, const float* b, const float* w, const uint8_t* mask, uint32_t n,
+                   Eigen::Isometry3d* b_T_a);
+
 struct TlsResult {
   Eigen::Isometry3d b_T_a = Eigen::Isometry3d::Identity();
   uint32_t inliers = 0;   // residual <= c
