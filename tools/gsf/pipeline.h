@@ -42,8 +42,11 @@ Meta read_meta(const std::string& dataset_root);
 // Length of a drive from its poses (sum of steps shorter than 50 m, so jumps between roads do not count).
 double path_length(port::ScanSource& src);
 
-Status build_map(port::ScanSource& src, const LocalizerConfig& config, LogitMode logits, float road_length,
-                 std::vector<uint64_t>* blob, size_t* bytes, mapping::MapBuildStats* stats, bool progress);
+// Builds the map of every scan of `src`. On failure *failed_scan is the index of the scan add_scan
+// refused (UINT32_MAX when the failure came later, at build()).
+Status build_map(port::ScanSource& src, const LocalizerConfig& config, const mapping::MapBuilderOptions& options,
+                 LogitMode logits, float road_length, std::vector<uint64_t>* blob, size_t* bytes,
+                 mapping::MapBuildStats* stats, bool progress, uint32_t* failed_scan = nullptr);
 
 constexpr uint32_t kMaxScanPoints = 262144;
 
