@@ -29,7 +29,9 @@ printf 'not a map' > "$tmp/bad.gsfmap"
 expect 1 "not a valid map" -- "$gsf" inspect --map "$tmp/bad.gsfmap"
 
 "$gsf" simulate --preset tiny --out "$tmp/ds" --quiet >/dev/null || fail "simulate"
-"$gsf" build-map --dataset "$tmp/ds" --sequence 00 --out "$tmp/map.gsfmap" --quiet >/dev/null || fail "build-map"
+built=$("$gsf" build-map --dataset "$tmp/ds" --sequence 00 --out "$tmp/map.gsfmap" --quiet) || fail "build-map"
+echo "$built" | grep -Eq "peak RSS [1-9][0-9]* MB" || fail "build-map summary lacks its peak RSS: $built"
+echo "$built" | grep -q "origin 0.000, -2.000, 2.000 m in frame 'local'" || fail "build-map summary lacks the origin: $built"
 "$gsf" inspect --map "$tmp/map.gsfmap" --json > "$tmp/inspect.json" || fail "inspect"
 "$gsf" evaluate --map "$tmp/map.gsfmap" --dataset "$tmp/ds" --sequence 01 --json "$tmp/out.json" --mode all \
   --svg "$tmp/svg" --quiet >/dev/null || fail "evaluate"

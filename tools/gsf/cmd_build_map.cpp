@@ -4,6 +4,7 @@
 #include "args.h"
 #include "commands.h"
 #include "gsf/map_format.h"
+#include "peak_rss.h"
 #include "pipeline.h"
 
 namespace gsf::cli {
@@ -70,10 +71,11 @@ int cmd_build_map(int argc, char** argv) {
     return 1;
   }
   std::printf("map %s: %u scans, %u voxels, %u instances, %u triangles (%u keys), %u refine points, %zu bytes "
-              "(%.2f MB/km over %.0f m); %.1f s accumulate, %.1f s cluster, %.1f s fields, %.1f s triangles\n",
+              "(%.2f MB/km over %.0f m); %.1f s accumulate, %.1f s cluster, %.1f s fields, %.1f s triangles; "
+              "peak RSS %.0f MB\n",
               args.get("out").c_str(), st.scans, st.map_voxels, st.instances, st.triangles, st.index_keys,
               st.refine_points, bytes, road > 0 ? bytes / 1e6 / (road / 1000.0) : 0.0, road, st.seconds_accumulate,
-              st.seconds_cluster, st.seconds_fields, st.seconds_triangles);
+              st.seconds_cluster, st.seconds_fields, st.seconds_triangles, peak_rss_bytes() / 1e6);
   std::printf("  origin %.3f, %.3f, %.3f m in frame '%s' (map coordinates are relative to it)\n", st.georef.origin[0],
               st.georef.origin[1], st.georef.origin[2], st.georef.frame);
   return 0;
