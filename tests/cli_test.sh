@@ -33,6 +33,9 @@ built=$("$gsf" build-map --dataset "$tmp/ds" --sequence 00 --out "$tmp/map.gsfma
 echo "$built" | grep -Eq "peak RSS [1-9][0-9]* MB" || fail "build-map summary lacks its peak RSS: $built"
 echo "$built" | grep -q "origin 0.000, -2.000, 2.000 m in frame 'local'" || fail "build-map summary lacks the origin: $built"
 "$gsf" inspect --map "$tmp/map.gsfmap" --json > "$tmp/inspect.json" || fail "inspect"
+# A regular file is memory-mapped; a pipe cannot be, so it is read into memory, and loads the same.
+"$gsf" inspect --map "$tmp/map.gsfmap" | grep -q "memory-mapped (used in place)" || fail "map file not mapped"
+"$gsf" inspect --map <(cat "$tmp/map.gsfmap") | grep -q "read into memory" || fail "map through a pipe"
 "$gsf" evaluate --map "$tmp/map.gsfmap" --dataset "$tmp/ds" --sequence 01 --json "$tmp/out.json" --mode all \
   --svg "$tmp/svg" --quiet >/dev/null || fail "evaluate"
 "$gsf" localize --map "$tmp/map.gsfmap" --dataset "$tmp/ds" --sequence 01 --frame 3 > "$tmp/one.json" || fail "localize"

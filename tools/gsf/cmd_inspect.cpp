@@ -49,6 +49,7 @@ int cmd_inspect(int argc, char** argv) {
     j.field("file", args.get("map"));
     j.field("version", kMapVersion);
     j.field("bytes", static_cast<unsigned long long>(map.total_bytes));
+    j.field("memory_mapped", file.file.mapped());
     j.field("frame", map.georef.frame);
     j.key("origin");
     j.begin_array();
@@ -73,7 +74,8 @@ int cmd_inspect(int argc, char** argv) {
     std::printf("%s\n", j.str().c_str());
     return 0;
   }
-  std::printf("map %s: valid, format version %u, %zu bytes\n", args.get("map").c_str(), kMapVersion, map.total_bytes);
+  std::printf("map %s: valid, format version %u, %zu bytes, %s\n", args.get("map").c_str(), kMapVersion,
+              map.total_bytes, file.file.mapped() ? "memory-mapped (used in place)" : "read into memory");
   std::printf("  frame           '%s', origin %.3f, %.3f, %.3f m (map coordinates are relative to it)\n",
               map.georef.frame, map.georef.origin[0], map.georef.origin[1], map.georef.origin[2]);
   std::printf("  class table     id %08x\n", map.params.class_table_id);
