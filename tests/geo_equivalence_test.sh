@@ -17,7 +17,7 @@ for w in local utm; do
   "$gsf" simulate --preset tiny --out "$tmp/$w" --offset "$offset" --quiet >/dev/null || fail "simulate $w"
   "$gsf" build-map --dataset "$tmp/$w" --out "$tmp/$w.gsfmap" --quiet > "$tmp/$w.build.txt" || fail "build-map $w"
   "$gsf" inspect --map "$tmp/$w.gsfmap" --json > "$tmp/$w.inspect.json" || fail "inspect $w"
-  "$gsf" evaluate --map "$tmp/$w.gsfmap" --dataset "$tmp/$w" --mode instance,gsf,gsf+refine --json "$tmp/$w.eval.json" \
+  "$gsf" evaluate --map "$tmp/$w.gsfmap" --dataset "$tmp/$w" --mode all --json "$tmp/$w.eval.json" \
     --quiet >/dev/null || fail "evaluate $w"
   "$gsf" localize --map "$tmp/$w.gsfmap" --dataset "$tmp/$w" > "$tmp/$w.localize.jsonl" || fail "localize $w"
 done
@@ -36,11 +36,12 @@ assert ins["utm"]["bytes"] == ins["local"]["bytes"]
 ev = {w: json.load(open(f"{t}/{w}.eval.json")) for w in ("local", "utm")}
 assert ev["utm"]["map_origin"] == ut
 summary = []
-for mode in ("instance", "gsf", "gsf+refine"):
+for mode in ("instance", "gsf", "gsf+refine", "scan-context"):
     a, b = ev["local"]["modes"][mode], ev["utm"]["modes"][mode]
     assert a["summary"]["successes"] == b["summary"]["successes"], (mode, a["summary"]["successes"], b["summary"]["successes"])
     assert a["summary"]["answered"] == b["summary"]["answered"], mode
-    assert a["summary"]["successes"] >= 20, (mode, a["summary"]["successes"])  # a working pipeline, not 0 == 0
+    if mode != "scan-context":  # the peer needs no map; it is here for the dataset-frame comparison
+        assert a["summary"]["successes"] >= 20, (mode, a["summary"]["successes"])  # working, not 0 == 0
     for qa, qb in zip(a["queries"], b["queries"]):
         assert qa["status"] == qb["status"] and qa["success"] == qb["success"], (mode, qa["index"])
         assert abs(qa["translation_error_m"] - qb["translation_error_m"]) < 1e-6, (mode, qa["index"])
