@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # CLI contract test (host builds): usage errors exit 2 with a message, runtime errors exit 1, and the
 # documented pipeline simulate -> build-map -> evaluate --json works on the tiny world with the
-# expected success counts (ground truth known) and a JSON file holding the documented fields.
+# expected success counts (ground truth known) and a JSON file holding the documented fields; poses
+# come in the map's frame and the map-local one, apart by the map origin.
 set -u
 gsf=$1
 tmp=$(mktemp -d)
@@ -28,8 +29,13 @@ printf 'not a map' > "$tmp/bad.gsfmap"
 expect 1 "not a valid map" -- "$gsf" inspect --map "$tmp/bad.gsfmap"
 
 "$gsf" simulate --preset tiny --out "$tmp/ds" --quiet >/dev/null || fail "simulate"
-"$gsf" build-map --dataset "$tmp/ds" --sequence 00 --out "$tmp/map.gsfmap" --quiet >/dev/null || fail "build-map"
+built=$("$gsf" build-map --dataset "$tmp/ds" --sequence 00 --out "$tmp/map.gsfmap" --quiet) || fail "build-map"
+echo "$built" | grep -Eq "peak RSS [1-9][0-9]* MB" || fail "build-map summary lacks its peak RSS: $built"
+echo "$built" | grep -q "origin 0.000, -2.000, 2.000 m in frame 'local'" || fail "build-map summary lacks the origin: $built"
 "$gsf" inspect --map "$tmp/map.gsfmap" --json > "$tmp/inspect.json" || fail "inspect"
+# A regular file is memory-mapped; a pipe cannot be, so it is read into memory, and loads the same.
+"$gsf" inspect --map "$tmp/map.gsfmap" | grep -q "memory-mapped (used in place)" || fail "map file not mapped"
+"$gsf" inspect --map <(cat "$tmp/map.gsfmap") | grep -q "read into memory" || fail "map through a pipe"
 "$gsf" evaluate --map "$tmp/map.gsfmap" --dataset "$tmp/ds" --sequence 01 --json "$tmp/out.json" --mode all \
   --svg "$tmp/svg" --quiet >/dev/null || fail "evaluate"
 "$gsf" localize --map "$tmp/map.gsfmap" --dataset "$tmp/ds" --sequence 01 --frame 3 > "$tmp/one.json" || fail "localize"
@@ -60,6 +66,16 @@ assert modes["gsf+refine"]["summary"]["ate_m"] < g["ate_m"]
 assert json.load(open(f"{t}/inspect.json"))["instances"] > 50
 one = json.loads(open(f"{t}/one.json").read().splitlines()[0])
 assert one["frame"] == 3 and len(one["pose"]) == 12
+# Two frames: "pose" is the map's frame, "pose_map_local" relative to the map origin (same rotation).
+ins = json.load(open(f"{t}/inspect.json"))
+origin = ins["origin"]
+assert r["map_origin"] == origin and r["map_frame"] == ins["frame"] == one["map_frame"], (r["map_origin"], origin)
+for row in range(3):
+    for c in range(3):
+        assert one["pose"][4 * row + c] == one["pose_map_local"][4 * row + c]
+    assert one["pose"][4 * row + 3] == one["pose_map_local"][4 * row + 3] + origin[row], row
+answered = [q for q in modes["gsf"]["queries"] if q["status"] == "Ok"]
+assert answered and all(len(q["pose"]) == 12 for q in answered)
 assert "match_dropped" in one["diagnostics"] and "hypotheses" in one["diagnostics"], one.keys()
 for f in ["map_trajectory.svg", "correspondences_instance.svg", "correspondences_gsf.svg"]:
     assert open(f"{t}/svg/{f}").read().startswith("<svg"), f

@@ -1,7 +1,8 @@
 // The C API (gsf/gsf.h) from C11: size queries, argument rejection (NULL, misaligned, too small, bad
 // config, corrupt map blobs), and end to end on the simulator's tiny world: every query gives the C++
 // API's result bit for bit, one well-constrained query is within 0.5 m / 2 deg of ground truth, and
-// map load, init and localize allocate nothing. The world comes from a C++ fixture (tiny_world_c.h).
+// map load, init and localize allocate nothing; the two poses of a result are in the frames gsf.h says
+// (map-local, and the map's frame with the origin added). The world comes from a C++ fixture (tiny_world_c.h).
 // Set GSF_C_API_VERBOSE=1 to print every query's error.
 #include <math.h>
 #include <stdio.h>
@@ -62,6 +63,7 @@ static void pose_error(const double* a, const double* b, double* metres, double*
 
 static int same_result(const gsf_result* a, const gsf_result* b) {
   return a->status == b->status && memcmp(a->map_T_scan, b->map_T_scan, sizeof(a->map_T_scan)) == 0 &&
+         memcmp(a->map_frame_T_scan, b->map_frame_T_scan, sizeof(a->map_frame_T_scan)) == 0 &&
          a->inliers == b->inliers && memcmp(&a->ambiguity, &b->ambiguity, sizeof(double)) == 0 &&
          memcmp(&a->score, &b->score, sizeof(double)) == 0 && a->clique_size == b->clique_size &&
          a->clique_nodes == b->clique_nodes && a->query_instances == b->query_instances &&
@@ -145,6 +147,64 @@ static void test_map_load(const void* blob, size_t bytes) {
   copy[bytes - 20] ^= 0x80;
   CHECK_STATUS(gsf_map_load(copy, bytes, &map), GSF_STATUS_CORRUPT_DATA);
   free(copy);
+}
+
+// Localizes query k against `blob` (copied into aligned memory) with the default config.
+static int localize_with(const void* blob, size_t bytes, uint32_t k, gsf_map_info* info, gsf_result* out) {
+  gsf_config cfg;
+  gsf_config_default(&cfg);
+  const size_t sb = gsf_localizer_storage_bytes(), wb = gsf_workspace_bytes(&cfg);
+  void* storage = block(sb);
+  void* ws = block(wb);
+  void* copy = block(bytes);
+  memcpy(copy, blob, bytes);
+  gsf_map map;
+  gsf_localizer* loc = NULL;
+  gsf_test_query q;
+  int s = gsf_map_load(copy, bytes, &map);
+  if (s == GSF_STATUS_OK) s = gsf_map_get_info(&map, info);
+  if (s == GSF_STATUS_OK) s = gsf_localizer_init(storage, sb, &cfg, &map, ws, wb, &loc);
+  if (s == GSF_STATUS_OK) s = gsf_test_tiny_query(k, &q);
+  if (s == GSF_STATUS_OK) s = gsf_localize(loc, q.xyzi, 4, q.count, q.labels, q.logits, GSF_NUM_CLASSES, out);
+  free(copy);
+  free(ws);
+  free(storage);
+  return s;
+}
+
+// Which frame each pose is in: the tiny map (origin 0, "local") and the same map georeferenced at a
+// UTM-size origin give the same map-local pose bit for bit; map_frame_T_scan is it plus the origin, and
+// only map_frame_T_scan matches the truth posed in the map's frame.
+static void test_pose_frames(const void* blob, size_t bytes) {
+  const double origin[3] = {512345.0, 5412343.0, 2.0};
+  size_t geo_bytes = 0;
+  const void* geo = gsf_test_tiny_map_georeferenced(origin, "utm-32N", &geo_bytes);
+  CHECK(geo != NULL && geo_bytes == bytes);
+  if (geo == NULL) return;
+  gsf_map_info local_info, geo_info;
+  gsf_result local, utm;
+  CHECK_STATUS(localize_with(blob, bytes, GOOD_QUERY, &local_info, &local), GSF_STATUS_OK);
+  CHECK(local_info.origin[0] == 0.0 && local_info.origin[1] == 0.0 && local_info.origin[2] == 0.0);
+  CHECK(strcmp(local_info.frame, "local") == 0);
+  CHECK(memcmp(local.map_T_scan, local.map_frame_T_scan, sizeof(local.map_T_scan)) == 0);  // origin 0
+  CHECK_STATUS(localize_with(geo, geo_bytes, GOOD_QUERY, &geo_info, &utm), GSF_STATUS_OK);
+  CHECK(geo_info.origin[0] == origin[0] && geo_info.origin[1] == origin[1] && geo_info.origin[2] == origin[2]);
+  CHECK(strcmp(geo_info.frame, "utm-32N") == 0);
+  CHECK(memcmp(local.map_T_scan, utm.map_T_scan, sizeof(local.map_T_scan)) == 0);  // map-local: unchanged
+  for (int r = 0; r < 3; ++r) {
+    for (int c = 0; c < 3; ++c) CHECK(utm.map_frame_T_scan[4 * r + c] == utm.map_T_scan[4 * r + c]);
+    CHECK(utm.map_frame_T_scan[4 * r + 3] == utm.map_T_scan[4 * r + 3] + origin[r]);  // added in double
+  }
+  gsf_test_query q;
+  CHECK_STATUS(gsf_test_tiny_query(GOOD_QUERY, &q), GSF_STATUS_OK);
+  double truth_utm[12];
+  memcpy(truth_utm, q.truth, sizeof(truth_utm));
+  for (int r = 0; r < 3; ++r) truth_utm[4 * r + 3] += origin[r];
+  double m, deg;
+  pose_error(utm.map_frame_T_scan, truth_utm, &m, &deg);
+  CHECK(m < 0.5 && deg < 2.0);
+  pose_error(utm.map_T_scan, truth_utm, &m, &deg);
+  CHECK(m > 5.0e6);  // the map-local pose is not in the map's frame
 }
 
 static void test_init_rejects(const gsf_map* map) {
@@ -319,6 +379,7 @@ int main(void) {
     free(copy);
   }
   test_end_to_end(blob, bytes);
+  test_pose_frames(blob, bytes);
   printf("test_c_api: %d checks, %d failed\n", g_checks, g_failures);
   return g_failures == 0 ? 0 : 1;
 }

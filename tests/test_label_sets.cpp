@@ -122,6 +122,20 @@ TEST_CASE("A map of one label set refuses a localizer of another, and the budget
   Localizer loc;
   CHECK(loc.init(kitti, w.map, ws.data(), ws.size() * 8) == Status::ConfigMismatch);
 
+  // The same roles and instance classes, one stability changed: another label set (its id), refused too.
+  ClassTable nus = w.classes, tweaked;
+  for (uint32_t i = 0; i < nus.size(); ++i) {
+    const ClassTableEntry& e = nus.entry(i);
+    const float st = e.library_class < 0 ? 0.0f : e.library_class == kRoad ? 0.9f : nus.stability(e.library_class);
+    REQUIRE(tweaked.add(e.raw_id, e.name, e.library_class, st, e.role) == ClassTableError::None);
+  }
+  REQUIRE(tweaked.id() != nus.id());
+  LocalizerConfig other = w.config;
+  other.classes = &tweaked;
+  CHECK(map_params_from(other).instance_class_mask == w.map.params.instance_class_mask);
+  CHECK(w.map.params.class_table_id == nus.id());
+  CHECK(loc.init(other, w.map, ws.data(), ws.size() * 8) == Status::ConfigMismatch);
+
   const Localizer::Budget b = Localizer::budget(w.config);
   CHECK(b.poles > 0);
   CHECK(b.poles >= PoleExtraction::required_bytes(effective_pole_config(w.config), w.config.voxel.max_voxels));

@@ -1,9 +1,15 @@
 // Map blob: round trip, and every single-byte corruption or truncation is rejected (never a crash).
 #include <catch2/catch.hpp>
 
+#include <cstddef>
+#include <cstdio>
+#include <cstdlib>
 #include <cstring>
+#include <limits>
+#include <string>
 #include <vector>
 
+#include "fuzz_seed_map.h"
 #include "gsf/crc32.h"
 #include "gsf/map_format.h"
 #include "gsf/semantic_classes.h"
@@ -21,6 +27,11 @@ struct SmallMap {
   MapView view;
 
   SmallMap() {
+    // A georeferenced map: an origin of UTM size with fractions that float32 could not hold.
+    view.georef.origin[0] = 512345.25;
+    view.georef.origin[1] = 5412345.125;
+    view.georef.origin[2] = 251.0625;
+    set_frame_name(&view.georef, "utm-32N");
     MapParams& p = view.params;
     std::memset(&p, 0, sizeof(p));
     p.num_classes = kNumClasses;
@@ -32,6 +43,7 @@ struct SmallMap {
     p.grid_spacing = 1.5f; p.layer_spacing = 1.0f; p.grid_z0 = 0.0f;
     p.length_scale = 2.0f; p.signal_variance = 1.0f; p.noise_variance = 0.05f;
     p.field_radius = 8.0f; p.voxel_size = 0.4f; p.side_bin = 1.0f; p.min_side = 0.5f; p.max_side = 50.0f;
+    p.class_table_id = 0xC0FFEE01u;
     const uint32_t n = 4, g = 4, d = kNumClasses;
     for (uint32_t i = 0; i < n; ++i) {
       MapInstance in;
@@ -84,6 +96,7 @@ struct Blob {
 };
 
 bool same_map(const MapView& a, const MapView& b) {
+  if (std::memcmp(&a.georef, &b.georef, sizeof(MapGeoreference)) != 0) return false;
   if (std::memcmp(&a.params, &b.params, sizeof(MapParams)) != 0) return false;
   if (std::memcmp(&a.counts, &b.counts, sizeof(MapCounts)) != 0) return false;
   const uint64_t n = a.counts.instances, g = a.grid_points(), d = a.params.num_classes, s = a.params.inducing_stride;
@@ -97,6 +110,29 @@ bool same_map(const MapView& a, const MapView& b) {
          std::memcmp(a.index_offsets, b.index_offsets, (a.counts.index_keys + 1) * 4) == 0 &&
          std::memcmp(a.index_entries, b.index_entries, a.counts.triangles * 4) == 0 &&
          std::memcmp(a.refine_points, b.refine_points, a.counts.refine_points * 16) == 0;
+}
+
+// Rewrites the header with `edit` applied and its CRC re-sealed, as a writer of that header would.
+template <class Edit>
+void reseal_header(uint8_t* blob, Edit edit) {
+  MapHeader h;
+  std::memcpy(&h, blob, sizeof(h));
+  edit(&h);
+  h.header_crc = 0;
+  std::memcpy(blob, &h, sizeof(h));
+  const uint32_t crc = crc32(blob, sizeof(MapHeader) + kMapSectionCount * sizeof(SectionEntry));
+  std::memcpy(blob + offsetof(MapHeader, header_crc), &crc, sizeof(crc));
+}
+
+std::vector<uint8_t> read_file(const std::string& path) {
+  std::vector<uint8_t> bytes;
+  FILE* f = std::fopen(path.c_str(), "rb");
+  if (f == nullptr) return bytes;
+  uint8_t buf[4096];
+  size_t n;
+  while ((n = std::fread(buf, 1, sizeof(buf), f)) > 0) bytes.insert(bytes.end(), buf, buf + n);
+  std::fclose(f);
+  return bytes;
 }
 
 }  // namespace
@@ -120,6 +156,12 @@ TEST_CASE("Map round trip is exact and deterministic") {
   MapView loaded;
   REQUIRE(load_map(a.data(), size, &loaded) == Status::Ok);
   CHECK(same_map(sm.view, loaded));
+  // The georeference comes back to the bit: doubles, not floats (5412345.125 has no float32).
+  CHECK(loaded.georef.origin[0] == 512345.25);
+  CHECK(loaded.georef.origin[1] == 5412345.125);
+  CHECK(loaded.georef.origin[2] == 251.0625);
+  CHECK(std::string(loaded.georef.frame) == "utm-32N");
+  CHECK(loaded.params.class_table_id == 0xC0FFEE01u);
   CHECK(reinterpret_cast<const uint8_t*>(loaded.instances) >= a.data());  // zero copy: points into the blob
   CHECK(reinterpret_cast<const uint8_t*>(loaded.instances) < a.data() + size);
   CHECK(write_map(sm.view, a.data(), size - 1, nullptr) == Status::BufferTooSmall);
@@ -215,4 +257,100 @@ TEST_CASE("Semantically invalid contents with valid CRCs are rejected") {
   Blob b3(size);
   REQUIRE(write_map(unsorted.view, b3.data(), size, nullptr) == Status::Ok);
   CHECK(load_map(b3.data(), size, &v) == Status::CorruptData);
+}
+
+TEST_CASE("Version 1 and 2 maps are refused as VersionMismatch, a real v2 file included") {
+  // tests/data/map_v2_small.gsfmap: the fuzz seed map as format version 2 wrote it (184-byte header).
+  const std::vector<uint8_t> v2 = read_file(std::string(GSF_SOURCE_DIR) + "/tests/data/map_v2_small.gsfmap");
+  REQUIRE(v2.size() == 2880);
+  Blob old(v2.size());
+  std::memcpy(old.data(), v2.data(), v2.size());
+  MapView v;
+  CHECK(load_map(old.data(), v2.size(), &v) == Status::VersionMismatch);
+  CHECK(v.instances == nullptr);
+  // A current map relabelled as version 1 or 2 (header CRC re-sealed): the version decides, not the CRC.
+  SmallMap sm;
+  const size_t size = map_serialized_size(sm.view);
+  for (uint32_t version : {1u, 2u}) {
+    Blob b(size);
+    REQUIRE(write_map(sm.view, b.data(), size, nullptr) == Status::Ok);
+    reseal_header(b.data(), [&](MapHeader* h) { h->version = version; });
+    INFO("version " << version);
+    CHECK(load_map(b.data(), size, &v) == Status::VersionMismatch);
+  }
+}
+
+TEST_CASE("A bad georeference is refused: on write InvalidArgument, on load CorruptData even with a valid CRC") {
+  struct Bad {
+    const char* what;
+    void (*edit)(MapGeoreference*);
+  };
+  const Bad bad[] = {
+      {"empty frame name", [](MapGeoreference* g) { std::memset(g->frame, 0, sizeof(g->frame)); }},
+      {"no terminating NUL", [](MapGeoreference* g) { std::memset(g->frame, 'a', sizeof(g->frame)); }},
+      {"control character", [](MapGeoreference* g) { g->frame[2] = '\n'; }},
+      {"byte above ASCII", [](MapGeoreference* g) { g->frame[0] = static_cast<char>(0xC3); }},
+      {"bytes after the NUL", [](MapGeoreference* g) { g->frame[20] = 'x'; }},
+      {"NaN origin", [](MapGeoreference* g) { g->origin[1] = std::numeric_limits<double>::quiet_NaN(); }},
+      {"infinite origin", [](MapGeoreference* g) { g->origin[2] = -std::numeric_limits<double>::infinity(); }},
+  };
+  SmallMap sm;
+  const size_t size = map_serialized_size(sm.view);
+  for (const Bad& b : bad) {
+    INFO(b.what);
+    SmallMap m;
+    b.edit(&m.view.georef);
+    CHECK_FALSE(valid_georeference(m.view.georef));
+    Blob out(size);
+    CHECK(write_map(m.view, out.data(), size, nullptr) == Status::InvalidArgument);
+    Blob blob(size);
+    REQUIRE(write_map(sm.view, blob.data(), size, nullptr) == Status::Ok);
+    reseal_header(blob.data(), [&](MapHeader* h) { b.edit(&h->georef); });
+    MapView v;
+    CHECK(load_map(blob.data(), size, &v) == Status::CorruptData);
+  }
+  // The longest name that fits (31 characters) is accepted; one more is not, and leaves the name as it was.
+  MapGeoreference g = local_georeference();
+  CHECK(set_frame_name(&g, "0123456789012345678901234567890"));
+  CHECK(valid_georeference(g));
+  CHECK_FALSE(set_frame_name(&g, "01234567890123456789012345678901"));
+  CHECK_FALSE(set_frame_name(&g, ""));
+  CHECK_FALSE(set_frame_name(&g, "tab\there"));
+  CHECK(std::string(g.frame) == "0123456789012345678901234567890");
+}
+
+TEST_CASE("Map-local and map-frame poses differ by the origin, added and removed in double") {
+  MapGeoreference g = local_georeference();
+  g.origin[0] = 512345.0;
+  g.origin[1] = 5412343.0;
+  g.origin[2] = 2.0;
+  Eigen::Isometry3d local = Eigen::Isometry3d::Identity();
+  local.linear() = Eigen::AngleAxisd(0.7, Eigen::Vector3d::UnitZ()).toRotationMatrix();
+  local.translation() = Eigen::Vector3d(123.456789012345, -45.678901234567, 0.123456789);
+  const Eigen::Isometry3d frame = to_map_frame(g, local);
+  CHECK(frame.linear() == local.linear());  // a translation only
+  CHECK(frame.translation().x() == 512345.0 + 123.456789012345);
+  CHECK(frame.translation().y() == 5412343.0 + -45.678901234567);
+  // frame -> local -> frame is exact (the subtraction near the origin is).
+  const Eigen::Isometry3d back = to_map_frame(g, to_map_local(g, frame));
+  CHECK(back.matrix() == frame.matrix());
+  CHECK((to_map_local(g, frame).translation() - local.translation()).norm() < 1e-9);
+}
+
+TEST_CASE("The fuzz seed map is the current format's (GSF_WRITE_SEED=1 rewrites it)") {
+  size_t bytes = 0;
+  const std::vector<uint64_t> seed = gsf_test::fuzz_seed_map(&bytes);
+  MapView v;
+  REQUIRE(load_map(seed.data(), bytes, &v) == Status::Ok);
+  CHECK(std::string(v.georef.frame) == "utm-32N");
+  const std::string path = std::string(GSF_SOURCE_DIR) + "/fuzz/corpus/fuzz_map_loader/tiny_valid.gsfmap";
+  if (std::getenv("GSF_WRITE_SEED")) {
+    FILE* f = std::fopen(path.c_str(), "wb");
+    REQUIRE(f != nullptr);
+    std::fwrite(seed.data(), 1, bytes, f);
+    std::fclose(f);
+  }
+  const std::vector<uint8_t> file = read_file(path);
+  REQUIRE(file.size() == bytes);
+  CHECK(std::memcmp(file.data(), seed.data(), bytes) == 0);
 }

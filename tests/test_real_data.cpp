@@ -62,7 +62,7 @@ Outcome localize_revisit(const char* seq, std::initializer_list<uint32_t> map_fr
   o.status = loc.localize(buf.buffer().view(), &r);
   Eigen::Isometry3d truth;
   REQUIRE(src.pose(static_cast<uint32_t>(query_index), &truth) == Status::Ok);
-  const Eigen::Isometry3d d = r.map_T_scan.inverse() * truth;
+  const Eigen::Isometry3d d = r.map_frame_T_scan.inverse() * truth;  // KITTI's poses are the map's frame
   o.t_err = d.translation().norm();
   o.r_err_deg = Eigen::AngleAxisd(d.rotation()).angle() * 180.0 / M_PI;
   o.inliers = r.inliers;
@@ -159,7 +159,7 @@ NuScenesRun localize_nuscenes(const std::string& root, const char* map_seq, cons
     buf.buffer().has_logits = true;
     LocalizeResult r;
     const bool ok = loc.localize(buf.buffer().view(), &r) == Status::Ok;
-    const Eigen::Isometry3d d = r.map_T_scan.inverse() * truth;
+    const Eigen::Isometry3d d = r.map_frame_T_scan.inverse() * truth;  // nuScenes poses are the map's frame
     const bool right = ok && d.translation().norm() < 5.0 && Eigen::AngleAxisd(d.rotation()).angle() < 10.0 * M_PI / 180.0;
     const bool answered = ok && r.ambiguity <= 0.5;
     double nearest = 1e9;

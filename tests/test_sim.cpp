@@ -442,8 +442,9 @@ TEST_CASE("tiny-lattice end to end: the map holds every lattice column; queries 
   for (const auto& zi : world.zone_instances) {
     bool hit = false;
     for (uint32_t i = 0; i < map.counts.instances; ++i)
-      hit = hit || (map.instances[i].label == gsf::kPole &&
-                    std::hypot(map.instances[i].centroid[0] - zi.x, map.instances[i].centroid[1] - zi.y) < 0.5);
+      hit = hit || (map.instances[i].label == gsf::kPole &&  // centroids are map-local: add the origin
+                    std::hypot(map.georef.origin[0] + map.instances[i].centroid[0] - zi.x,
+                               map.georef.origin[1] + map.instances[i].centroid[1] - zi.y) < 0.5);
     found += hit;
   }
   CHECK(found == static_cast<int>(world.zone_instances.size()));
@@ -456,7 +457,7 @@ TEST_CASE("tiny-lattice end to end: the map holds every lattice column; queries 
     const gsf::ScanView v = make(query_rc, qd.poses[f], scan_seed(sc.world.seed, 1, f), 2000000u + f, &s, &logits);
     gsf::LocalizeResult r;
     loc.localize(v, &r);
-    const Eigen::Isometry3d d = r.map_T_scan.inverse() * qd.poses[f];
+    const Eigen::Isometry3d d = r.map_frame_T_scan.inverse() * qd.poses[f];  // the world is the map's frame
     const bool ok = r.status == gsf::Status::Ok && d.translation().norm() < 5.0 &&
                     Eigen::AngleAxisd(d.rotation()).angle() < 10.0 * M_PI / 180.0;
     if (qd.in_zone[f]) ++zone;

@@ -34,6 +34,7 @@ GSF_SAME_STATUS(GSF_STATUS_NO_SOLUTION, NoSolution);
 GSF_SAME_STATUS(GSF_STATUS_UNSUPPORTED, Unsupported);
 #undef GSF_SAME_STATUS
 static_assert(GSF_NUM_CLASSES == gsf::kNumClasses, "gsf.h GSF_NUM_CLASSES");
+static_assert(GSF_MAP_FRAME_NAME_BYTES == gsf::kMapFrameNameBytes, "gsf.h GSF_MAP_FRAME_NAME_BYTES");
 
 // Tags mark storage that holds a live object (a loaded map, an initialised localizer), so a gsf_map that
 // was never loaded or a handle whose re-init failed is refused instead of read.
@@ -126,8 +127,12 @@ void fill(const gsf::LocalizeResult& r, gsf_result* out) {
   std::memset(out, 0, sizeof(*out));
   out->status = static_cast<int>(r.status);
   const Eigen::Matrix4d& m = r.map_T_scan.matrix();
+  const Eigen::Matrix4d& f = r.map_frame_T_scan.matrix();
   for (int row = 0; row < 3; ++row)
-    for (int col = 0; col < 4; ++col) out->map_T_scan[row * 4 + col] = m(row, col);
+    for (int col = 0; col < 4; ++col) {
+      out->map_T_scan[row * 4 + col] = m(row, col);
+      out->map_frame_T_scan[row * 4 + col] = f(row, col);
+    }
   out->inliers = r.inliers;
   out->clique_size = r.clique_size;
   out->score = r.score;
@@ -215,6 +220,8 @@ int gsf_map_get_info(const gsf_map* map, gsf_map_info* out) noexcept {
   out->refine_points = slot->view.counts.refine_points;
   out->road_length_m = slot->view.counts.road_length_m;
   out->total_bytes = slot->view.total_bytes;
+  for (int k = 0; k < 3; ++k) out->origin[k] = slot->view.georef.origin[k];
+  std::memcpy(out->frame, slot->view.georef.frame, sizeof(out->frame));
   return code(Status::Ok);
 }
 

@@ -65,6 +65,7 @@ MapParams map_params_from(const LocalizerConfig& c) {
   MapParams p{};
   p.num_classes = kNumClasses;
   p.instance_class_mask = instance_label_mask(c);
+  p.class_table_id = label_set(c).id();
   p.field_input_dims = c.field.input_dims;
   p.inducing_stride = c.field.inducing_points;
   p.grid_nx = c.field.grid_nx;
@@ -94,7 +95,7 @@ Status check_map_params(const LocalizerConfig& c, const MapParams& p) {
       p.layer_spacing != w.layer_spacing || p.grid_z0 != w.grid_z0 || p.length_scale != w.length_scale ||
       p.signal_variance != w.signal_variance || p.noise_variance != w.noise_variance || p.field_radius != w.field_radius ||
       p.voxel_size != w.voxel_size || p.side_bin != w.side_bin || p.triangle_neighbours != w.triangle_neighbours ||
-      p.min_side != w.min_side || p.max_side != w.max_side)
+      p.min_side != w.min_side || p.max_side != w.max_side || p.class_table_id != w.class_table_id)
     return Status::ConfigMismatch;
   return Status::Ok;
 }

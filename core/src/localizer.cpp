@@ -260,6 +260,7 @@ Status Localizer::localize(const ScanView& scan, LocalizeResult* out_ptr) {
   };
   auto finish = [&](Status s) {
     out.status = s;
+    out.map_frame_T_scan = to_map_frame(map_.georef, out.map_T_scan);
     out.times.total = now(clock_) - t_start;
     return s;
   };

@@ -136,7 +136,7 @@ Status write_map(const MapView& m, void* out, size_t out_bytes, size_t* written)
   if (!host_is_little_endian()) return Status::Unsupported;
   if (out == nullptr || (reinterpret_cast<uintptr_t>(out) % kAlign) != 0) return Status::InvalidArgument;
   Status ps = check_params(m.params);
-  if (ps != Status::Ok) return Status::InvalidArgument;
+  if (ps != Status::Ok || !valid_georeference(m.georef)) return Status::InvalidArgument;
   SectionSpec s[kMapSectionCount];
   if (!section_specs(m, s)) return Status::InvalidArgument;
   for (const SectionSpec& sp : s)
@@ -155,6 +155,7 @@ Status write_map(const MapView& m, void* out, size_t out_bytes, size_t* written)
   h.header_bytes = static_cast<uint32_t>(table_end());
   h.total_bytes = total;
   h.section_count = kMapSectionCount;
+  h.georef = m.georef;
   h.params = m.params;
   h.counts = m.counts;
   SectionEntry table[kMapSectionCount];
@@ -202,8 +203,10 @@ Status load_map(const void* data, size_t bytes, MapView* out) {
   if (crc != h.header_crc) return Status::CorruptData;
   const Status ps = check_params(h.params);
   if (ps != Status::Ok) return ps;
+  if (!valid_georeference(h.georef)) return Status::CorruptData;
 
   MapView m;
+  m.georef = h.georef;
   m.params = h.params;
   m.counts = h.counts;
   m.total_bytes = bytes;

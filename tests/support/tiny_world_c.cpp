@@ -13,8 +13,12 @@ void to_c(const gsf::LocalizeResult& r, gsf_result* out) {
   std::memset(out, 0, sizeof(*out));
   out->status = static_cast<int>(r.status);
   for (int row = 0; row < 3; ++row) {
-    for (int col = 0; col < 3; ++col) out->map_T_scan[4 * row + col] = r.map_T_scan.linear()(row, col);
+    for (int col = 0; col < 3; ++col) {
+      out->map_T_scan[4 * row + col] = r.map_T_scan.linear()(row, col);
+      out->map_frame_T_scan[4 * row + col] = r.map_frame_T_scan.linear()(row, col);
+    }
     out->map_T_scan[4 * row + 3] = r.map_T_scan.translation()(row);
+    out->map_frame_T_scan[4 * row + 3] = r.map_frame_T_scan.translation()(row);
   }
   out->inliers = r.inliers;
   out->ambiguity = r.ambiguity;
@@ -41,6 +45,17 @@ const void* gsf_test_tiny_map(size_t* bytes) {
   const gsf_test::TinyWorld& w = gsf_test::tiny_world();
   if (bytes) *bytes = w.bytes;
   return w.blob.data();
+}
+
+const void* gsf_test_tiny_map_georeferenced(const double origin[3], const char* frame, size_t* bytes) {
+  static std::vector<uint64_t> blob;
+  gsf::MapView view = gsf_test::tiny_world().map;
+  for (int k = 0; k < 3; ++k) view.georef.origin[k] = origin[k];
+  if (!gsf::set_frame_name(&view.georef, frame)) return nullptr;
+  const size_t size = gsf::map_serialized_size(view);
+  blob.assign(size / 8 + 2, 0);
+  if (gsf::write_map(view, blob.data(), blob.size() * 8, bytes) != gsf::Status::Ok) return nullptr;
+  return blob.data();
 }
 
 uint32_t gsf_test_tiny_query_count(void) { return static_cast<uint32_t>(gsf_test::tiny_world().queries.size()); }

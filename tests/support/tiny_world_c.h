@@ -17,11 +17,15 @@ typedef struct gsf_test_query {
   const float* logits;     // count x GSF_NUM_CLASSES synthetic logits
   uint32_t count;
   uint32_t in_zone;  // 1 inside the simulated repetitive zone
-  double truth[12];  // ground-truth map_T_scan, row-major 3x4
+  double truth[12];  // ground-truth pose in the simulator's frame (the tiny map's, origin 0), row-major 3x4
 } gsf_test_query;
 
 // The tiny world's serialized map blob (16-byte aligned, owned by the fixture) and its size.
 const void* gsf_test_tiny_map(size_t* bytes);
+// The same map with its header's georeference set to `origin` and `frame` (sections unchanged): what the
+// same drive posed in that frame (origin + the simulator's poses) would have given. 16-byte aligned,
+// owned by the fixture until the next call; NULL for a bad frame name.
+const void* gsf_test_tiny_map_georeferenced(const double origin[3], const char* frame, size_t* bytes);
 uint32_t gsf_test_tiny_query_count(void);
 // Query k (views into the fixture); GSF_STATUS_NOT_FOUND past the end.
 int gsf_test_tiny_query(uint32_t k, gsf_test_query* out);

@@ -1,6 +1,7 @@
 #include "args.h"
 
 #include <cerrno>
+#include <cmath>
 #include <cstdlib>
 #include <sstream>
 
@@ -75,6 +76,35 @@ bool Args::get_double(const std::string& name, double* out, std::string* error) 
     return false;
   }
   *out = x;
+  return true;
+}
+
+bool Args::get_doubles(const std::string& name, int min_count, int max_count, double* out, int* count,
+                       std::string* error) const {
+  const std::string v = get(name);
+  int n = 0;
+  size_t pos = 0;
+  while (true) {
+    const size_t comma = v.find(',', pos);
+    const std::string item = v.substr(pos, comma == std::string::npos ? std::string::npos : comma - pos);
+    char* end = nullptr;
+    errno = 0;
+    const double x = std::strtod(item.c_str(), &end);
+    if (item.empty() || errno != 0 || *end != '\0' || !std::isfinite(x) || n >= max_count) {
+      *error = "option '--" + name + "' expects " + std::to_string(min_count) + " to " + std::to_string(max_count) +
+               " comma-separated numbers, got '" + v + "'";
+      return false;
+    }
+    out[n++] = x;
+    if (comma == std::string::npos) break;
+    pos = comma + 1;
+  }
+  if (n < min_count) {
+    *error = "option '--" + name + "' expects " + std::to_string(min_count) + " to " + std::to_string(max_count) +
+             " comma-separated numbers, got '" + v + "'";
+    return false;
+  }
+  if (count) *count = n;
   return true;
 }
 

@@ -23,6 +23,10 @@ class Args {
   // Numeric getters fail (return false, set error) on malformed numbers.
   bool get_int(const std::string& name, long long* out, std::string* error) const;
   bool get_double(const std::string& name, double* out, std::string* error) const;
+  // A comma list of min_count..max_count finite numbers ("512345,5412345" or "1,2,3") into out[0..];
+  // *count (if given) is how many there were.
+  bool get_doubles(const std::string& name, int min_count, int max_count, double* out, int* count,
+                   std::string* error) const;
   bool flag(const std::string& name) const { return has(name) && values_.at(name) == "1"; }
 
  private:

@@ -1,9 +1,10 @@
-// gsf build-map --dataset DIR --sequence 00 --out MAP [--logits synthetic|none] [--classes SET]
+// gsf build-map --dataset DIR --sequence 00 --out MAP [--logits synthetic|none] [--classes SET] [--origin X,Y[,Z]] [--frame NAME]
 #include <cstdio>
 
 #include "args.h"
 #include "commands.h"
 #include "gsf/map_format.h"
+#include "peak_rss.h"
 #include "pipeline.h"
 
 namespace gsf::cli {
@@ -16,6 +17,9 @@ int cmd_build_map(int argc, char** argv) {
       {"logits", "synthetic: confusion-model logits and predicted labels; none: ground-truth labels", "synthetic"},
       {"classes", "label set of the dataset's labels: auto, semantic-kitti, nuscenes or a class-table file (docs/data-formats.md)", "auto"},
       {"set", "config overrides name=value[,...] (must match at evaluate/localize time)", ""},
+      {"origin", "map origin X,Y[,Z] in the poses' frame (m); everything in the map is stored relative to it "
+                 "(default: the first pose's translation rounded half up to a whole metre)", ""},
+      {"frame", "name of the poses' frame recorded in the map, 1..31 printable ASCII (e.g. utm-32N)", "local"},
       {"quiet", "no progress on stderr", "", true},
   };
   if (wants_help(argc, argv)) {
@@ -33,6 +37,17 @@ int cmd_build_map(int argc, char** argv) {
   if (!resolve_label_set(args.get("classes"), args.get("dataset"), args.get("sequence"), &labels, &err))
     return usage_error("build-map", err);
   cfg.classes = labels.config_table();
+  mapping::MapBuilderOptions options;
+  if (args.has("origin")) {
+    double o[3] = {0, 0, 0};
+    if (!args.get_doubles("origin", 2, 3, o, nullptr, &err)) return usage_error("build-map", err);
+    options.origin_given = true;
+    options.origin = {o[0], o[1], o[2]};
+  }
+  options.frame = args.get("frame");
+  MapGeoreference probe;
+  if (!set_frame_name(&probe, options.frame.c_str()))
+    return usage_error("build-map", "--frame must be 1..31 printable ASCII characters, got '" + options.frame + "'");
   Status s;
   auto src = open_source(args.get("dataset"), args.get("sequence"), &s, &labels);
   if (s != Status::Ok || src->size() == 0) {
@@ -45,9 +60,15 @@ int cmd_build_map(int argc, char** argv) {
   std::vector<uint64_t> blob;
   size_t bytes = 0;
   mapping::MapBuildStats st;
-  s = build_map(*src, cfg, logits, road, &blob, &bytes, &st, !args.flag("quiet"));
+  uint32_t failed_scan = UINT32_MAX;
+  s = build_map(*src, cfg, options, logits, road, &blob, &bytes, &st, !args.flag("quiet"), &failed_scan);
   if (s != Status::Ok) {
-    std::fprintf(stderr, "gsf build-map: failed: %s\n", to_string(s));
+    if (failed_scan != UINT32_MAX && s == Status::InvalidInput)
+      std::fprintf(stderr, "gsf build-map: failed: %s at scan %u (file %u): its pose is more than %.0f m from the map "
+                   "origin (give an --origin near the drive) or not finite, or its points are unusable\n",
+                   to_string(s), failed_scan, src->frame_id(failed_scan), mapping::kMaxMapLocalCoordinate);
+    else
+      std::fprintf(stderr, "gsf build-map: failed: %s\n", to_string(s));
     return 1;
   }
   if (!write_file(args.get("out"), blob.data(), bytes, &err)) {
@@ -55,10 +76,13 @@ int cmd_build_map(int argc, char** argv) {
     return 1;
   }
   std::printf("map %s (%s labels): %u scans, %u voxels, %u instances (%u geometric poles), %u triangles (%u keys), %u refine points, %zu bytes "
-              "(%.2f MB/km over %.0f m); %.1f s accumulate, %.1f s cluster, %.1f s fields, %.1f s triangles\n",
+              "(%.2f MB/km over %.0f m); %.1f s accumulate, %.1f s cluster, %.1f s fields, %.1f s triangles; "
+              "peak RSS %.0f MB\n",
               args.get("out").c_str(), labels.name.c_str(), st.scans, st.map_voxels, st.instances, st.pole_instances, st.triangles, st.index_keys,
               st.refine_points, bytes, road > 0 ? bytes / 1e6 / (road / 1000.0) : 0.0, road, st.seconds_accumulate,
-              st.seconds_cluster, st.seconds_fields, st.seconds_triangles);
+              st.seconds_cluster, st.seconds_fields, st.seconds_triangles, peak_rss_bytes() / 1e6);
+  std::printf("  origin %.3f, %.3f, %.3f m in frame '%s' (map coordinates are relative to it)\n", st.georef.origin[0],
+              st.georef.origin[1], st.georef.origin[2], st.georef.frame);
   return 0;
 }
 

@@ -57,7 +57,7 @@ int cmd_demo(int argc, char** argv) {
   std::vector<uint64_t> blob;
   size_t bytes = 0;
   mapping::MapBuildStats st;
-  s = build_map(*src, default_config(), LogitMode::Synthetic, sum.road_length_m, &blob, &bytes, &st, !quiet);
+  s = build_map(*src, default_config(), mapping::MapBuilderOptions(), LogitMode::Synthetic, sum.road_length_m, &blob, &bytes, &st, !quiet);
   if (s != Status::Ok) {
     std::fprintf(stderr, "gsf demo: map build failed: %s\n", to_string(s));
     return 1;

@@ -49,6 +49,13 @@ int cmd_inspect(int argc, char** argv) {
     j.field("file", args.get("map"));
     j.field("version", kMapVersion);
     j.field("bytes", static_cast<unsigned long long>(map.total_bytes));
+    j.field("memory_mapped", file.file.mapped());
+    j.field("frame", map.georef.frame);
+    j.key("origin");
+    j.begin_array();
+    for (double o : map.georef.origin) j.exact(o);
+    j.end_array();
+    j.field("class_table_id", static_cast<unsigned long long>(map.params.class_table_id));
     j.field("road_length_m", map.counts.road_length_m);
     j.field("bytes_per_km", bytes_per_km);
     j.field("instances", map.counts.instances);
@@ -67,9 +74,14 @@ int cmd_inspect(int argc, char** argv) {
     std::printf("%s\n", j.str().c_str());
     return 0;
   }
-  std::printf("map %s: valid, format version %u, %zu bytes\n", args.get("map").c_str(), kMapVersion, map.total_bytes);
+  std::printf("map %s: valid, format version %u, %zu bytes, %s\n", args.get("map").c_str(), kMapVersion,
+              map.total_bytes, file.file.mapped() ? "memory-mapped (used in place)" : "read into memory");
+  std::printf("  frame           '%s', origin %.3f, %.3f, %.3f m (map coordinates are relative to it)\n",
+              map.georef.frame, map.georef.origin[0], map.georef.origin[1], map.georef.origin[2]);
+  std::printf("  class table     id %08x\n", map.params.class_table_id);
   std::printf("  road length     %.1f m  (%.2f MB per km)\n", map.counts.road_length_m, bytes_per_km / 1e6);
-  std::printf("  instances       %u\n", map.counts.instances);
+  std::printf("  instances       %u, map-local bounds x %.1f..%.1f, y %.1f..%.1f m\n", map.counts.instances,
+              map.counts.bounds_min[0], map.counts.bounds_max[0], map.counts.bounds_min[1], map.counts.bounds_max[1]);
   for (int c = 0; c < kNumClasses; ++c)
     if (per_class[c]) std::printf("    %-14s %u\n", class_name(c), per_class[c]);
   std::printf("  triangles       %u in %u hash keys\n", map.counts.triangles, map.counts.index_keys);

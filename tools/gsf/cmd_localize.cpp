@@ -1,4 +1,5 @@
-// gsf localize --map MAP --dataset DIR --sequence 01 [--frame N] [--mode gsf|instance]: one JSON line per scan.
+// gsf localize --map MAP --dataset DIR --sequence 01 [--frame N] [--mode gsf|instance]: one JSON line per scan,
+// the pose in the map's frame ("pose", with the map origin applied) and in the map-local frame.
 #include <cstdio>
 
 #include "args.h"
@@ -77,11 +78,11 @@ int cmd_localize(int argc, char** argv) {
     j.begin_object();
     j.field("frame", src->frame_id(i));
     j.field("status", to_string(r.status));
-    j.key("pose");
-    j.begin_array();
-    for (int row = 0; row < 3; ++row)
-      for (int c = 0; c < 4; ++c) j.value(r.map_T_scan.matrix()(row, c));
-    j.end_array();
+    // "pose" is in the map's frame (the frame of the mapping poses, "map_frame"); "pose_map_local" is
+    // the same pose relative to the map origin.
+    write_pose(j, "pose", r.map_frame_T_scan);
+    j.field("map_frame", map.georef.frame);
+    write_pose(j, "pose_map_local", r.map_T_scan);
     j.field("inliers", r.inliers);
     j.field("score", r.score);
     j.field("ambiguity", r.ambiguity);

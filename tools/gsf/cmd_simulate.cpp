@@ -1,5 +1,5 @@
 // gsf simulate --out DIR [--preset demo|tiny|suite|tiny-lattice] [--zone row|lattice|hall|avenue|auto]
-//              [--cue-density X] [--seed N] [--beams N] [--label-noise P] [--no-instance-ids] [--label-set semantic-kitti|nuscenes]
+//              [--cue-density X] [--seed N] [--beams N] [--label-noise P] [--no-instance-ids] [--label-set semantic-kitti|nuscenes] [--offset X,Y[,Z]]
 #include <cstdio>
 
 #include "args.h"
@@ -24,6 +24,8 @@ int cmd_simulate(int argc, char** argv) {
       {"beams", "LiDAR beams (e.g. 32 or 64)", ""},
       {"blocks-x", "city blocks along x (overrides the preset)", ""},
       {"blocks-y", "city blocks along y (overrides the preset)", ""},
+      {"offset", "X,Y[,Z] m added to every written pose (scans unchanged): the same drive posed in another frame, "
+                 "e.g. 512345,5412345 for UTM-size coordinates", ""},
       {"quiet", "no progress on stderr", "", true},
   };
   if (wants_help(argc, argv)) {
@@ -82,6 +84,9 @@ int cmd_simulate(int argc, char** argv) {
   if (args.has("blocks-y")) {
     if (!args.get_int("blocks-y", &v, &err) || v < 1 || v > 64) return usage_error("simulate", "--blocks-y must be 1..64");
     cfg.world.blocks_y = static_cast<int>(v);
+  }
+  if (args.has("offset")) {
+    if (!args.get_doubles("offset", 2, 3, cfg.pose_offset, nullptr, &err)) return usage_error("simulate", err);
   }
   const bool quiet = args.flag("quiet");
   sim::SimSummary sum;

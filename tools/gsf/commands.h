@@ -4,6 +4,7 @@
 #include <string>
 #include <vector>
 
+#include "gsf/port/mapped_file.h"
 #include "gsf/status.h"
 
 namespace gsf::cli {
@@ -15,11 +16,12 @@ int cmd_localize(int argc, char** argv);
 int cmd_evaluate(int argc, char** argv);
 int cmd_demo(int argc, char** argv);
 
-// A map file read into 16-byte aligned memory (as load_map requires).
+// A map file in 16-byte aligned memory (as load_map requires): memory-mapped read-only where the platform
+// allows, else read into a buffer (port/mapped_file.h). load_map then uses it in place.
 struct MapFile {
-  std::vector<uint64_t> words;
+  port::MappedFile file;
   size_t bytes = 0;
-  const void* data() const { return words.data(); }
+  const void* data() const { return file.data(); }
 };
 Status read_map_file(const std::string& path, MapFile* out, std::string* error);
 bool write_file(const std::string& path, const void* data, size_t bytes, std::string* error);

@@ -6,24 +6,10 @@
 namespace gsf::cli {
 
 Status read_map_file(const std::string& path, MapFile* out, std::string* error) {
-  std::ifstream f(path, std::ios::binary | std::ios::ate);
-  if (!f) {
-    *error = "cannot open map file '" + path + "'";
-    return Status::IoError;
-  }
-  const std::streamoff size = f.tellg();
-  if (size < 0) {
-    *error = "cannot read map file '" + path + "'";
-    return Status::IoError;
-  }
-  out->bytes = static_cast<size_t>(size);
-  out->words.assign(out->bytes / 8 + 1, 0);
-  f.seekg(0);
-  if (!f.read(reinterpret_cast<char*>(out->words.data()), size)) {
-    *error = "short read on map file '" + path + "'";
-    return Status::IoError;
-  }
-  return Status::Ok;
+  const Status s = out->file.open(path);
+  out->bytes = out->file.size();
+  if (s != Status::Ok) *error = "cannot open map file '" + path + "'";
+  return s;
 }
 
 bool write_file(const std::string& path, const void* data, size_t bytes, std::string* error) {

@@ -42,8 +42,12 @@ struct QueryRecord {
   StageMs stages;
   double ambiguity = 1.0;    // lower = more confident
   uint32_t inliers = 0;
+  // Poses in the dataset's frame (= the map's frame, georeference.h): errors are measured there.
   Eigen::Isometry3d estimate = Eigen::Isometry3d::Identity();
   Eigen::Isometry3d truth = Eigen::Isometry3d::Identity();
+  // The truth in the map-local frame (relative to the map origin), where the map's own coordinates are:
+  // for the diagnostics that compare with map instances, hypotheses and the pictures.
+  Eigen::Isometry3d truth_local = Eigen::Isometry3d::Identity();
   LocalizeResult result;     // the library's own counts for this query (diagnostics)
   uint32_t repeatable_instances = 0;  // query instances with a same-label map instance < 2 m under the truth
   uint32_t true_correspondences = 0;  // selected correspondences the ground truth agrees with (< 2 m)

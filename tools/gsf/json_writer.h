@@ -31,6 +31,15 @@ class JsonWriter {
     std::snprintf(buf, sizeof(buf), "%.9g", d);
     out_ += buf;
   }
+  // A double with every digit (%.17g: round-trips exactly), for map-frame coordinates such as UTM
+  // northings, where value()'s 9 significant digits would keep only centimetres.
+  void exact(double d) {
+    value_prefix();
+    if (!std::isfinite(d)) { out_ += "null"; return; }
+    char buf[40];
+    std::snprintf(buf, sizeof(buf), "%.17g", d);
+    out_ += buf;
+  }
   void value(long long v) { value_prefix(); out_ += std::to_string(v); }
   void value(unsigned long long v) { value_prefix(); out_ += std::to_string(v); }
   void value(int v) { value(static_cast<long long>(v)); }

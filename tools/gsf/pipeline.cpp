@@ -199,9 +199,11 @@ double path_length(port::ScanSource& src) {
   return len;
 }
 
-Status build_map(port::ScanSource& src, const LocalizerConfig& config, LogitMode logits, float road_length,
-                 std::vector<uint64_t>* blob, size_t* bytes, mapping::MapBuildStats* stats, bool progress) {
-  mapping::MapBuilder builder(config);
+Status build_map(port::ScanSource& src, const LocalizerConfig& config, const mapping::MapBuilderOptions& options,
+                 LogitMode logits, float road_length, std::vector<uint64_t>* blob, size_t* bytes,
+                 mapping::MapBuildStats* stats, bool progress, uint32_t* failed_scan) {
+  if (failed_scan) *failed_scan = UINT32_MAX;
+  mapping::MapBuilder builder(config, options);
   port::OwnedScanBuffer buf(kMaxScanPoints, true);
   for (uint32_t i = 0; i < src.size(); ++i) {
     Eigen::Isometry3d pose;
@@ -210,7 +212,11 @@ Status build_map(port::ScanSource& src, const LocalizerConfig& config, LogitMode
     s = read_scan(src, i, buf.buffer(), logits, 1000000u + src.frame_id(i), config.classes);
     if (s != Status::Ok) return s;
     s = builder.add_scan(buf.buffer().view(), pose);
-    if (s != Status::Ok) return s;
+    if (s != Status::Ok) {
+      if (failed_scan) *failed_scan = i;
+      if (progress) std::fprintf(stderr, "\n");
+      return s;
+    }
     if (progress && (i % 25 == 0 || i + 1 == src.size()))
       std::fprintf(stderr, "\r  build-map: accumulated %u / %u scans", i + 1, src.size());
   }

@@ -29,6 +29,14 @@ void write_stage_ms(JsonWriter& j, const char* key, const StageMs& t) {
   j.end_object();
 }
 
+void write_pose(JsonWriter& j, const char* key, const Eigen::Isometry3d& pose) {
+  j.key(key);
+  j.begin_array();
+  for (int row = 0; row < 3; ++row)
+    for (int c = 0; c < 4; ++c) j.exact(pose.matrix()(row, c));
+  j.end_array();
+}
+
 void write_result_diagnostics(JsonWriter& j, const LocalizeResult& x, const QueryTruth* truth) {
   j.key("diagnostics");
   j.begin_object();

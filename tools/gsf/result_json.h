@@ -14,7 +14,7 @@
 namespace gsf::cli {
 
 struct QueryTruth {
-  Eigen::Isometry3d truth = Eigen::Isometry3d::Identity();
+  Eigen::Isometry3d truth = Eigen::Isometry3d::Identity();  // map-local (to_map_local of the dataset pose)
   uint32_t true_correspondences = 0;  // selected correspondences the truth agrees with
   // Query instances that have a map instance of the same label within 2 m under the true pose (what
   // any matcher could find at best), of query_instances.
@@ -27,7 +27,10 @@ StageMs stage_ms(const StageTimes& times);
 // Writes `key` with the nine stage times.
 void write_stage_ms(JsonWriter& j, const char* key, const StageMs& t);
 
-// Writes key "diagnostics" with an object; `truth` may be null.
+// Writes `key` with a pose as 12 numbers, row-major 3x4 [R | t], every digit kept (JsonWriter::exact).
+void write_pose(JsonWriter& j, const char* key, const Eigen::Isometry3d& pose);
+
+// Writes key "diagnostics" with an object; `truth` may be null. Hypotheses are map-local, so is truth.
 void write_result_diagnostics(JsonWriter& j, const LocalizeResult& x, const QueryTruth* truth);
 
 }  // namespace gsf::cli

@@ -33,7 +33,7 @@ struct ModeRun {
 // The library's per-query counts: where candidates were dropped, what the hypotheses were.
 void write_diagnostics(JsonWriter& j, const QueryRecord& r) {
   QueryTruth t;
-  t.truth = r.truth;
+  t.truth = r.truth_local;
   t.true_correspondences = r.true_correspondences;
   t.repeatable_instances = r.repeatable_instances;
   t.truth_verified_score = r.truth_verified_score;
@@ -48,6 +48,11 @@ void write_json(const std::string& path, const EvalOptions& o, const MapView& ma
   j.field("dataset", o.dataset);
   j.field("sequence", o.sequence);
   j.field("map_bytes", static_cast<unsigned long long>(map.total_bytes));
+  j.field("map_frame", map.georef.frame);
+  j.key("map_origin");
+  j.begin_array();
+  for (double o : map.georef.origin) j.exact(o);
+  j.end_array();
   j.field("road_length_m", map.counts.road_length_m);
   j.field("map_bytes_per_km", map.counts.road_length_m > 0 ? map.total_bytes / (map.counts.road_length_m / 1000.0) : 0.0);
   j.field("map_instances", map.counts.instances);
@@ -113,6 +118,7 @@ void write_json(const std::string& path, const EvalOptions& o, const MapView& ma
       j.field("time_ms", r.time_ms);
       j.field("ambiguity", r.ambiguity);
       j.field("inliers", r.inliers);
+      if (r.answered) write_pose(j, "pose", r.estimate);  // the map's frame (the dataset's)
       if (run.mode != "scan-context") write_diagnostics(j, r);
       j.end_object();
     }
@@ -142,7 +148,7 @@ void write_svgs(const EvalOptions& o, const MapView& map, const std::vector<Mode
   for (uint32_t i = 0; i < map.counts.instances; ++i)
     c.circle(map.instances[i].centroid[0], map.instances[i].centroid[1], 1.6, class_colour(map.instances[i].label), 0.8);
   for (const auto& r : shown->records) {
-    const auto t = r.truth.translation();
+    const auto t = r.truth_local.translation();  // map-local, like the map's instances
     c.circle(t.x(), t.y(), 5, r.success ? "#1a9850" : (r.answered ? "#d73027" : "#999999"), 0.9);
   }
   c.text_px(20, 16, "map instances by class; queries (" + shown->mode + "): green = success, red = wrong pose, grey = no answer", 13);
@@ -157,7 +163,7 @@ void write_svgs(const EvalOptions& o, const MapView& map, const std::vector<Mode
   if (pick < 0) return;
   for (const ModeRun* run : {inst, gsf}) {
     const QueryRecord& r = run->records[pick];
-    const Eigen::Isometry3d& T = r.truth;
+    const Eigen::Isometry3d& T = r.truth_local;
     const Eigen::Vector3d p = T.translation();
     SvgCanvas f(p.x() - 60, p.y() - 45, p.x() + 60, p.y() + 45, 900);
     for (uint32_t i = 0; i < map.counts.instances; ++i) {
@@ -256,6 +262,8 @@ int run_evaluation(const EvalOptions& o) {
   for (uint32_t q = 0; q < nq && !locs.empty(); ++q) {
     Eigen::Isometry3d truth;
     src->pose(q, &truth);
+    // The map's coordinates are relative to its origin; the dataset's poses are in the map's frame.
+    const Eigen::Isometry3d truth_local = to_map_local(map.georef, truth);
     const Status rs = read_scan(*src, q, buf.buffer(), o.logits, 2000000u + src->frame_id(q), labels.config_table());
     for (LocalizerMode& lm : locs) {
       QueryRecord r;
@@ -264,6 +272,7 @@ int run_evaluation(const EvalOptions& o) {
       r.in_zone = q < meta.query_in_zone.size() && meta.query_in_zone[q];
       r.near_zone = q < meta.query_near_zone.size() && meta.query_near_zone[q];
       r.truth = truth;
+      r.truth_local = truth_local;
       LocalizeResult res;
       if (rs == Status::Ok) {
         lm.loc->localize(buf.buffer().view(), &res);
@@ -272,7 +281,7 @@ int run_evaluation(const EvalOptions& o) {
       }
       r.status = to_string(res.status);
       r.answered = res.status == Status::Ok;
-      r.estimate = res.map_T_scan;
+      r.estimate = res.map_frame_T_scan;
       r.ambiguity = res.ambiguity;
       r.inliers = res.inliers;
       r.result = res;
@@ -284,7 +293,7 @@ int run_evaluation(const EvalOptions& o) {
       }
       const uint32_t nc = lm.loc->last_correspondences(corr.data(), static_cast<uint32_t>(corr.size()));
       for (uint32_t k = 0; k < nc && k < corr.size(); ++k) {
-        const Eigen::Vector3d qw = truth * Eigen::Vector3d(corr[k].query_xyz[0], corr[k].query_xyz[1], corr[k].query_xyz[2]);
+        const Eigen::Vector3d qw = truth_local * Eigen::Vector3d(corr[k].query_xyz[0], corr[k].query_xyz[1], corr[k].query_xyz[2]);
         const float* m = map.instances[corr[k].map_instance].centroid;
         if ((qw - Eigen::Vector3d(m[0], m[1], m[2])).norm() < 2.0) ++r.true_correspondences;
       }
@@ -293,7 +302,7 @@ int run_evaluation(const EvalOptions& o) {
         uint8_t qlab[1024];
         const uint32_t ni = std::min<uint32_t>(lm.loc->last_instances(qxyz, qlab, 1024), 1024);
         for (uint32_t i = 0; i < ni; ++i) {
-          const Eigen::Vector3d qw = truth * Eigen::Vector3d(qxyz[3 * i], qxyz[3 * i + 1], qxyz[3 * i + 2]);
+          const Eigen::Vector3d qw = truth_local * Eigen::Vector3d(qxyz[3 * i], qxyz[3 * i + 1], qxyz[3 * i + 2]);
           for (uint32_t m = 0; m < map.counts.instances; ++m) {  // host tool: a linear scan is fine
             const float* c = map.instances[m].centroid;
             if (map.instances[m].label == qlab[i] && (qw - Eigen::Vector3d(c[0], c[1], c[2])).norm() < 2.0) {
@@ -303,7 +312,7 @@ int run_evaluation(const EvalOptions& o) {
           }
         }
       }
-      if (res.status == Status::Ok) r.truth_verified_score = lm.loc->score_pose(truth).score;
+      if (res.status == Status::Ok) r.truth_verified_score = lm.loc->score_pose(truth_local).score;
       runs[lm.run].corr.emplace_back(corr.begin(), corr.begin() + std::min<size_t>(nc, corr.size()));
       runs[lm.run].records.push_back(r);
     }
@@ -333,6 +342,7 @@ int run_evaluation(const EvalOptions& o) {
         r.in_zone = q < meta.query_in_zone.size() && meta.query_in_zone[q];
         r.near_zone = q < meta.query_near_zone.size() && meta.query_near_zone[q];
         src->pose(q, &r.truth);
+        r.truth_local = to_map_local(map.georef, r.truth);
         if (src->read(q, buf.buffer()) == Status::Ok) {
           const auto t0 = std::chrono::steady_clock::now();
           const auto desc = bench::make_scan_context(sc, buf.buffer().points, 4, buf.buffer().count);
@@ -363,8 +373,10 @@ int run_evaluation(const EvalOptions& o) {
     if (s2.mode == "instance") base = s2.median_ms;
   for (auto& s2 : sums) s2.time_ratio_to_gsf_off = base > 0 ? s2.median_ms / base : 0;
   const double km = map.counts.road_length_m / 1000.0;
-  std::printf("\nmap: %zu bytes, %u instances, %u triangles, %.0f m of road -> %.2f MB/km\n", map.total_bytes,
-              map.counts.instances, map.counts.triangles, map.counts.road_length_m, km > 0 ? map.total_bytes / 1e6 / km : 0.0);
+  std::printf("\nmap: %zu bytes, %u instances, %u triangles, %.0f m of road -> %.2f MB/km; origin %.3f, %.3f, %.3f in '%s'\n",
+              map.total_bytes, map.counts.instances, map.counts.triangles, map.counts.road_length_m,
+              km > 0 ? map.total_bytes / 1e6 / km : 0.0, map.georef.origin[0], map.georef.origin[1], map.georef.origin[2],
+              map.georef.frame);
   std::printf("queries: %u (%u in the repetitive zone%s%s, %u near it, %u elsewhere); success = t < %.0f m and r < %.0f deg\n\n",
               nq, sums.empty() ? 0 : sums[0].zone_queries, meta.zone_type.empty() ? "" : ": ", meta.zone_type.c_str(),
               sums.empty() ? 0 : sums[0].near_zone_queries, sums.empty() ? 0 : sums[0].elsewhere_queries,

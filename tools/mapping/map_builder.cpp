@@ -4,8 +4,10 @@
 #include <chrono>
 #include <cmath>
 #include <cstring>
+#include <memory>
 
 #include "gsf/arena.h"
+#include "gsf/class_table.h"
 #include "gsf/fixed_vector.h"
 #include "gsf/gaussian_field.h"
 #include "gsf/instance_clustering.h"
@@ -22,7 +24,9 @@ double seconds_since(std::chrono::steady_clock::time_point t0) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
 }
 
-uint64_t world_key(const Eigen::Vector3d& p, double size) {
+// Key of the map-local voxel holding p: 21 bits per axis, so 2^20 voxels either side of the origin
+// (419 km at 0.4 m) before keys wrap; add_scan keeps poses within kMaxMapLocalCoordinate of it.
+uint64_t voxel_key(const Eigen::Vector3d& p, double size) {
   const int64_t x = static_cast<int64_t>(std::floor(p.x() / size)) + (1 << 20);
   const int64_t y = static_cast<int64_t>(std::floor(p.y() / size)) + (1 << 20);
   const int64_t z = static_cast<int64_t>(std::floor(p.z() / size)) + (1 << 20);
@@ -38,14 +42,30 @@ struct Workspace {
 
 }  // namespace
 
-MapBuilder::MapBuilder(const LocalizerConfig& config, float refine_voxel)
-    : config_(config), classes_(label_set(config)), refine_voxel_(refine_voxel) {
+MapBuilder::MapBuilder(const LocalizerConfig& config, const MapBuilderOptions& options)
+    : config_(config), classes_(label_set(config)), options_(options), georef_(local_georeference()) {
   if (config_.classes) config_.classes = &classes_;
   scan_arena_.resize(VoxelLayer::required_bytes(config_.voxel) + 64);
+  georef_valid_ = set_frame_name(&georef_, options_.frame.c_str());
+  for (int k = 0; k < 3; ++k) georef_.origin[k] = options_.origin[k];
+  georef_valid_ = georef_valid_ && valid_georeference(georef_);
+  origin_fixed_ = options_.origin_given;
 }
 
-Status MapBuilder::add_scan(const ScanView& scan, const Eigen::Isometry3d& world_T_lidar) {
+Status MapBuilder::add_scan(const ScanView& scan, const Eigen::Isometry3d& frame_T_lidar) {
   const auto t0 = std::chrono::steady_clock::now();
+  if (!georef_valid_) return Status::InvalidArgument;
+  if (!frame_T_lidar.matrix().allFinite()) return Status::InvalidInput;
+  if (!origin_fixed_) {
+    // Half up, not std::round's half away from zero: floor(x + 0.5) moves by exactly n when x moves by a
+    // whole n, so a drive shifted by whole metres gets an origin shifted by the same (sim poses start at
+    // y = -2.5, where std::round would give -3 unshifted but 5412343 = 5412345 - 2 shifted).
+    for (int k = 0; k < 3; ++k) georef_.origin[k] = std::floor(frame_T_lidar.translation()[k] + 0.5);
+    origin_fixed_ = true;
+  }
+  // Into the map-local frame in double, before anything becomes float.
+  const Eigen::Isometry3d map_T_lidar = to_map_local(georef_, frame_T_lidar);
+  if (map_T_lidar.translation().cwiseAbs().maxCoeff() > kMaxMapLocalCoordinate) return Status::InvalidInput;
   void* base = reinterpret_cast<void*>((reinterpret_cast<uintptr_t>(scan_arena_.data()) + 15) & ~uintptr_t(15));
   Arena arena(base, scan_arena_.size() - 16);
   VoxelLayer layer;
@@ -57,8 +77,8 @@ Status MapBuilder::add_scan(const ScanView& scan, const Eigen::Isometry3d& world
   const double vs = config_.voxel.voxel_size;
   for (uint32_t i = 0; i < layer.size(); ++i) {
     const Voxel& v = layer.voxel(i);
-    const Eigen::Vector3d p = world_T_lidar * Eigen::Vector3d(v.centroid[0], v.centroid[1], v.centroid[2]);
-    Accum& a = voxels_[world_key(p, vs)];
+    const Eigen::Vector3d p = map_T_lidar * Eigen::Vector3d(v.centroid[0], v.centroid[1], v.centroid[2]);
+    Accum& a = voxels_[voxel_key(p, vs)];
     for (int k = 0; k < 3; ++k) a.sum[k] += p[k] * v.count;
     for (int c = 0; c < kNumClasses; ++c) a.prob[c] += double(v.prob[c]) * v.count;
     a.count += v.count;
@@ -73,6 +93,7 @@ Status MapBuilder::build(std::vector<uint64_t>* blob, size_t* bytes_out, MapBuil
                          const Progress& progress) {
   *bytes_out = 0;
   MapBuildStats st = stats_;
+  st.georef = georef_;
   // Deterministic voxel order (unordered_map iteration order is not).
   std::vector<uint64_t> keys;
   keys.reserve(voxels_.size());
@@ -208,14 +229,14 @@ Status MapBuilder::build(std::vector<uint64_t>* blob, size_t* bytes_out, MapBuil
 
   // Refinement layer: long-term structure downsampled to refine_voxel.
   std::vector<float> refine;
-  if (refine_voxel_ > 0.0f) {
+  if (options_.refine_voxel > 0.0f) {
     std::unordered_map<uint64_t, std::pair<Eigen::Vector3d, uint32_t>> cells;
     std::vector<uint64_t> order;
     for (uint32_t i = 0; i < layer.size(); ++i) {
       const Voxel& v = layer.voxel(i);
       if (classes_.stability(v.label) < 1.0f) continue;
       const Eigen::Vector3d p(v.centroid[0], v.centroid[1], v.centroid[2]);
-      const uint64_t k = world_key(p, refine_voxel_);
+      const uint64_t k = voxel_key(p, options_.refine_voxel);
       auto it = cells.find(k);
       if (it == cells.end()) {
         cells.emplace(k, std::make_pair(p, uint32_t(v.label)));
@@ -236,6 +257,7 @@ Status MapBuilder::build(std::vector<uint64_t>* blob, size_t* bytes_out, MapBuil
   st.semantic_tiles = static_cast<uint32_t>(sem_keys.size());
 
   MapView view;
+  view.georef = georef_;
   view.params = map_params_from(config_);
   view.counts.instances = ni;
   view.counts.triangles = nt;

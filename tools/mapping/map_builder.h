@@ -1,10 +1,13 @@
 // Offline map building (host side; may use the heap). Scans with their poses are voxelised one by one
-// with the same VoxelLayer the localizer uses, and their voxels accumulate into one world-frame voxel
-// map (class probabilities averaged, weighted by point counts). build() then runs the localizer's own
+// with the same VoxelLayer the localizer uses, and their voxels accumulate into one map-local voxel map
+// (class probabilities averaged, weighted by point counts). Poses come in the map's frame (e.g. UTM
+// metres); the builder moves them to the map-local frame by subtracting the map origin in double before
+// anything becomes float (georeference.h), so maps of GNSS-posed drives keep millimetres. build() then runs the localizer's own
 // stages over the whole map: instance clustering (an object seen from many scans is one instance), one
 // Gaussian semantic field per instance probed on its canonical grid, triangles and the hash index,
 // plus a downsampled point layer for refinement, and serialises the map blob (map_format.h).
 #pragma once
+#include <array>
 #include <cstdint>
 #include <functional>
 #include <string>
@@ -14,6 +17,7 @@
 #include <Eigen/Geometry>
 
 #include "gsf/config.h"
+#include "gsf/georeference.h"
 #include "gsf/scan.h"
 #include "gsf/status.h"
 #include "mapping/semantic_layer.h"
@@ -33,18 +37,39 @@ struct MapBuildStats {
   uint32_t semantic_tiles = 0;
   uint32_t fields_failed = 0;
   size_t bytes = 0;
+  MapGeoreference georef = local_georeference();  // the map's origin and frame
   double seconds_accumulate = 0, seconds_cluster = 0, seconds_fields = 0, seconds_triangles = 0;
 };
 
 using Progress = std::function<void(const char* stage, uint64_t done, uint64_t total)>;
 
+// Scan poses farther than this from the map origin (m, on any axis) are refused with InvalidInput: float32
+// steps there are 1/64 m, still far below the 0.4 m voxels, and the builder's voxel keys (2^20 voxels
+// either side) and the semantic layer's tile keys (32768 tiles either side) reach well beyond it.
+constexpr double kMaxMapLocalCoordinate = 131072.0;
+
+struct MapBuilderOptions {
+  float refine_voxel = 1.0f;  // m; cell of the refinement point layer (<= 0: no layer)
+  // The map origin in the frame of the poses. Not given: the first scan's pose translation rounded (half
+  // up) to a whole metre. A whole-metre origin keeps the subtraction exact for poses posed to float
+  // precision, so the same drive shifted by whole metres gets the same map-local frame and the same map.
+  bool origin_given = false;
+  std::array<double, 3> origin = {0.0, 0.0, 0.0};
+  std::string frame = "local";  // name of the poses' frame (1..31 printable ASCII), e.g. "utm-32N"
+};
+
 class MapBuilder {
  public:
   // `config` supplies the stages' settings; its per-scan capacities are raised for the whole map. Its
   // label set (config.classes, copied) maps the scans' raw labels and decides instance classes,
-  // geometric pole / trunk hosts and stabilities, as in the localizer.
-  explicit MapBuilder(const LocalizerConfig& config, float refine_voxel = 1.0f);
-  Status add_scan(const ScanView& scan, const Eigen::Isometry3d& world_T_lidar);
+  // geometric pole / trunk hosts and stabilities, as in the localizer; the map records its id.
+  explicit MapBuilder(const LocalizerConfig& config, const MapBuilderOptions& options = MapBuilderOptions());
+  // `frame_T_lidar`: the scan's pose in the map's frame (options.frame). InvalidArgument for a bad origin
+  // or frame name in the options, InvalidInput for a non-finite pose or one beyond
+  // kMaxMapLocalCoordinate from the origin (the scan is then not added).
+  Status add_scan(const ScanView& scan, const Eigen::Isometry3d& frame_T_lidar);
+  // The map's georeference: final once the first scan was added (or at once when the origin was given).
+  const MapGeoreference& georeference() const { return georef_; }
   void set_road_length(float metres) { road_length_ = metres; }
   // The semantic layer used to verify pose hypotheses; cell <= 0 leaves it out of the map.
   void set_semantic_layer(const SemanticLayerConfig& c) { semantic_ = c; }
@@ -59,7 +84,10 @@ class MapBuilder {
   };
   LocalizerConfig config_;
   ClassTable classes_;  // copy of the label set; config_.classes points here
-  float refine_voxel_;
+  MapBuilderOptions options_;
+  MapGeoreference georef_;
+  bool georef_valid_ = false;
+  bool origin_fixed_ = false;
   float road_length_ = 0.0f;
   SemanticLayerConfig semantic_;
   MapBuildStats stats_;

@@ -280,7 +280,9 @@ Status run_simulation(const SimConfig& c, const std::string& root, SimSummary* s
       sum.points += scan.size();
       if (progress) progress(seq == 0 ? "mapping drive" : "query drive", f + 1, static_cast<uint32_t>(d.poses.size()));
     }
-    s = c.nuscenes_labels ? nus_writer.write_poses(d.poses) : writer.write_poses(d.poses);
+    std::vector<Eigen::Isometry3d> posed = d.poses;  // the scans stay in the sensor frame; only poses move
+    for (Eigen::Isometry3d& p : posed) p.translation() += Eigen::Vector3d(c.pose_offset[0], c.pose_offset[1], c.pose_offset[2]);
+    s = c.nuscenes_labels ? nus_writer.write_poses(posed) : writer.write_poses(posed);
     if (s != Status::Ok) return s;
   }
   sum.map_scans = static_cast<uint32_t>(map.poses.size());
@@ -303,6 +305,9 @@ Status run_simulation(const SimConfig& c, const std::string& root, SimSummary* s
   meta << "  \"time_gap\": {\"seed\": " << c.time_gap.seed << ", \"cars_removed\": " << c.time_gap.cars_removed
        << ", \"cars_moved\": " << c.time_gap.cars_moved << ", \"vegetation_change\": " << c.time_gap.vegetation_change
        << ", \"bushes_cut\": " << c.time_gap.bushes_cut << "},\n";
+  char offset[96];  // every digit (the stream's default 6 would print 5.41234e+06)
+  std::snprintf(offset, sizeof(offset), "[%.17g, %.17g, %.17g]", c.pose_offset[0], c.pose_offset[1], c.pose_offset[2]);
+  meta << "  \"pose_offset\": " << offset << ",\n";
   meta << "  \"road_length_m\": " << sum.road_length_m << ",\n  \"map_sequence\": \"00\",\n  \"query_sequence\": \"01\",\n";
   meta << "  \"map_scans\": " << sum.map_scans << ",\n  \"queries\": " << sum.queries << ",\n";
   meta << "  \"query_in_repetitive_zone\": [";

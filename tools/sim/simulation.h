@@ -41,6 +41,9 @@ struct SimConfig {
   // (lidarseg/, uint8, kitti_to_nuscenes): poles, signs, fences and trunks lose their classes inside
   // static.manmade / static.vegetation, as in real nuScenes data.
   bool nuscenes_labels = false;
+  // Added to every written pose's translation (in double): the same world and the same scans posed in
+  // another frame, e.g. UTM metres as a GNSS/INS-posed drive would be. meta.json records it.
+  double pose_offset[3] = {0.0, 0.0, 0.0};
   static SimConfig demo();  // a few km of road, hundreds of map scans, 100+ queries
   static SimConfig tiny();  // seconds to generate, for tests
   // bench/suite.sh: a 2 x 2-block city plus the zone, cue density 0.5, ~100-150 queries, ~40 in the zone.

@@ -92,10 +92,15 @@ typedef struct gsf_map {
   uint64_t opaque[48];
 } gsf_map;
 
+// Map coordinates are float32 in a map-local frame relative to `origin`; `frame` names the frame the
+// origin (and gsf_result.map_frame_T_scan) is given in - the frame of the mapping poses, e.g. "utm-32N".
+#define GSF_MAP_FRAME_NAME_BYTES 32
 typedef struct gsf_map_info {
   uint32_t instances, triangles, refine_points;
   float road_length_m;
   uint64_t total_bytes;
+  double origin[3];                      // m, in `frame`: where the map-local (0, 0, 0) is
+  char frame[GSF_MAP_FRAME_NAME_BYTES];  // NUL-terminated printable ASCII, e.g. "local", "utm-32N"
 } gsf_map_info;
 
 // Validates `blob` (16-byte aligned, exactly `bytes` long) completely and points `out` into it. Never
@@ -124,7 +129,9 @@ int gsf_localizer_init(void* storage, size_t storage_bytes, const gsf_config* co
 typedef struct gsf_result {
   int status;             // also the return value of gsf_localize
   uint32_t inliers;       // correspondences agreeing with the pose
-  double map_T_scan[12];  // row-major 3x4 [R | t]: p_map = R p_scan + t
+  // The pose, row-major 3x4 [R | t] (p = R p_scan + t), in two frames with the same R:
+  double map_T_scan[12];        // map-local frame: t relative to the map origin (gsf_map_info.origin)
+  double map_frame_T_scan[12];  // the map's frame (gsf_map_info.frame): t = map-local t + origin, in double
   double ambiguity;       // 0 = unambiguous ... 1 = decline (see gsf::LocalizeResult)
   double score;           // sum of inlier weights
   uint64_t clique_nodes;

@@ -26,7 +26,7 @@ struct StageTimes {  // nanoseconds from the Clock given at init (all zero witho
 
 // One pose hypothesis as the localizer saw it (diagnostics).
 struct HypothesisReport {
-  float x = 0, y = 0, yaw_deg = 0;   // map_T_scan translation and heading
+  float x = 0, y = 0, yaw_deg = 0;   // map_T_scan translation (map-local) and heading
   uint32_t clique_size = 0, inliers = 0;
   float support = 0;                 // sum of inlier weights
   float verified_score = 0;          // agree - disagree (semantic_grid.h); 0 without verification
@@ -39,7 +39,14 @@ constexpr uint32_t kMaxReportedHypotheses = 16;  // the best by verified score (
 
 struct LocalizeResult {
   Status status = Status::NotInitialized;
-  Eigen::Isometry3d map_T_scan = Eigen::Isometry3d::Identity();  // maps scan points into the map frame
+  // The pose twice (georeference.h). map_T_scan: map-local frame, relative to the map origin - what
+  // every stage computes in, and the frame of the map's own coordinates (instances, hypotheses below).
+  // map_frame_T_scan: the same pose in the map's frame (MapView::georef.frame, the frame the mapping
+  // poses were in, e.g. UTM metres): map_T_scan with the origin added to the translation in double. Both
+  // map scan points (p = R p_scan + t); the rotations are equal. Without an answer map_T_scan is the
+  // identity and map_frame_T_scan the origin (the identity before init).
+  Eigen::Isometry3d map_T_scan = Eigen::Isometry3d::Identity();
+  Eigen::Isometry3d map_frame_T_scan = Eigen::Isometry3d::Identity();
   uint32_t inliers = 0;          // correspondences agreeing with the pose (after TLS)
   uint32_t clique_size = 0;
   double score = 0.0;            // sum of inlier weights
@@ -105,8 +112,9 @@ class Localizer {
   // The query instances of the last localize() (clustered, then geometric poles): up to `max`
   // centroids (x, y, z in the scan frame) and labels; returns how many there were.
   uint32_t last_instances(float* xyz, uint8_t* labels, uint32_t max) const;
-  // Whole-scan verification of any pose against the last scan (diagnostics: how the ground truth would
-  // have scored). Zero scores without a map semantic layer or before the first localize().
+  // Whole-scan verification of any pose (map-local: to_map_local(map.georef, truth) for a ground truth in
+  // the map's frame) against the last scan (diagnostics: how the ground truth would have scored). Zero
+  // scores without a map semantic layer or before the first localize().
   PoseVerification score_pose(const Eigen::Isometry3d& map_T_scan) const;
 
   bool initialized() const { return initialized_; }

@@ -11,6 +11,7 @@
 #include <cstddef>
 #include <cstdint>
 
+#include "gsf/georeference.h"
 #include "gsf/semantic_grid.h"
 #include "gsf/status.h"
 #include "gsf/triangle.h"
@@ -18,7 +19,9 @@
 namespace gsf {
 
 constexpr char kMapMagic[8] = {'G', 'S', 'F', 'M', 'A', 'P', '\r', '\n'};
-constexpr uint32_t kMapVersion = 2;  // 2: semantic layer for hypothesis verification (v1 -> VersionMismatch)
+// 2: semantic layer for hypothesis verification; 3: georeference (origin + frame) and the class table id.
+// Older maps -> VersionMismatch (rebuild with gsf build-map).
+constexpr uint32_t kMapVersion = 3;
 
 // Parameters the map was built with that a localizer must agree with (checked by the Localizer).
 struct MapParams {
@@ -35,8 +38,10 @@ struct MapParams {
   float side_bin, min_side, max_side;
   float semantic_cell;           // m; cell of the semantic layer (0 when the map has none)
   uint32_t semantic_tile_cells;  // cells per tile side (0 when the map has none)
-  uint32_t reserved[2];
+  uint32_t class_table_id;       // ClassTable::id() of the label set the map was built with (class_table.h)
+  uint32_t reserved;
 };
+static_assert(sizeof(MapParams) == 92, "on-disk layout (docs/map-format.md)");
 
 struct MapCounts {
   uint32_t instances;
@@ -48,6 +53,7 @@ struct MapCounts {
   float bounds_max[3];
   uint32_t semantic_tiles; // tiles of the semantic layer (0: no layer; verification is then off)
 };
+static_assert(sizeof(MapCounts) == 48, "on-disk layout (docs/map-format.md)");
 
 struct MapHeader {
   char magic[8];
@@ -56,10 +62,11 @@ struct MapHeader {
   uint64_t total_bytes;    // whole blob
   uint32_t section_count;
   uint32_t flags;
+  MapGeoreference georef;  // double origin of the map-local frame and the name of the map's frame
   MapParams params;
   MapCounts counts;
   uint32_t header_crc;     // CRC-32 of header (this field as 0) + section table
-  uint32_t pad;
+  uint32_t pad[2];         // explicit, so the header has no compiler padding (all of it is CRC-covered)
 };
 
 enum class MapSection : uint32_t {
@@ -98,10 +105,15 @@ struct MapInstance {
 static_assert(sizeof(MapInstance) == 32, "on-disk layout");
 
 using MapTriangle = Triangle;  // triangle.h: sides sorted d01 <= d12 <= d20
-static_assert(sizeof(MapHeader) == 184 && sizeof(SectionEntry) == 32, "on-disk layout (docs/map-format.md)");
+static_assert(sizeof(MapHeader) == 240 && sizeof(SectionEntry) == 32, "on-disk layout (docs/map-format.md)");
+static_assert(offsetof(MapHeader, georef) == 32 && offsetof(MapHeader, params) == 88 &&
+                  offsetof(MapHeader, counts) == 180 && offsetof(MapHeader, header_crc) == 228,
+              "on-disk layout (docs/map-format.md)");
 
-// Zero-copy view over a validated blob (or, for write_map, over the builder's arrays).
+// Zero-copy view over a validated blob (or, for write_map, over the builder's arrays). Coordinates in
+// the sections are map-local (relative to georef.origin); georef says where that is.
 struct MapView {
+  MapGeoreference georef = local_georeference();
   MapParams params{};
   MapCounts counts{};
   const MapInstance* instances = nullptr;

@@ -1,0 +1,140 @@
+// MapBuilder's georeferencing: the origin it picks (first pose rounded half up, or the one given), the
+// frame name and class table id it records, and that subtracting the origin in double makes a drive
+// posed in UTM-size coordinates give the same map as the same drive posed locally.
+#include <catch2/catch.hpp>
+
+#include <cmath>
+#include <cstring>
+#include <string>
+#include <vector>
+
+#include "gsf/class_table.h"
+#include "gsf/map_format.h"
+#include "mapping/map_builder.h"
+#include "tiny_world.h"
+
+using namespace gsf;
+
+namespace {
+
+constexpr double kEast = 512345.0, kNorth = 5412345.0;  // a UTM-size shift (zone 32N, near Munich)
+
+// The first scans of the tiny world's mapping drive (enough for a map with instances and triangles).
+struct Drive {
+  std::vector<gsf_test::QueryScan> scans;
+  Drive() {
+    const sim::SimConfig sc = sim::SimConfig::tiny();
+    const sim::World world = sim::generate_world(sc.world);
+    const sim::Raycaster rc(world);
+    const sim::Drive md = sim::mapping_drive(world, sc);
+    for (uint32_t f = 0; f < 12 && f < md.poses.size(); ++f) {
+      gsf_test::QueryScan s;
+      gsf_test::make_scan(rc, sc, md.poses[f], sim::scan_seed(sc.world.seed, 0, f), 1000000u + f, &s);
+      scans.push_back(std::move(s));
+    }
+  }
+};
+
+const Drive& drive() {
+  static const Drive d;
+  return d;
+}
+
+struct Built {
+  Status add = Status::Ok, build = Status::Ok;
+  std::vector<uint64_t> blob;
+  size_t bytes = 0;
+  MapView map;
+  const uint8_t* sections() const { return reinterpret_cast<const uint8_t*>(blob.data()) + 624; }
+};
+
+Built build(const mapping::MapBuilderOptions& options, const Eigen::Vector3d& shift) {
+  LocalizerConfig cfg;
+  cfg.max_scan_points = 262144;
+  mapping::MapBuilder builder(cfg, options);
+  Built b;
+  for (const auto& s : drive().scans) {
+    Eigen::Isometry3d pose = s.truth;
+    pose.translation() += shift;
+    b.add = builder.add_scan(s.view(), pose);
+    if (b.add != Status::Ok) return b;
+  }
+  builder.set_road_length(120.0f);
+  mapping::MapBuildStats st;
+  b.build = builder.build(&b.blob, &b.bytes, &st);
+  if (b.build == Status::Ok) b.build = load_map(b.blob.data(), b.bytes, &b.map);
+  return b;
+}
+
+}  // namespace
+
+TEST_CASE("The default origin is the first pose rounded half up to a whole metre; the class table is recorded") {
+  const Built local = build(mapping::MapBuilderOptions(), Eigen::Vector3d::Zero());
+  REQUIRE(local.build == Status::Ok);
+  const Eigen::Vector3d first = drive().scans[0].truth.translation();  // (0, -2.5, 1.73) in the tiny world
+  for (int k = 0; k < 3; ++k) CHECK(local.map.georef.origin[k] == std::floor(first[k] + 0.5));
+  CHECK(local.map.georef.origin[1] == -2.0);  // half up: -2.5 -> -2 (std::round would give -3)
+  CHECK(std::string(local.map.georef.frame) == "local");
+  ClassTable kitti;
+  semantic_kitti_class_table(&kitti);
+  CHECK(local.map.params.class_table_id == kitti.id());
+  CHECK(local.map.counts.instances > 10);
+  CHECK(local.map.counts.triangles > 10);
+}
+
+TEST_CASE("A drive shifted by a UTM-size offset gives the same map sections, with the origin shifted exactly") {
+  const Built local = build(mapping::MapBuilderOptions(), Eigen::Vector3d::Zero());
+  const Built utm = build(mapping::MapBuilderOptions(), Eigen::Vector3d(kEast, kNorth, 0.0));
+  REQUIRE(local.build == Status::Ok);
+  REQUIRE(utm.build == Status::Ok);
+  CHECK(utm.map.georef.origin[0] == local.map.georef.origin[0] + kEast);
+  CHECK(utm.map.georef.origin[1] == local.map.georef.origin[1] + kNorth);
+  CHECK(utm.map.georef.origin[2] == local.map.georef.origin[2]);
+  // Everything after the header: instances, fields, triangles, index, refinement and semantic layers.
+  REQUIRE(utm.bytes == local.bytes);
+  CHECK(std::memcmp(utm.sections(), local.sections(), local.bytes - 624) == 0);
+  CHECK(std::memcmp(&utm.map.counts, &local.map.counts, sizeof(MapCounts)) == 0);
+}
+
+TEST_CASE("A given origin and frame are recorded and the sections are relative to that origin") {
+  mapping::MapBuilderOptions zero;
+  zero.origin_given = true;  // (0, 0, 0), the simulator's own frame
+  mapping::MapBuilderOptions utm;
+  utm.origin_given = true;
+  utm.origin = {kEast, kNorth, 0.0};
+  utm.frame = "utm-32N";
+  const Built a = build(zero, Eigen::Vector3d::Zero());
+  const Built b = build(utm, Eigen::Vector3d(kEast, kNorth, 0.0));
+  REQUIRE(a.build == Status::Ok);
+  REQUIRE(b.build == Status::Ok);
+  CHECK(b.map.georef.origin[0] == kEast);
+  CHECK(b.map.georef.origin[1] == kNorth);
+  CHECK(std::string(b.map.georef.frame) == "utm-32N");
+  REQUIRE(a.bytes == b.bytes);
+  CHECK(std::memcmp(a.sections(), b.sections(), a.bytes - 624) == 0);
+  // The sections are the unshifted drive's own coordinates: an instance lies where the simulator put it.
+  const Eigen::Vector3d first = drive().scans[0].truth.translation();
+  double nearest = 1e9;
+  for (uint32_t i = 0; i < a.map.counts.instances; ++i)
+    nearest = std::min(nearest, std::hypot(a.map.instances[i].centroid[0] - first.x(), a.map.instances[i].centroid[1] - first.y()));
+  CHECK(nearest < 40.0);  // the map is around the drive, not 5,000 km away
+}
+
+TEST_CASE("Poses far from the origin, non-finite poses and bad frame names are refused at add_scan") {
+  // The old failure: UTM poses kept in a map whose origin is 0 would lose precision in float; the
+  // builder now says so at the first scan instead of after accumulating every one.
+  mapping::MapBuilderOptions zero;
+  zero.origin_given = true;
+  CHECK(build(zero, Eigen::Vector3d(kEast, kNorth, 0.0)).add == Status::InvalidInput);
+  mapping::MapBuilderOptions near = zero;
+  near.origin = {kEast - 1000.0, kNorth + 1000.0, 0.0};  // 1 km away: fine
+  CHECK(build(near, Eigen::Vector3d(kEast, kNorth, 0.0)).build == Status::Ok);
+  const Built nan = build(mapping::MapBuilderOptions(), Eigen::Vector3d(std::nan(""), 0.0, 0.0));
+  CHECK(nan.add == Status::InvalidInput);
+  for (const char* name : {"", "bad\tname", "a-frame-name-that-is-much-too-long"}) {
+    mapping::MapBuilderOptions bad;
+    bad.frame = name;
+    INFO("frame '" << name << "'");
+    CHECK(build(bad, Eigen::Vector3d::Zero()).add == Status::InvalidArgument);
+  }
+}
