@@ -251,6 +251,19 @@ static void test_init_rejects(const gsf_map* map) {
   bad = cfg;
   bad.field_length_scale *= 2.0f;  // the map was built with the default
   CHECK_STATUS(gsf_localizer_init(storage, sb, &bad, map, ws, wb, &loc), GSF_STATUS_CONFIG_MISMATCH);
+  bad = cfg;
+  bad.label_set = 2;  // no such built-in label set
+  CHECK_STATUS(gsf_localizer_init(storage, sb, &bad, map, ws, wb, &loc), GSF_STATUS_INVALID_ARGUMENT);
+  CHECK(gsf_workspace_bytes(&bad) == 0);
+  bad = cfg;
+  bad.label_set = GSF_LABEL_SET_NUSCENES_LIDARSEG;  // the map was built with SemanticKITTI's
+  CHECK(gsf_workspace_bytes(&bad) > wb);              // the geometric-pole stage
+  {
+    unsigned char* big = block(gsf_workspace_bytes(&bad));
+    CHECK_STATUS(gsf_localizer_init(storage, sb, &bad, map, big, gsf_workspace_bytes(&bad), &loc),
+                 GSF_STATUS_CONFIG_MISMATCH);
+    free(big);
+  }
   CHECK(loc == NULL);
 
   // A working handle stops working once a re-init of its storage fails.

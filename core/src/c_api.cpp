@@ -1,6 +1,8 @@
 // C API (gsf/gsf.h) over the C++ facade. Only placement new into caller storage; no heap, no exceptions.
 #include "gsf/gsf.h"
 
+#include "gsf/class_table.h"
+
 #include <cstddef>
 #include <cstring>
 #include <new>
@@ -119,6 +121,17 @@ bool to_cpp(const gsf_config* c, gsf::LocalizerConfig* out) {
   k.field.grid_nx = c->field_grid_nx;
   k.field.grid_ny = c->field_grid_ny;
   k.triangle.neighbours = c->triangle_neighbours;
+  // Built-in tables in static storage, built on first use (read-only afterwards; init copies them).
+  if (c->label_set == GSF_LABEL_SET_NUSCENES_LIDARSEG) {
+    static const gsf::ClassTable nuscenes = [] {
+      gsf::ClassTable t;
+      gsf::nuscenes_lidarseg_class_table(&t);
+      return t;
+    }();
+    k.classes = &nuscenes;
+  } else if (c->label_set != GSF_LABEL_SET_SEMANTIC_KITTI) {
+    return false;
+  }
   *out = k;
   return true;
 }
@@ -198,6 +211,7 @@ void gsf_config_default(gsf_config* c) noexcept {
   c->field_inducing_points = k.field.inducing_points;
   c->field_grid_nx = k.field.grid_nx;
   c->field_grid_ny = k.field.grid_ny;
+  c->label_set = GSF_LABEL_SET_SEMANTIC_KITTI;
   c->triangle_neighbours = k.triangle.neighbours;
 }
 

@@ -82,7 +82,15 @@ typedef struct gsf_config {
   float field_length_scale, field_radius, field_grid_spacing, field_noise_variance;
   uint32_t field_inducing_points, field_grid_nx, field_grid_ny;
   uint32_t triangle_neighbours;
+  // Label set of the scans' label ids (built-in class tables, gsf/class_table.h); the map records it, so
+  // it must be the one the map was built with. Geometric poles / trunks come with nuScenes-lidarseg.
+  uint32_t label_set;  // GSF_LABEL_SET_*
 } gsf_config;
+
+enum {
+  GSF_LABEL_SET_SEMANTIC_KITTI = 0,    // SemanticKITTI ids (low 16 bits of the label word)
+  GSF_LABEL_SET_NUSCENES_LIDARSEG = 1  // nuScenes-lidarseg classes 0..31
+};
 
 // Fills the defaults (the evaluated settings, gsf::LocalizerConfig{}). No-op on NULL.
 void gsf_config_default(gsf_config* config) GSF_NOEXCEPT;
