@@ -96,6 +96,21 @@ struct Localizer::Impl {
   uint32_t instance_count = 0;        // query instances of the last call
   Eigen::Isometry3d* refined_pose = nullptr;  // verify.refine_top: poses the pattern search chose
   uint32_t* refined_id = nullptr;             // verify.refine_top: their hypotheses
+
+  // The stages of localize(), in order (defined below, each with its comment).
+  Status build_voxels(const ScanView& scan, LocalizeResult& out);
+  Status find_instances(const LocalizerConfig& cfg, LocalizeResult& out);
+  void fit_query_fields(const LocalizerConfig& cfg, LocalizeResult& out);
+  Status build_query_triangles(LocalizeResult& out);
+  void vote_headings(const LocalizerConfig& cfg, const MapView& map, LocalizeResult& out);
+  void match_and_filter(const LocalizerConfig& cfg, const MapView& map, Clock* clock, LocalizeResult& out);
+  uint32_t select_correspondences(const LocalizerConfig& cfg, const MapView& map, LocalizeResult& out);
+  Status generate_hypotheses(const LocalizerConfig& cfg, uint32_t C, LocalizeResult& out);
+  void set_verify_weights(const LocalizerConfig& cfg);
+  void choose_answer(const LocalizerConfig& cfg, LocalizeResult& out);
+  void refine_answer(LocalizeResult& out);
+  uint32_t heading_bin(const Triangle& qt, const RankedTriangleMatch& rm, const MapView& map, uint32_t yaw_bins,
+                       uint32_t* qv) const;
 };
 
 // The one layout of the workspace: run on a counting arena by required_bytes and budget, and on the
@@ -241,61 +256,42 @@ uint64_t now(Clock* c) { return c ? c->now_ns() : 0; }
 
 }  // namespace
 
-Status Localizer::localize(const ScanView& scan, LocalizeResult* out_ptr) {
-  LocalizeResult scratch_result;
-  LocalizeResult& out = out_ptr ? *out_ptr : scratch_result;
-  out = LocalizeResult();
-  if (!initialized_) return out.status = Status::NotInitialized;
-  Impl& im = *impl_;
-  const LocalizerConfig& cfg = config_;
-  im.selected = 0;
-  im.chosen = UINT32_MAX;
-  im.instance_count = 0;
-  const uint64_t t_start = now(clock_);
-  uint64_t t = t_start;
-  auto lap = [&](uint64_t* field) {
-    const uint64_t n = now(clock_);
-    *field = n - t;
-    t = n;
-  };
-  auto finish = [&](Status s) {
-    out.status = s;
-    out.map_frame_T_scan = to_map_frame(map_.georef, out.map_T_scan);
-    out.times.total = now(clock_) - t_start;
-    return s;
-  };
-  if (scan.count > cfg.max_scan_points) return finish(Status::CapacityExceeded);
+// ---- The query pipeline, one stage per function; localize() below calls them in order. ----
 
-  // 1. Metric-semantic layer.
-  Status s = im.voxels.build(scan, nullptr);
-  lap(&out.times.voxel);
+// 1. Metric-semantic layer.
+Status Localizer::Impl::build_voxels(const ScanView& scan, LocalizeResult& out) {
+  const Status s = voxels.build(scan, nullptr);
   if (s == Status::CapacityExceeded) out.capacity_truncated = true;
-  else if (s != Status::Ok) return finish(s);
+  return s == Status::CapacityExceeded ? Status::Ok : s;
+}
 
-  // 2. Object layer.
-  s = im.clusters.build(im.voxels, nullptr);
+// 2. Object layer: clustered instances, then geometric poles / trunks (label sets without pole and
+// trunk classes), best score first into the instance slots clustering left free; the rest are counted,
+// never cut in storage order.
+Status Localizer::Impl::find_instances(const LocalizerConfig& cfg, LocalizeResult& out) {
+  Status s = clusters.build(voxels, nullptr);
   if (s == Status::CapacityExceeded) out.capacity_truncated = true;
-  else if (s != Status::Ok) return finish(s);
-  uint32_t n = im.clusters.size();
+  else if (s != Status::Ok) return s;
+  uint32_t n = clusters.size();
   for (uint32_t i = 0; i < n; ++i) {
-    const Instance& in = im.clusters.instance(i);
-    for (int k = 0; k < 3; ++k) im.centroids[3 * i + k] = in.centroid[k];
-    im.labels[i] = in.label;
+    const Instance& in = clusters.instance(i);
+    for (int k = 0; k < 3; ++k) centroids[3 * i + k] = in.centroid[k];
+    labels[i] = in.label;
   }
   // 2b. Geometric pole / trunk instances (label sets without pole and trunk classes), best score first
   // into the instance slots clustering left free; the rest are counted, never cut in storage order.
-  if (im.poles_on) {
-    s = im.poles.build(im.voxels, nullptr);
+  if (poles_on) {
+    s = poles.build(voxels, nullptr);
     if (s == Status::CapacityExceeded) out.capacity_truncated = true;
-    else if (s != Status::Ok) return finish(s);
-    const uint32_t np = im.poles.size();
+    else if (s != Status::Ok) return s;
+    const uint32_t np = poles.size();
     for (uint32_t i = 0; i < np; ++i) {  // insertion sort by score (np <= poles.max_instances, small)
       uint32_t pos = i;
-      while (pos > 0 && im.poles.info(im.pole_order[pos - 1]).score < im.poles.info(i).score) {
-        im.pole_order[pos] = im.pole_order[pos - 1];
+      while (pos > 0 && poles.info(pole_order[pos - 1]).score < poles.info(i).score) {
+        pole_order[pos] = pole_order[pos - 1];
         --pos;
       }
-      im.pole_order[pos] = i;
+      pole_order[pos] = i;
     }
     for (uint32_t k = 0; k < np; ++k) {
       if (n >= cfg.cluster.max_instances) {
@@ -303,98 +299,112 @@ Status Localizer::localize(const ScanView& scan, LocalizeResult* out_ptr) {
         out.capacity_truncated = true;
         continue;
       }
-      const Instance& in = im.poles.instance(im.pole_order[k]);
-      for (int c = 0; c < 3; ++c) im.centroids[3 * n + c] = in.centroid[c];
-      im.labels[n++] = in.label;
+      const Instance& in = poles.instance(pole_order[k]);
+      for (int c = 0; c < 3; ++c) centroids[3 * n + c] = in.centroid[c];
+      labels[n++] = in.label;
       ++out.pole_instances;
     }
   }
-  out.query_instances = im.instance_count = n;
-  lap(&out.times.cluster);
-  if (n < 3) return finish(Status::NoSolution);
+  out.query_instances = instance_count = n;
+  return Status::Ok;
+}
 
-  // 3. Gaussian semantic fields of the query instances (only needed with the GSF filter).
+// 3. Gaussian semantic fields of the query instances (only needed with the GSF filter).
+void Localizer::Impl::fit_query_fields(const LocalizerConfig& cfg, LocalizeResult& out) {
+  const uint32_t n = instance_count;
   const uint32_t M = cfg.field.inducing_points;
   for (uint32_t i = 0; i < n; ++i) {
-    im.q_m[i] = 0;
+    q_m[i] = 0;
     if (!cfg.match.use_gsf) continue;
     uint32_t total = 0;
-    const uint32_t got = collect_field_points(im.voxels, cfg.field, im.centroids + 3 * i, cfg.match.max_field_points,
-                                              im.gather_ids, im.gather_xyz, im.gather_targets, im.gather_labels, &total);
+    const uint32_t got = collect_field_points(voxels, cfg.field, centroids + 3 * i, cfg.match.max_field_points,
+                                              gather_ids, gather_xyz, gather_targets, gather_labels, &total);
     if (total > got) out.capacity_truncated = true;
     uint32_t m = 0;
-    if (im.solver.fit(im.gather_xyz, im.gather_targets, im.gather_labels, got, im.q_inputs + size_t(i) * M * 3,
-                      im.q_alpha + size_t(i) * M * kNumClasses, im.q_chol + size_t(i) * M * M, &m) == Status::Ok)
-      im.q_m[i] = m;
+    if (solver.fit(gather_xyz, gather_targets, gather_labels, got, q_inputs + size_t(i) * M * 3,
+                      q_alpha + size_t(i) * M * kNumClasses, q_chol + size_t(i) * M * M, &m) == Status::Ok)
+      q_m[i] = m;
   }
-  lap(&out.times.field);
+}
 
-  // 4. Query triangles.
-  s = im.triangle_builder.build(im.centroids, 3, im.labels, n, im.triangles);
+// 4. Query triangles.
+Status Localizer::Impl::build_query_triangles(LocalizeResult& out) {
+  const uint32_t n = instance_count;
+  const Status s = triangle_builder.build(centroids, 3, labels, n, triangles);
   if (s == Status::CapacityExceeded) out.capacity_truncated = true;
-  else if (s != Status::Ok) return finish(s);
-  out.query_triangles = im.triangles.size();
-  lap(&out.times.triangle);
+  else if (s != Status::Ok) return s;
+  out.query_triangles = triangles.size();
+  return Status::Ok;
+}
 
-  // 5 + 6. Per query triangle: ranked index matches, then the GSF filter, accumulating weighted,
-  // deduplicated vertex correspondences. Nothing is stored per triangle match, so no global cap on
-  // matches exists that could cut in storage order.
-  im.gsf.reset();
-  im.corr_index.clear();
-  im.corr_count = 0;
-  const QueryFields qf{im.q_inputs, im.q_alpha, im.q_chol, im.q_m, M};
-  uint64_t t_match = 0, t_gsf = 0;
-  uint32_t survivors = 0;
-  const uint32_t T = im.triangles.size();
-  auto match_bin = [&](const Triangle& qt, const RankedTriangleMatch& rm, uint32_t* qv) {
-    const Triangle& mt = map_.triangles[rm.map];
-    for (int v = 0; v < 3; ++v) qv[v] = TriangleMatcher::query_vertex(qt, rm.order, v);
-    const float* qp[3] = {im.centroids + 3 * qv[0], im.centroids + 3 * qv[1], im.centroids + 3 * qv[2]};
-    const float* mp[3] = {map_.instances[mt.v[0]].centroid, map_.instances[mt.v[1]].centroid,
-                          map_.instances[mt.v[2]].centroid};
-    return triangle_yaw_bin(qp, mp, cfg.gsf.yaw_bins);
-  };
-  // 5a. Heading votes: the matches of an evenly spaced sample of query triangles vote for their yaw
-  // bin; only the best-supported headings (and their neighbour bins) go on. True matches agree on one
-  // heading (a lattice's symmetries add a few more), wrong ones spread over all of them; this bounds
-  // the distinct (instance, heading) probes of the GSF filter by instances x kept bins.
-  const uint32_t B = cfg.gsf.yaw_bins;
-  for (uint32_t b = 0; b < B; ++b) im.heading_allowed[b] = cfg.match.heading_bins == 0 ? 1 : 0;
+// Yaw bin of a ranked match (the heading that maps the query triangle onto the map triangle); its
+// query vertices in the map triangle's vertex order go to qv.
+uint32_t Localizer::Impl::heading_bin(const Triangle& qt, const RankedTriangleMatch& rm, const MapView& map,
+                                      uint32_t yaw_bins, uint32_t* qv) const {
+  const Triangle& mt = map.triangles[rm.map];
+  for (int v = 0; v < 3; ++v) qv[v] = TriangleMatcher::query_vertex(qt, rm.order, v);
+  const float* qp[3] = {centroids + 3 * qv[0], centroids + 3 * qv[1], centroids + 3 * qv[2]};
+  const float* mp[3] = {map.instances[mt.v[0]].centroid, map.instances[mt.v[1]].centroid,
+                        map.instances[mt.v[2]].centroid};
+  return triangle_yaw_bin(qp, mp, yaw_bins);
+}
+
+// 5a. Heading votes: the matches of an evenly spaced sample of query triangles vote for their yaw
+// bin; only the best-supported headings (and their neighbour bins) go on. True matches agree on one
+// heading (a lattice's symmetries add a few more), wrong ones spread over all of them; this bounds
+// the distinct (instance, heading) probes of the GSF filter by instances x kept bins.
+void Localizer::Impl::vote_headings(const LocalizerConfig& cfg, const MapView& map, LocalizeResult& out) {
+  const uint32_t B = cfg.gsf.yaw_bins, T = triangles.size();
+  for (uint32_t b = 0; b < B; ++b) heading_allowed[b] = cfg.match.heading_bins == 0 ? 1 : 0;
   if (cfg.match.heading_bins > 0 && T > 0) {
-    for (uint32_t b = 0; b < B; ++b) im.heading_votes[b] = 0;
+    for (uint32_t b = 0; b < B; ++b) heading_votes[b] = 0;
     const uint32_t stride = (T + cfg.match.heading_sample_triangles - 1) / cfg.match.heading_sample_triangles;
     uint32_t qv[3];
     for (uint32_t qt_id = 0; qt_id < T; qt_id += stride) {
-      const Triangle& qt = im.triangles[qt_id];
-      im.matcher.match(qt, im.index, map_.triangles, cfg.triangle, cfg.match.vertex_tie_tolerance);
-      for (uint32_t k = 0; k < im.matcher.size(); ++k) ++im.heading_votes[match_bin(qt, im.matcher.match_at(k), qv)];
+      const Triangle& qt = triangles[qt_id];
+      matcher.match(qt, index, map.triangles, cfg.triangle, cfg.match.vertex_tie_tolerance);
+      for (uint32_t k = 0; k < matcher.size(); ++k) ++heading_votes[heading_bin(qt, matcher.match_at(k), map, cfg.gsf.yaw_bins, qv)];
     }
     for (uint32_t pick = 0; pick < cfg.match.heading_bins && pick < B; ++pick) {
       uint32_t best = UINT32_MAX;
       for (uint32_t b = 0; b < B; ++b)
-        if (im.heading_votes[b] > 0 && (best == UINT32_MAX || im.heading_votes[b] > im.heading_votes[best])) best = b;
+        if (heading_votes[b] > 0 && (best == UINT32_MAX || heading_votes[b] > heading_votes[best])) best = b;
       if (best == UINT32_MAX) break;
-      im.heading_votes[best] = 0;
-      im.heading_allowed[best] = im.heading_allowed[(best + 1) % B] = im.heading_allowed[(best + B - 1) % B] = 1;
+      heading_votes[best] = 0;
+      heading_allowed[best] = heading_allowed[(best + 1) % B] = heading_allowed[(best + B - 1) % B] = 1;
     }
   }
-  for (uint32_t b = 0; b < B; ++b) out.headings_kept += im.heading_allowed[b];
+  for (uint32_t b = 0; b < B; ++b) out.headings_kept += heading_allowed[b];
+}
+
+// 5b + 6. Per query triangle: ranked index matches, then the GSF filter, accumulating weighted,
+// deduplicated vertex correspondences. Nothing is stored per triangle match, so no global cap on
+// matches exists that could cut in storage order. Adds its time to out.times.match and .gsf.
+void Localizer::Impl::match_and_filter(const LocalizerConfig& cfg, const MapView& map, Clock* clock,
+                                       LocalizeResult& out) {
+  gsf.reset();
+  corr_index.clear();
+  corr_count = 0;
+  const QueryFields qf{q_inputs, q_alpha, q_chol, q_m, cfg.field.inducing_points};
+  uint64_t t_match = 0, t_gsf = 0;
+  uint32_t survivors = 0;
+  const uint32_t T = triangles.size();
   for (uint32_t qt_id = 0; qt_id < T; ++qt_id) {
-    const Triangle& qt = im.triangles[qt_id];
-    const uint64_t t0 = now(clock_);
-    const TriangleMatchStats ms = im.matcher.match(qt, im.index, map_.triangles, cfg.triangle, cfg.match.vertex_tie_tolerance);
-    const uint64_t t1 = now(clock_);
+    const Triangle& qt = triangles[qt_id];
+    const uint64_t t0 = now(clock);
+    const TriangleMatchStats ms = matcher.match(qt, index, map.triangles, cfg.triangle, cfg.match.vertex_tie_tolerance);
+    const uint64_t t1 = now(clock);
     t_match += t1 - t0;
     out.match_candidates += ms.accepted;
     out.match_dropped += ms.dropped();
     out.triangle_matches += ms.kept;
     if (ms.orders > 1) ++out.tie_ordered_triangles;
-    for (uint32_t k = 0; k < im.matcher.size(); ++k) {
-      const RankedTriangleMatch& rm = im.matcher.match_at(k);
-      const Triangle& mt = map_.triangles[rm.map];
+    for (uint32_t k = 0; k < matcher.size(); ++k) {
+      const RankedTriangleMatch& rm = matcher.match_at(k);
+      const Triangle& mt = map.triangles[rm.map];
       uint32_t qv[3];
-      const uint32_t bin = match_bin(qt, rm, qv);
-      if (!im.heading_allowed[bin]) {
+      const uint32_t bin = heading_bin(qt, rm, map, cfg.gsf.yaw_bins, qv);
+      if (!heading_allowed[bin]) {
         ++out.heading_dropped;
         continue;
       }
@@ -402,7 +412,7 @@ Status Localizer::localize(const ScanView& scan, LocalizeResult* out_ptr) {
       if (cfg.match.use_gsf) {
         bool keep = true;
         for (int v = 0; v < 3 && keep; ++v) {
-          omega[v] = im.gsf.similarity(qf, qv[v], map_, mt.v[v], bin);
+          omega[v] = gsf.similarity(qf, qv[v], map, mt.v[v], bin);
           keep = omega[v] >= cfg.match.min_similarity;
         }
         if (!keep) continue;
@@ -413,38 +423,40 @@ Status Localizer::localize(const ScanView& scan, LocalizeResult* out_ptr) {
         bool inserted = false;
         // corr_index and corr share one capacity, so the index refuses a new key (nullptr) exactly when
         // the array is full; the second test is a guard that can only fire if that invariant breaks.
-        uint32_t* id = im.corr_index.find_or_insert(key, &inserted);
-        if (!id || (inserted && im.corr_count >= im.corr_capacity)) { ++out.candidate_pairs_dropped; continue; }
+        uint32_t* id = corr_index.find_or_insert(key, &inserted);
+        if (!id || (inserted && corr_count >= corr_capacity)) { ++out.candidate_pairs_dropped; continue; }
         if (inserted) {
-          *id = im.corr_count;
-          im.corr[im.corr_count++] = CorrespondenceAcc{qv[v], mt.v[v], 0.0f, 0};
+          *id = corr_count;
+          corr[corr_count++] = CorrespondenceAcc{qv[v], mt.v[v], 0.0f, 0};
         }
-        CorrespondenceAcc& c = im.corr[*id];
+        CorrespondenceAcc& c = corr[*id];
         c.weight = std::max(c.weight, omega[v]);
         c.votes += 1;
       }
     }
-    t_gsf += now(clock_) - t1;
+    t_gsf += now(clock) - t1;
   }
-  out.times.match = t_match;
-  out.times.gsf = t_gsf;
-  t = now(clock_);
+  out.times.match += t_match;
+  out.times.gsf += t_gsf;
   out.gsf_survivors = survivors;
-  out.field_probes = im.gsf.probes();
-  out.field_comparisons = im.gsf.comparisons();
-  out.candidate_pairs = im.corr_count;
+  out.field_probes = gsf.probes();
+  out.field_comparisons = gsf.comparisons();
+  out.candidate_pairs = corr_count;
   if (out.match_dropped > 0 || out.candidate_pairs_dropped > 0 || out.heading_dropped > 0) out.capacity_truncated = true;
+}
 
-  // 7. Keep the best-supported correspondences (votes x weight) up to the clique capacity; equal
-  // support is broken by a hash of the pair, never by instance id (map ids follow map x order).
-  const uint32_t total = im.corr_count;
-  for (uint32_t i = 0; i < total; ++i) im.order[i] = i;
-  const CorrespondenceAcc* corr = im.corr;
-  std::sort(im.order, im.order + total, [corr](uint32_t x, uint32_t y) {
-    const float sx = corr[x].weight * float(corr[x].votes), sy = corr[y].weight * float(corr[y].votes);
+// 7. Keep the best-supported correspondences (votes x weight) up to the clique capacity; equal
+// support is broken by a hash of the pair, never by instance id (map ids follow map x order).
+// Returns how many were kept (a, b and w hold them).
+uint32_t Localizer::Impl::select_correspondences(const LocalizerConfig& cfg, const MapView& map, LocalizeResult& out) {
+  const uint32_t total = corr_count;
+  for (uint32_t i = 0; i < total; ++i) order[i] = i;
+  const CorrespondenceAcc* acc = corr;
+  std::sort(order, order + total, [acc](uint32_t x, uint32_t y) {
+    const float sx = acc[x].weight * float(acc[x].votes), sy = acc[y].weight * float(acc[y].votes);
     if (sx != sy) return sx > sy;
-    const uint64_t hx = mix64((uint64_t(corr[x].query) << 32) | corr[x].map);
-    const uint64_t hy = mix64((uint64_t(corr[y].query) << 32) | corr[y].map);
+    const uint64_t hx = mix64((uint64_t(acc[x].query) << 32) | acc[x].map);
+    const uint64_t hy = mix64((uint64_t(acc[y].query) << 32) | acc[y].map);
     if (hx != hy) return hx < hy;
     return x < y;
   });
@@ -452,52 +464,58 @@ Status Localizer::localize(const ScanView& scan, LocalizeResult* out_ptr) {
   out.correspondences_dropped = total - C;
   if (total > C) out.capacity_truncated = true;
   for (uint32_t i = 0; i < C; ++i) {
-    const CorrespondenceAcc& c = im.corr[im.order[i]];
+    const CorrespondenceAcc& c = corr[order[i]];
     for (int d = 0; d < 3; ++d) {
-      im.a[3 * i + d] = im.centroids[3 * c.query + d];
-      im.b[3 * i + d] = map_.instances[c.map].centroid[d];
+      a[3 * i + d] = centroids[3 * c.query + d];
+      b[3 * i + d] = map.instances[c.map].centroid[d];
     }
-    im.w[i] = c.weight;
+    w[i] = c.weight;
   }
   out.correspondences = C;
-  im.selected = C;
-  if (C < cfg.hypotheses.min_inliers) return finish(Status::NoSolution);
+  return C;
+}
 
-  // 8. Pose hypotheses: peeled maximum cliques, each with its weighted TLS pose.
+// 8. Pose hypotheses: peeled maximum cliques, each with its weighted TLS pose, and translation votes.
+Status Localizer::Impl::generate_hypotheses(const LocalizerConfig& cfg, uint32_t C, LocalizeResult& out) {
   HypothesisStats hs;
-  s = im.hypotheses.generate(im.a, im.b, im.w, C, cfg.hypotheses, &hs);
+  const Status s = hypotheses.generate(a, b, w, C, cfg.hypotheses, &hs);
   out.clique_nodes = hs.nodes;
   out.clique_searches = hs.searches;
   out.budget_exhausted = hs.budget_exhausted;
-  out.hypotheses = im.hypotheses.size();
-  lap(&out.times.clique);
-  if (s != Status::Ok) return finish(Status::NoSolution);
+  out.hypotheses = hypotheses.size();
+  return s;
+}
 
-  // 9. Whole-scan verification against the map's semantic layer picks among the hypotheses; the
-  // ambiguity is how clearly the chosen one beats the runner-up.
-  const uint32_t H = im.hypotheses.size();
-  const bool verify = cfg.verify.enabled && !im.semantic.empty();
-  uint32_t best = 0, second = UINT32_MAX;
-  uint8_t full_scored[PoseHypotheses::kMaxHypotheses] = {};
-  Eigen::Isometry3d* refined_pose = im.refined_pose;  // verify.refine_top of them
-  uint32_t* refined_id = im.refined_id;
-  uint32_t refined_count = 0;
-  for (int c = 0; c < kNumClasses; ++c) im.verify_weights[c] = im.weights[c];
-  if (verify && cfg.verify.rarity_exponent > 0.0f) {
+// Verification weights for this scan: the stability weights, each class scaled by (its share of the
+// sampled voxels)^-rarity_exponent and all rescaled to keep the total (VerifyConfig::rarity_exponent).
+void Localizer::Impl::set_verify_weights(const LocalizerConfig& cfg) {
+  for (int c = 0; c < kNumClasses; ++c) verify_weights[c] = weights[c];
+  if (cfg.verify.rarity_exponent > 0.0f && voxels.size() > 0) {
     uint32_t counts[kNumClasses] = {};
-    const uint32_t nv = im.voxels.size(), stride = (nv + cfg.verify.max_points - 1) / cfg.verify.max_points;
+    const uint32_t nv = voxels.size(), stride = (nv + cfg.verify.max_points - 1) / cfg.verify.max_points;
     uint32_t total = 0;
-    for (uint32_t i = 0; i < nv; i += stride, ++total) ++counts[im.voxels.voxel(i).label];
+    for (uint32_t i = 0; i < nv; i += stride, ++total) ++counts[voxels.voxel(i).label];
     double mass = 0.0, scaled = 0.0;
     for (int c = 0; c < kNumClasses; ++c) {
       if (counts[c] == 0) continue;
-      im.verify_weights[c] = im.weights[c] * static_cast<float>(std::pow(double(counts[c]) / total, -double(cfg.verify.rarity_exponent)));
-      mass += double(im.weights[c]) * counts[c];
-      scaled += double(im.verify_weights[c]) * counts[c];
+      verify_weights[c] = weights[c] * static_cast<float>(std::pow(double(counts[c]) / total, -double(cfg.verify.rarity_exponent)));
+      mass += double(weights[c]) * counts[c];
+      scaled += double(verify_weights[c]) * counts[c];
     }
     if (scaled > 0.0)
-      for (int c = 0; c < kNumClasses; ++c) im.verify_weights[c] = static_cast<float>(im.verify_weights[c] * (mass / scaled));
+      for (int c = 0; c < kNumClasses; ++c) verify_weights[c] = static_cast<float>(verify_weights[c] * (mass / scaled));
   }
+}
+
+// 9. Whole-scan verification against the map's semantic layer picks among the hypotheses; the
+// ambiguity is how clearly the chosen one beats the runner-up, the answer's support and its agreement.
+void Localizer::Impl::choose_answer(const LocalizerConfig& cfg, LocalizeResult& out) {
+  const uint32_t H = hypotheses.size();
+  const bool verify = cfg.verify.enabled && !semantic.empty();
+  uint32_t best = 0, second = UINT32_MAX;
+  uint8_t full_scored[PoseHypotheses::kMaxHypotheses] = {};
+  uint32_t refined_count = 0;
+  set_verify_weights(cfg);
   if (verify) {
     // Coarse score for every hypothesis, the full score for the best `full_top`, then the best
     // `refine_top` at their best local alignment. Each step ranks, then caps.
@@ -505,35 +523,35 @@ Status Localizer::localize(const ScanView& scan, LocalizeResult* out_ptr) {
     uint32_t top[PoseHypotheses::kMaxHypotheses];
     const uint32_t coarse_points = std::max<uint32_t>(1, cfg.verify.max_points / cfg.verify.coarse_divisor);
     for (uint32_t h = 0; h < H; ++h) {
-      im.hypotheses[h].verification =
-          verify_pose(im.voxels, im.semantic, im.hypotheses[h].map_T_scan, coarse_points, im.verify_weights);
+      hypotheses[h].verification =
+          verify_pose(voxels, semantic, hypotheses[h].map_T_scan, coarse_points, verify_weights);
       full[h] = 0;
     }
-    uint32_t nt = top_by_score(im.hypotheses, H, nullptr, cfg.verify.full_top, top);
+    uint32_t nt = top_by_score(hypotheses, H, nullptr, cfg.verify.full_top, top);
     for (uint32_t k = 0; k < nt; ++k) {
-      im.hypotheses[top[k]].verification =
-          verify_pose(im.voxels, im.semantic, im.hypotheses[top[k]].map_T_scan, cfg.verify.max_points, im.verify_weights);
+      hypotheses[top[k]].verification =
+          verify_pose(voxels, semantic, hypotheses[top[k]].map_T_scan, cfg.verify.max_points, verify_weights);
       full[top[k]] = 1;
     }
-    nt = cfg.verify.refine_rounds > 0 ? top_by_score(im.hypotheses, H, full, cfg.verify.refine_top, top) : 0;
+    nt = cfg.verify.refine_rounds > 0 ? top_by_score(hypotheses, H, full, cfg.verify.refine_top, top) : 0;
     refined_count = nt;
     for (uint32_t k = 0; k < nt; ++k) {
       refined_id[k] = top[k];
-      im.hypotheses[top[k]].verification =
-          verify_pose_refined(im.voxels, im.semantic, im.hypotheses[top[k]].map_T_scan, cfg.verify.max_points,
-                              im.verify_weights, cfg.verify.refine_rounds, cfg.verify.refine_step_m,
+      hypotheses[top[k]].verification =
+          verify_pose_refined(voxels, semantic, hypotheses[top[k]].map_T_scan, cfg.verify.max_points,
+                              verify_weights, cfg.verify.refine_rounds, cfg.verify.refine_step_m,
                               cfg.verify.refine_step_deg, &refined_pose[k]);
     }
     // The answer, and as runner-up the best fully scored hypothesis at another place or heading: a
     // near-twin of the answer (within hypotheses.same_pose_m and same_pose_deg in the bird's-eye view
     // the verification sees) is the same answer, not a rival.
-    nt = top_by_score(im.hypotheses, H, full, H, top);
+    nt = top_by_score(hypotheses, H, full, H, top);
     best = nt > 0 ? top[0] : 0;
-    const Eigen::Isometry3d& a = im.hypotheses[best].map_T_scan;
+    const Eigen::Isometry3d& a = hypotheses[best].map_T_scan;
     const double yaw_a = std::atan2(a.linear()(1, 0), a.linear()(0, 0));
     const double same_rad = double(cfg.hypotheses.same_pose_deg) / kRadToDeg;
     for (uint32_t k = 1; k < nt && second == UINT32_MAX; ++k) {
-      const Eigen::Isometry3d& b = im.hypotheses[top[k]].map_T_scan;
+      const Eigen::Isometry3d& b = hypotheses[top[k]].map_T_scan;
       const double dx = b.translation().x() - a.translation().x(), dy = b.translation().y() - a.translation().y();
       double dyaw = std::fabs(std::atan2(b.linear()(1, 0), b.linear()(0, 0)) - yaw_a);
       if (dyaw > 3.14159265358979323846) dyaw = 2.0 * 3.14159265358979323846 - dyaw;
@@ -542,21 +560,21 @@ Status Localizer::localize(const ScanView& scan, LocalizeResult* out_ptr) {
   } else {
     second = H > 1 ? 1 : UINT32_MAX;
   }
-  const PoseHypothesis& answer = im.hypotheses[best];
+  const PoseHypothesis& answer = hypotheses[best];
   out.map_T_scan = answer.map_T_scan;
   out.inliers = answer.inliers;
   out.clique_size = answer.clique_size;
   out.score = answer.support;
   out.chosen_hypothesis = best;
   out.verified = verify;
-  im.chosen = best;
+  chosen = best;
   // Report the best hypotheses by verified score (the order found without verification).
   uint32_t shown[kMaxReportedHypotheses];
   uint32_t reported = std::min(H, kMaxReportedHypotheses);
-  if (verify) reported = top_by_score(im.hypotheses, H, nullptr, kMaxReportedHypotheses, shown);
+  if (verify) reported = top_by_score(hypotheses, H, nullptr, kMaxReportedHypotheses, shown);
   else for (uint32_t k = 0; k < reported; ++k) shown[k] = k;
   for (uint32_t k = 0; k < reported; ++k) {
-    const PoseHypothesis& p = im.hypotheses[shown[k]];
+    const PoseHypothesis& p = hypotheses[shown[k]];
     HypothesisReport& r = out.hypothesis[k];
     r.x = static_cast<float>(p.map_T_scan.translation().x());
     r.y = static_cast<float>(p.map_T_scan.translation().y());
@@ -578,11 +596,11 @@ Status Localizer::localize(const ScanView& scan, LocalizeResult* out_ptr) {
   double rival = 0.0;
   if (second != UINT32_MAX) {
     if (verify) {
-      const double margin = double(answer.verification.score) - im.hypotheses[second].verification.score;
+      const double margin = double(answer.verification.score) - hypotheses[second].verification.score;
       const double scale = double(cfg.verify.margin_scale) * std::max<uint32_t>(answer.verification.scored, 1);
       rival = std::exp(-std::max(0.0, margin) / scale);
     } else {
-      rival = answer.support > 0 ? im.hypotheses[second].support / answer.support : 1.0;
+      rival = answer.support > 0 ? hypotheses[second].support / answer.support : 1.0;
     }
   }
   // A verified answer that agrees poorly with the map is doubtful even without a rival (its true
@@ -598,7 +616,7 @@ Status Localizer::localize(const ScanView& scan, LocalizeResult* out_ptr) {
     const Eigen::Isometry3d* at = &answer.map_T_scan;
     for (uint32_t k = 0; k < refined_count; ++k)
       if (refined_id[k] == best) at = &refined_pose[k];
-    plain = verify_pose(im.voxels, im.semantic, *at, cfg.verify.max_points, im.weights);
+    plain = verify_pose(voxels, semantic, *at, cfg.verify.max_points, weights);
   }
   const double weight = double(plain.agree) + plain.disagree;
   if (verify && plain.scored > 0) {
@@ -606,16 +624,68 @@ Status Localizer::localize(const ScanView& scan, LocalizeResult* out_ptr) {
     quality = (double(cfg.verify.quality_high) - q) / (double(cfg.verify.quality_high) - cfg.verify.quality_low);
   }
   out.ambiguity = std::min(1.0, std::max({rival, support, quality}));
-  lap(&out.times.pose);
+}
 
-  // 10. Optional refinement against the map's point layer.
+// 10. Refinement against the map's point layer (accepted only within its correction limit).
+void Localizer::Impl::refine_answer(LocalizeResult& out) {
+  Eigen::Isometry3d refined;
+  RefineStats rs;
+  if (refiner.refine(voxels, out.map_T_scan, &refined, &rs) == Status::Ok && rs.accepted) {
+    out.map_T_scan = refined;
+    out.refined = true;
+  }
+}
+
+Status Localizer::localize(const ScanView& scan, LocalizeResult* out_ptr) {
+  LocalizeResult scratch_result;
+  LocalizeResult& out = out_ptr ? *out_ptr : scratch_result;
+  out = LocalizeResult();
+  if (!initialized_) return out.status = Status::NotInitialized;
+  Impl& im = *impl_;
+  const LocalizerConfig& cfg = config_;
+  im.selected = 0;
+  im.chosen = UINT32_MAX;
+  im.instance_count = 0;
+  const uint64_t t_start = now(clock_);
+  uint64_t t = t_start;
+  auto lap = [&](uint64_t* field) {
+    const uint64_t n = now(clock_);
+    *field += n - t;
+    t = n;
+  };
+  auto finish = [&](Status s) {
+    out.status = s;
+    out.map_frame_T_scan = to_map_frame(map_.georef, out.map_T_scan);
+    out.times.total = now(clock_) - t_start;
+    return s;
+  };
+  if (scan.count > cfg.max_scan_points) return finish(Status::CapacityExceeded);
+
+  Status s = im.build_voxels(scan, out);
+  lap(&out.times.voxel);
+  if (s != Status::Ok) return finish(s);
+  s = im.find_instances(cfg, out);
+  lap(&out.times.cluster);
+  if (s != Status::Ok) return finish(s);
+  if (im.instance_count < 3) return finish(Status::NoSolution);
+  im.fit_query_fields(cfg, out);
+  lap(&out.times.field);
+  s = im.build_query_triangles(out);
+  lap(&out.times.triangle);
+  if (s != Status::Ok) return finish(s);
+  im.vote_headings(cfg, map_, out);
+  lap(&out.times.match);  // the heading votes are index matching too
+  im.match_and_filter(cfg, map_, clock_, out);
+  t = now(clock_);
+  const uint32_t C = im.selected = im.select_correspondences(cfg, map_, out);
+  if (C < cfg.hypotheses.min_inliers) return finish(Status::NoSolution);
+  s = im.generate_hypotheses(cfg, C, out);
+  lap(&out.times.clique);  // with the correspondence selection
+  if (s != Status::Ok) return finish(Status::NoSolution);
+  im.choose_answer(cfg, out);
+  lap(&out.times.pose);
   if (cfg.refine.enabled && map_.counts.refine_points > 0) {
-    Eigen::Isometry3d refined;
-    RefineStats rs;
-    if (im.refiner.refine(im.voxels, out.map_T_scan, &refined, &rs) == Status::Ok && rs.accepted) {
-      out.map_T_scan = refined;
-      out.refined = true;
-    }
+    im.refine_answer(out);
     lap(&out.times.refine);
   }
   return finish(Status::Ok);
