@@ -321,6 +321,7 @@ Status Localizer::localize(const ScanView& scan, LocalizeResult* out_ptr) {
     }
   }
   for (uint32_t b = 0; b < B; ++b) out.headings_kept += im.heading_allowed[b];
+  t_match = now(clock_) - t;  // the heading votes (and the per-scan resets above) are index matching too
   for (uint32_t qt_id = 0; qt_id < T; ++qt_id) {
     const Triangle& qt = im.triangles[qt_id];
     const uint64_t t0 = now(clock_);
