@@ -1,5 +1,6 @@
 #include "gsf/refine.h"
 
+#include <algorithm>
 #include <cmath>
 
 #include <Eigen/Cholesky>
@@ -168,11 +169,32 @@ Status Refiner::refine(const VoxelLayer& layer, const Eigen::Isometry3d& initial
       const Eigen::Vector3d p = t * Eigen::Vector3d(query_[3 * i], query_[3 * i + 1], query_[3 * i + 2]);
       float best = r2;
       int32_t nn = -1;
+      const float pf[3] = {float(p.x()), float(p.y()), float(p.z())};
+      // Gaps from p to the lower and upper faces of its own cell, shrunk by 1 mm (and a relative 1e-5):
+      // every point of the cell below (above) lies at least the lower (upper) gap away along that axis,
+      // whatever the float rounding of its cell key and of d2.
+      const uint64_t own = cell_key(pf[0], pf[1], pf[2]);
+      float gap[3][3];  // [axis][offset + 1]: 0 for the own cell
+      for (int k = 0; k < 3; ++k) {
+        const int64_t c = int64_t((own >> (42 - 21 * k)) & 0x1FFFFF) - (1 << 20);
+        const double lo = double(c) * config_.cell, hi = double(c + 1) * config_.cell, x = pf[k];
+        const double slack = 1e-5 * (std::fabs(lo) + std::fabs(hi)) + 1e-3;
+        gap[k][0] = float(std::max(0.0, x - lo - slack));
+        gap[k][1] = 0.0f;
+        gap[k][2] = float(std::max(0.0, hi - x - slack));
+      }
       for (int dx = -1; dx <= 1; ++dx)
         for (int dy = -1; dy <= 1; ++dy)
           for (int dz = -1; dz <= 1; ++dz) {
-            const uint32_t c = find_cell(cell_key(float(p.x()) + dx * config_.cell, float(p.y()) + dy * config_.cell,
-                                                  float(p.z()) + dz * config_.cell));
+            const uint64_t key = cell_key(pf[0] + dx * config_.cell, pf[1] + dy * config_.cell, pf[2] + dz * config_.cell);
+            // A cell farther than the best distance so far cannot hold a point that beats it (the search
+            // keeps the first strictly nearer point): skip its lookup. Only when the visited cell is the
+            // neighbour the offsets name (float rounding could make it another one).
+            const float g = gap[0][dx + 1] * gap[0][dx + 1] + gap[1][dy + 1] * gap[1][dy + 1] + gap[2][dz + 1] * gap[2][dz + 1];
+            if (g > best * (1.0f + 1e-4f) + 1e-6f &&
+                key == own + (uint64_t(int64_t(dx)) << 42) + (uint64_t(int64_t(dy)) << 21) + uint64_t(int64_t(dz)))
+              continue;
+            const uint32_t c = find_cell(key);
             if (c == UINT32_MAX) continue;
             for (uint32_t id = begin_[c]; id < begin_[c + 1]; ++id) {
               const float ex = points_[3 * id] - float(p.x()), ey = points_[3 * id + 1] - float(p.y()),
