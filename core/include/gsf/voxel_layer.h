@@ -35,12 +35,12 @@ struct VoxelConfig {
   uint32_t max_columns = 16384;  // gather index cells (hash capacity)
 };
 
-struct Voxel {
+struct Voxel {  // 96 B; what verification, clustering and refinement read sits in the first 20
   float centroid[3];
   uint32_t count;
-  float prob[kNumClasses];  // mean class probability
   uint8_t label;            // dense argmax class
   uint8_t pad[3];
+  float prob[kNumClasses];  // mean class probability
 };
 
 struct VoxelStats {
