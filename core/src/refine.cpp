@@ -30,10 +30,13 @@ Status Refiner::bind(Arena& arena, const RefineConfig& c) {
   points_ = arena.allocate<float>(size_t(c.max_map_points) * 3);
   normals_ = arena.allocate<float>(size_t(c.max_map_points) * 3);
   query_ = arena.allocate<float>(size_t(c.max_points) * 3);
+  query_cell_ = arena.allocate<uint64_t>(c.max_points);
+  query_neighbours_ = arena.allocate<uint32_t>(size_t(c.max_points) * 27);
   n_ = 0;
   cells_ = 0;
   if (arena.counting()) return Status::Ok;
-  if (!slots_ || !cell_keys_ || !begin_ || !points_ || !normals_ || !query_) return Status::BufferTooSmall;
+  if (!slots_ || !cell_keys_ || !begin_ || !points_ || !normals_ || !query_ || !query_cell_ || !query_neighbours_)
+    return Status::BufferTooSmall;
   bound_ = true;
   return Status::Ok;
 }
@@ -156,6 +159,8 @@ Status Refiner::refine(const VoxelLayer& layer, const Eigen::Isometry3d& initial
     ++q;
   }
   st.query_points = q;
+  constexpr uint32_t kNotLooked = UINT32_MAX - 1;
+  for (uint32_t i = 0; i < q; ++i) query_cell_[i] = UINT64_MAX;
   Eigen::Isometry3d t = initial;
   for (uint32_t it = 0; it < config_.iterations; ++it) {
     const float frac = config_.iterations > 1 ? float(it) / float(config_.iterations - 1) : 1.0f;
@@ -174,6 +179,11 @@ Status Refiner::refine(const VoxelLayer& layer, const Eigen::Isometry3d& initial
       // every point of the cell below (above) lies at least the lower (upper) gap away along that axis,
       // whatever the float rounding of its cell key and of d2.
       const uint64_t own = cell_key(pf[0], pf[1], pf[2]);
+      uint32_t* known = query_neighbours_ + size_t(i) * 27;  // cells around `own`, by offset
+      if (query_cell_[i] != own) {
+        query_cell_[i] = own;
+        for (int j = 0; j < 27; ++j) known[j] = kNotLooked;
+      }
       float gap[3][3];  // [axis][offset + 1]: 0 for the own cell
       for (int k = 0; k < 3; ++k) {
         const int64_t c = int64_t((own >> (42 - 21 * k)) & 0x1FFFFF) - (1 << 20);
@@ -191,10 +201,16 @@ Status Refiner::refine(const VoxelLayer& layer, const Eigen::Isometry3d& initial
             // keeps the first strictly nearer point): skip its lookup. Only when the visited cell is the
             // neighbour the offsets name (float rounding could make it another one).
             const float g = gap[0][dx + 1] * gap[0][dx + 1] + gap[1][dy + 1] * gap[1][dy + 1] + gap[2][dz + 1] * gap[2][dz + 1];
-            if (g > best * (1.0f + 1e-4f) + 1e-6f &&
-                key == own + (uint64_t(int64_t(dx)) << 42) + (uint64_t(int64_t(dy)) << 21) + uint64_t(int64_t(dz)))
-              continue;
-            const uint32_t c = find_cell(key);
+            const bool named = key == own + (uint64_t(int64_t(dx)) << 42) + (uint64_t(int64_t(dy)) << 21) + uint64_t(int64_t(dz));
+            if (named && g > best * (1.0f + 1e-4f) + 1e-6f) continue;
+            uint32_t c;
+            if (named) {  // the cell at this offset from `own`: found before or looked up once now
+              uint32_t& slot = known[(dx + 1) * 9 + (dy + 1) * 3 + (dz + 1)];
+              if (slot == kNotLooked) slot = find_cell(key);
+              c = slot;
+            } else {
+              c = find_cell(key);
+            }
             if (c == UINT32_MAX) continue;
             for (uint32_t id = begin_[c]; id < begin_[c + 1]; ++id) {
               const float ex = points_[3 * id] - float(p.x()), ey = points_[3 * id + 1] - float(p.y()),

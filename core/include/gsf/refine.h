@@ -63,6 +63,11 @@ class Refiner {
   float* points_ = nullptr;     // n x 3, sorted by cell (ascending map order within a cell)
   float* normals_ = nullptr;    // n x 3, the same order (0 vector: no reliable normal)
   float* query_ = nullptr;      // max_points x 3
+  // Per query point, the grid cell it fell in at the last iteration and the cells found around it
+  // (27 per point; kNotLooked until looked up): the pose moves little between iterations, so the same
+  // cells are found again without probing the grid hash.
+  uint64_t* query_cell_ = nullptr;      // max_points
+  uint32_t* query_neighbours_ = nullptr;  // max_points x 27
   uint32_t n_ = 0;
   bool bound_ = false;
 };
