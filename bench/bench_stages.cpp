@@ -10,6 +10,10 @@
 //       without a clock. Meant for `valgrind --tool=callgrind` (bench/stages.sh --counts): the
 //       inclusive instruction counts of the stage functions are the per-stage instruction counts.
 //
+//   bench_stages ... --icount-file PATH   (under qemu-aarch64 with bench/qemu_icount_plugin.c)
+//       the stage clock reads the guest instruction count from the plugin instead of the time: the
+//       table's "us" columns are then thousands of instructions (bench/stages.sh --arm64-counts).
+//
 // Every run also prints a digest per mode (FNV-1a over every result field except the times), so a
 // speed change can be checked for bit-identical results on the whole query set, not just the golden
 // test's tiny world.
@@ -21,6 +25,9 @@
 #include <cstring>
 #include <string>
 #include <vector>
+
+#include <fcntl.h>
+#include <unistd.h>
 
 #include "gsf/localizer.h"
 #include "gsf/map_format.h"
@@ -74,6 +81,22 @@ __attribute__((noinline)) uint32_t bench_floor_bucket(const ScanView& scan, floa
   for (uint32_t k = 0; k < n; ++k) t.slots[t.touched[k]].used = 0;
   return n;
 }
+
+// ---- instruction-count clock (qemu plugin) --------------------------------------------------------
+// now_ns() reads 8 bytes at a magic offset of a file; bench/qemu_icount_plugin.c writes the guest's
+// instruction count there when it sees exactly that pread64. Without the plugin it reads nothing (0).
+constexpr off_t kIcountMagic = 0x47534600;  // must match bench/qemu_icount_plugin.c
+class IcountClock final : public Clock {
+ public:
+  explicit IcountClock(int fd) : fd_(fd) {}
+  uint64_t now_ns() override {
+    uint64_t v = 0;
+    if (pread(fd_, &v, sizeof v, kIcountMagic) != static_cast<ssize_t>(sizeof v)) v = 0;
+    return v;
+  }
+ private:
+  int fd_;
+};
 
 // ---- result digest ---------------------------------------------------------------------------------
 struct Fnv {
@@ -175,7 +198,12 @@ int main(int argc, char** argv) {
   const uint32_t nq = limit ? std::min(limit, src->size()) : src->size();
 
   const bool counting = !count_mode.empty();
-  port::SteadyClock clock;
+  port::SteadyClock steady;
+  const std::string icount_file = arg(argc, argv, "--icount-file", "");
+  const int icount_fd = icount_file.empty() ? -1 : open(icount_file.c_str(), O_RDONLY);
+  if (!icount_file.empty() && icount_fd < 0) { std::fprintf(stderr, "cannot open %s\n", icount_file.c_str()); return 1; }
+  IcountClock icount(icount_fd);
+  Clock& clock = icount_fd >= 0 ? static_cast<Clock&>(icount) : static_cast<Clock&>(steady);
   Mode modes[3] = {{"instance", false, false, {}, {}, {}, {}, {}, 0},
                    {"gsf", true, false, {}, {}, {}, {}, {}, 0},
                    {"gsf+refine", true, true, {}, {}, {}, {}, {}, 0}};
@@ -217,9 +245,9 @@ int main(int argc, char** argv) {
         const int which = (step + int(r) + int(q)) % 4;  // rotate so no mode always runs first
         if (which == 3) {
           if (counting && count_mode != "floor" && r > 0) continue;
-          const auto t0 = std::chrono::steady_clock::now();
+          const uint64_t t0 = clock.now_ns();
           const uint32_t nv = bench_floor_bucket(view, base.voxel.voxel_size, floor_table);
-          const double ns = std::chrono::duration<double, std::nano>(std::chrono::steady_clock::now() - t0).count();
+          const double ns = double(clock.now_ns() - t0);
           best_floor = std::min(best_floor, ns);
           if (r == 0) { voxels.push_back(nv); floor_digest.add(nv); }
           continue;
@@ -254,7 +282,9 @@ int main(int argc, char** argv) {
   if (counting) return 0;
 
   const double f = median(floor_ns);
-  std::printf("repetitions per scan: %u (each cell: median over scans of the fastest repetition)\n\n", repeat);
+  std::printf("repetitions per scan: %u (each cell: median over scans of the fastest repetition)\n", repeat);
+  if (icount_fd >= 0) std::printf("UNITS: the 'us' columns are thousands of guest INSTRUCTIONS (qemu plugin count), not times\n");
+  std::printf("\n");
   std::printf("| stage | GSF off us | x floor | GSF on us | x floor | GSF + refine us | x floor |\n");
   std::printf("| --- | ---: | ---: | ---: | ---: | ---: | ---: |\n");
   std::printf("| floor | %.0f | 1.00 | %.0f | 1.00 | %.0f | 1.00 |\n", f / 1e3, f / 1e3, f / 1e3);

@@ -6,15 +6,18 @@
 #
 #   bash bench/stages.sh [--map MAP --dataset DIR] [--out DIR] [--limit N] [--repeat R]
 #                        [--counts | --counts-only] [--count-limit N] [--build DIR] [--reuse]
+#                        [--arm64-counts AARCH64_BUILD_DIR]
 # Without --map/--dataset it simulates the demo world (gsf simulate --preset demo) into OUT/dataset and
 # builds OUT/map.gsfmap once (reused on the next run). --counts runs one callgrind pass per mode
 # (floor, instance, gsf, gsf+refine) over the first --count-limit scans (default 20) and prints the
 # instructions per scan of each stage (--counts-only: skip the timing table; --reuse: parse the
 # callgrind files of an earlier run in OUT again). --build points at another build tree (default
-# build/release; it is then not rebuilt).
+# build/release; it is then not rebuilt). --arm64-counts runs the timing table of an aarch64 build's
+# bench_stages under qemu-aarch64 with bench/qemu_icount_plugin.c, whose clock counts guest
+# instructions instead of time (configure that build with -DGSF_BUILD_BENCH=ON and build bench_stages).
 set -euo pipefail
 cd "$(dirname "$0")/.."
-map=""; dataset=""; out=out/stages; limit=0; repeat=3; counts=0; count_limit=20; build=build/release; timing=1; reuse=0
+map=""; dataset=""; out=out/stages; limit=0; repeat=3; counts=0; count_limit=20; build=build/release; timing=1; reuse=0; arm64=""
 while [ $# -gt 0 ]; do
   case "$1" in
     --map) map=$2; shift 2;;
@@ -26,6 +29,7 @@ while [ $# -gt 0 ]; do
     --counts-only) counts=1; timing=0; shift;;
     --count-limit) count_limit=$2; shift 2;;
     --reuse) reuse=1; shift;;
+    --arm64-counts) arm64=$2; shift 2;;
     --build) build=$2; shift 2;;
     *) echo "bench/stages.sh: unknown option $1" >&2; exit 2;;
   esac
@@ -45,6 +49,17 @@ if [ -z "$map" ]; then
 fi
 [ -n "$dataset" ] || { echo "bench/stages.sh: --map needs --dataset" >&2; exit 2; }
 
+if [ -n "$arm64" ]; then
+  plugin=$out/qemu_icount_plugin.so
+  cc -shared -fPIC -O2 -Wall -Wextra -o "$plugin" bench/qemu_icount_plugin.c
+  f=/dev/shm/gsf_icount.$$
+  : >"$f"
+  echo "aarch64 ($arm64): guest instructions per stage under qemu-aarch64 (counts, not times), first $count_limit scans:"
+  qemu-aarch64 -L /usr/aarch64-linux-gnu -plugin "$plugin,out=$f" "$arm64/bench/bench_stages" --map "$map" \
+      --dataset "$dataset" --limit "$count_limit" --repeat 1 --icount-file "$f"
+  rm -f "$f"
+  exit 0
+fi
 if [ "$timing" = 1 ]; then
   $bench --map "$map" --dataset "$dataset" --limit "$limit" --repeat "$repeat"
 fi
