@@ -41,7 +41,7 @@ Status VoxelLayer::bind(Arena& arena, const VoxelConfig& config) {
   keys_ = arena.allocate<uint64_t>(config.max_voxels);
   const bool ok_index = slots_ != nullptr && keys_ != nullptr;
   if (ok_index) std::memset(slots_, 0, sizeof(uint32_t) * slot_count_);
-  active_slots_ = slot_count_;
+  active_slots_ = ok_index ? slot_count_ : 0;  // lookups on a counting or failed bind find nothing
   const bool ok_columns = columns_.bind(arena, config.max_columns);
   column_members_ = arena.allocate<uint32_t>(config.max_voxels);
   column_of_ = arena.allocate<uint32_t>(config.max_voxels);
