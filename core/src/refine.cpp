@@ -1,5 +1,6 @@
 #include "gsf/refine.h"
 
+#include <algorithm>
 #include <cmath>
 
 #include <Eigen/Cholesky>
@@ -22,14 +23,20 @@ Status Refiner::bind(Arena& arena, const RefineConfig& c) {
       !(c.radius_start >= c.radius_end) || c.radius_start > c.cell * 1.5f)
     return Status::InvalidArgument;
   config_ = c;
-  const bool ok = cells_.bind(arena, c.max_map_points);
-  order_ = arena.allocate<uint32_t>(c.max_map_points);
+  slot_count_ = BoundedHashMap<uint32_t>::slots_for(c.max_map_points);
+  slots_ = arena.allocate<uint32_t>(slot_count_);
+  cell_keys_ = arena.allocate<uint64_t>(c.max_map_points);
+  begin_ = arena.allocate<uint32_t>(size_t(c.max_map_points) + 1);
   points_ = arena.allocate<float>(size_t(c.max_map_points) * 3);
   normals_ = arena.allocate<float>(size_t(c.max_map_points) * 3);
   query_ = arena.allocate<float>(size_t(c.max_points) * 3);
+  query_cell_ = arena.allocate<uint64_t>(c.max_points);
+  query_neighbours_ = arena.allocate<uint32_t>(size_t(c.max_points) * 27);
   n_ = 0;
+  cells_ = 0;
   if (arena.counting()) return Status::Ok;
-  if (!ok || !order_ || !points_ || !normals_ || !query_) return Status::BufferTooSmall;
+  if (!slots_ || !cell_keys_ || !begin_ || !points_ || !normals_ || !query_ || !query_cell_ || !query_neighbours_)
+    return Status::BufferTooSmall;
   bound_ = true;
   return Status::Ok;
 }
@@ -42,23 +49,66 @@ uint64_t Refiner::cell_key(float x, float y, float z) const {
   return (uint64_t(cx & 0x1FFFFF) << 42) | (uint64_t(cy & 0x1FFFFF) << 21) | uint64_t(cz & 0x1FFFFF);
 }
 
+namespace {
+// Slot hash of a cell key (x << 42 | y << 21 | z): mix64 of the column (x, y) plus z, so the cells of
+// one column sit in neighbouring slots and the 3 z-neighbours a search visits share a cache line.
+inline uint32_t cell_hash(uint64_t key) {
+  return static_cast<uint32_t>(mix64(key >> 21)) + static_cast<uint32_t>(key & 0x1FFFFFu);
+}
+}  // namespace
+
+uint32_t Refiner::find_cell(uint64_t key) const {
+  const uint32_t mask = slot_count_ - 1;
+  for (uint32_t i = cell_hash(key) & mask, n = 0; n < slot_count_; ++n, i = (i + 1) & mask) {
+    const uint32_t s = slots_[i];
+    if (s == 0) return UINT32_MAX;
+    if (cell_keys_[s - 1] == key) return s - 1;
+  }
+  return UINT32_MAX;
+}
+
 Status Refiner::set_map(const float* pts, uint32_t n) {
   if (!bound_) return Status::NotInitialized;
   if (n > config_.max_map_points) return Status::InvalidArgument;
-  n_ = n;
-  cells_.clear();
+  n_ = 0;
+  cells_ = 0;
+  for (uint32_t i = 0; i < slot_count_; ++i) slots_[i] = 0;
+  // Counting sort of the points by cell: cells in order of first appearance, points in map order
+  // within a cell (the order the nearest-neighbour search visits them in; ties go to the first).
+  // begin_ first counts per cell, then becomes the exclusive prefix sum.
+  const uint32_t mask = slot_count_ - 1;
+  uint32_t* cell_of = reinterpret_cast<uint32_t*>(normals_);  // scratch until the normals are computed
   for (uint32_t i = 0; i < n; ++i) {
-    for (int k = 0; k < 3; ++k) points_[3 * i + k] = pts[4 * i + k];
-    Cell* c = cells_.find_or_insert(cell_key(pts[4 * i], pts[4 * i + 1], pts[4 * i + 2]));
-    if (!c) return Status::CapacityExceeded;
-    c->count++;
+    const uint64_t key = cell_key(pts[4 * i], pts[4 * i + 1], pts[4 * i + 2]);
+    uint32_t c = find_cell(key);
+    if (c == UINT32_MAX) {
+      if (cells_ >= config_.max_map_points) return Status::CapacityExceeded;
+      uint32_t j = cell_hash(key) & mask;
+      while (slots_[j] != 0) j = (j + 1) & mask;  // load <= 0.5: an empty slot exists
+      c = cells_++;
+      slots_[j] = c + 1;
+      cell_keys_[c] = key;
+      begin_[c] = 0;
+    }
+    ++begin_[c];  // count for now
+    cell_of[i] = c;
   }
   uint32_t run = 0;
-  cells_.for_each([&](uint64_t, Cell& c) { c.begin = run; run += c.count; c.count = 0; });
-  for (uint32_t i = 0; i < n; ++i) {
-    Cell* c = cells_.find(cell_key(points_[3 * i], points_[3 * i + 1], points_[3 * i + 2]));
-    order_[c->begin + c->count++] = i;
+  for (uint32_t c = 0; c < cells_; ++c) {
+    const uint32_t count = begin_[c];
+    begin_[c] = run;
+    run += count;
   }
+  begin_[cells_] = run;
+  // Place each point at its cell's next free position: begin_[c] is advanced while filling, then
+  // shifted back by one cell.
+  for (uint32_t i = 0; i < n; ++i) {
+    const uint32_t at = begin_[cell_of[i]]++;
+    for (int k = 0; k < 3; ++k) points_[3 * at + k] = pts[4 * i + k];
+  }
+  for (uint32_t c = cells_; c > 0; --c) begin_[c] = begin_[c - 1];
+  begin_[0] = 0;
+  n_ = n;
   // Normals: PCA of the points in the 27 surrounding cells (smallest eigenvector), if planar enough.
   for (uint32_t i = 0; i < n; ++i) {
     const float* p = points_ + 3 * i;
@@ -68,10 +118,10 @@ Status Refiner::set_map(const float* pts, uint32_t n) {
     for (int dx = -1; dx <= 1; ++dx)
       for (int dy = -1; dy <= 1; ++dy)
         for (int dz = -1; dz <= 1; ++dz) {
-          const Cell* c = cells_.find(cell_key(p[0] + dx * config_.cell, p[1] + dy * config_.cell, p[2] + dz * config_.cell));
-          if (!c) continue;
-          for (uint32_t k = 0; k < c->count; ++k) {
-            const float* q = points_ + 3 * order_[c->begin + k];
+          const uint32_t c = find_cell(cell_key(p[0] + dx * config_.cell, p[1] + dy * config_.cell, p[2] + dz * config_.cell));
+          if (c == UINT32_MAX) continue;
+          for (uint32_t k = begin_[c]; k < begin_[c + 1]; ++k) {
+            const float* q = points_ + 3 * k;
             const Eigen::Vector3d v(q[0], q[1], q[2]);
             mean += v;
             cov += v * v.transpose();
@@ -109,6 +159,8 @@ Status Refiner::refine(const VoxelLayer& layer, const Eigen::Isometry3d& initial
     ++q;
   }
   st.query_points = q;
+  constexpr uint32_t kNotLooked = UINT32_MAX - 1;
+  for (uint32_t i = 0; i < q; ++i) query_cell_[i] = UINT64_MAX;
   Eigen::Isometry3d t = initial;
   for (uint32_t it = 0; it < config_.iterations; ++it) {
     const float frac = config_.iterations > 1 ? float(it) / float(config_.iterations - 1) : 1.0f;
@@ -122,14 +174,45 @@ Status Refiner::refine(const VoxelLayer& layer, const Eigen::Isometry3d& initial
       const Eigen::Vector3d p = t * Eigen::Vector3d(query_[3 * i], query_[3 * i + 1], query_[3 * i + 2]);
       float best = r2;
       int32_t nn = -1;
+      const float pf[3] = {float(p.x()), float(p.y()), float(p.z())};
+      // Gaps from p to the lower and upper faces of its own cell, shrunk by 1 mm (and a relative 1e-5):
+      // every point of the cell below (above) lies at least the lower (upper) gap away along that axis,
+      // whatever the float rounding of its cell key and of d2.
+      const uint64_t own = cell_key(pf[0], pf[1], pf[2]);
+      uint32_t* known = query_neighbours_ + size_t(i) * 27;  // cells around `own`, by offset
+      if (query_cell_[i] != own) {
+        query_cell_[i] = own;
+        for (int j = 0; j < 27; ++j) known[j] = kNotLooked;
+      }
+      float gap[3][3];  // [axis][offset + 1]: 0 for the own cell
+      for (int k = 0; k < 3; ++k) {
+        const int64_t c = int64_t((own >> (42 - 21 * k)) & 0x1FFFFF) - (1 << 20);
+        const double lo = double(c) * config_.cell, hi = double(c + 1) * config_.cell, x = pf[k];
+        const double slack = 1e-5 * (std::fabs(lo) + std::fabs(hi)) + 1e-3;
+        gap[k][0] = float(std::max(0.0, x - lo - slack));
+        gap[k][1] = 0.0f;
+        gap[k][2] = float(std::max(0.0, hi - x - slack));
+      }
       for (int dx = -1; dx <= 1; ++dx)
         for (int dy = -1; dy <= 1; ++dy)
           for (int dz = -1; dz <= 1; ++dz) {
-            const Cell* c = cells_.find(cell_key(float(p.x()) + dx * config_.cell, float(p.y()) + dy * config_.cell,
-                                                 float(p.z()) + dz * config_.cell));
-            if (!c) continue;
-            for (uint32_t k = 0; k < c->count; ++k) {
-              const uint32_t id = order_[c->begin + k];
+            const uint64_t key = cell_key(pf[0] + dx * config_.cell, pf[1] + dy * config_.cell, pf[2] + dz * config_.cell);
+            // A cell farther than the best distance so far cannot hold a point that beats it (the search
+            // keeps the first strictly nearer point): skip its lookup. Only when the visited cell is the
+            // neighbour the offsets name (float rounding could make it another one).
+            const float g = gap[0][dx + 1] * gap[0][dx + 1] + gap[1][dy + 1] * gap[1][dy + 1] + gap[2][dz + 1] * gap[2][dz + 1];
+            const bool named = key == own + (uint64_t(int64_t(dx)) << 42) + (uint64_t(int64_t(dy)) << 21) + uint64_t(int64_t(dz));
+            if (named && g > best * (1.0f + 1e-4f) + 1e-6f) continue;
+            uint32_t c;
+            if (named) {  // the cell at this offset from `own`: found before or looked up once now
+              uint32_t& slot = known[(dx + 1) * 9 + (dy + 1) * 3 + (dz + 1)];
+              if (slot == kNotLooked) slot = find_cell(key);
+              c = slot;
+            } else {
+              c = find_cell(key);
+            }
+            if (c == UINT32_MAX) continue;
+            for (uint32_t id = begin_[c]; id < begin_[c + 1]; ++id) {
               const float ex = points_[3 * id] - float(p.x()), ey = points_[3 * id + 1] - float(p.y()),
                           ez = points_[3 * id + 2] - float(p.z());
               const float d2 = ex * ex + ey * ey + ez * ez;

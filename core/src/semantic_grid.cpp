@@ -12,6 +12,59 @@ bool semantic_tile_key(int64_t tx, int64_t ty, uint32_t* key) {
   return true;
 }
 
+namespace {
+
+// Index of the first tile key >= key (tile_count when none), branch-free: the same answer as the
+// branching binary search, without its unpredictable branches.
+uint32_t tile_lower_bound(const uint32_t* keys, uint32_t n, uint32_t key) {
+  if (n == 0) return 0;
+  const uint32_t* base = keys;
+  while (n > 1) {
+    const uint32_t half = n / 2;
+    base = base[half] < key ? base + half : base;
+    n -= half;
+  }
+  return static_cast<uint32_t>(base - keys) + (*base < key ? 1u : 0u);
+}
+
+// Per-call cache of tile lookups for verify_pose: a hypothesis' voxels fall into a few dozen tiles, so
+// most lookups skip the binary search. Entry value 0: empty, 1: tile absent, t + 2: tile t.
+struct TileCache {
+  static constexpr uint32_t kEntries = 64;
+  uint32_t key[kEntries];
+  uint32_t value[kEntries] = {};
+};
+
+// cell_at with the tile found through `cache` (identical results).
+inline uint32_t cell_at_cached(const SemanticGridView& g, float x, float y, TileCache& cache) {
+  if (g.tile_count == 0 || !(g.cell > 0.0f)) return 0;
+  const float tile = g.cell * static_cast<float>(g.tile_cells);
+  const float fx = std::floor(x / tile), fy = std::floor(y / tile);
+  if (!(std::fabs(fx) < 32768.0f && std::fabs(fy) < 32768.0f)) return 0;  // also rejects NaN
+  uint32_t key;
+  if (!semantic_tile_key(static_cast<int64_t>(fx), static_cast<int64_t>(fy), &key)) return 0;
+  const uint32_t e = static_cast<uint32_t>((key * 0x9E3779B1u) >> 26);  // 64 entries
+  uint32_t t;
+  if (cache.value[e] != 0 && cache.key[e] == key) {
+    if (cache.value[e] == 1) return 0;
+    t = cache.value[e] - 2;
+  } else {
+    const uint32_t lo = tile_lower_bound(g.tile_keys, g.tile_count, key);
+    const bool found = lo < g.tile_count && g.tile_keys[lo] == key;
+    cache.key[e] = key;
+    cache.value[e] = found ? lo + 2 : 1;
+    if (!found) return 0;
+    t = lo;
+  }
+  int32_t cx = static_cast<int32_t>((x - fx * tile) / g.cell), cy = static_cast<int32_t>((y - fy * tile) / g.cell);
+  const int32_t n = static_cast<int32_t>(g.tile_cells);
+  cx = cx < 0 ? 0 : (cx >= n ? n - 1 : cx);  // float rounding at the tile's far edge
+  cy = cy < 0 ? 0 : (cy >= n ? n - 1 : cy);
+  return g.cells[size_t(t) * g.tile_cells * g.tile_cells + size_t(cy) * g.tile_cells + size_t(cx)];
+}
+
+}  // namespace
+
 uint32_t SemanticGridView::cell_at(float x, float y, uint32_t* hint) const {
   if (tile_count == 0 || !(cell > 0.0f)) return 0;
   const float tile = cell * static_cast<float>(tile_cells);
@@ -23,11 +76,7 @@ uint32_t SemanticGridView::cell_at(float x, float y, uint32_t* hint) const {
   if (hint && *hint < tile_count && tile_keys[*hint] == key) {
     t = *hint;
   } else {
-    uint32_t lo = 0, hi = tile_count;
-    while (lo < hi) {
-      const uint32_t mid = lo + (hi - lo) / 2;
-      if (tile_keys[mid] < key) lo = mid + 1; else hi = mid;
-    }
+    const uint32_t lo = tile_lower_bound(tile_keys, tile_count, key);
     if (lo >= tile_count || tile_keys[lo] != key) return 0;
     t = lo;
     if (hint) *hint = t;
@@ -65,11 +114,11 @@ PoseVerification verify_pose(const VoxelLayer& voxels, const SemanticGridView& g
   const float yaw = static_cast<float>(std::atan2(T.linear()(1, 0), T.linear()(0, 0)));
   const Eigen::Matrix3f R = Eigen::AngleAxisf(yaw, Eigen::Vector3f::UnitZ()).toRotationMatrix();
   const Eigen::Vector3f t = T.translation().cast<float>();
-  uint32_t hint = 0;
+  TileCache cache;
   for (uint32_t i = 0; i < n; i += stride) {
     const Voxel& vx = voxels.voxel(i);
     const Eigen::Vector3f p = R * Eigen::Vector3f(vx.centroid[0], vx.centroid[1], vx.centroid[2]) + t;
-    const uint32_t mask = grid.cell_at(p.x(), p.y(), &hint);
+    const uint32_t mask = cell_at_cached(grid, p.x(), p.y(), cache);
     const uint32_t bit = class_bit(vx.label);
     const float w = weights[vx.label];
     int verdict = 0;  // +1 agree, -1 disagree, 0 unknown
@@ -84,7 +133,7 @@ PoseVerification verify_pose(const VoxelLayer& voxels, const SemanticGridView& g
       const float c = grid.cell;
       const float nx[4] = {p.x() - c, p.x() + c, p.x(), p.x()}, ny[4] = {p.y(), p.y(), p.y() - c, p.y() + c};
       for (int k = 0; k < 4 && verdict < 0; ++k)
-        if (grid.cell_at(nx[k], ny[k], &hint) & bit) verdict = 1;
+        if (cell_at_cached(grid, nx[k], ny[k], cache) & bit) verdict = 1;
     }
     if (verdict == 0) { ++v.unknown; continue; }
     ++v.scored;

@@ -7,11 +7,16 @@ namespace gsf {
 
 bool TriangleIndexView::lookup(uint64_t key, uint32_t* begin, uint32_t* end) const {
   *begin = *end = 0;
-  uint32_t lo = 0, hi = key_count;
-  while (lo < hi) {
-    const uint32_t mid = lo + (hi - lo) / 2;
-    if (keys[mid] < key) lo = mid + 1; else hi = mid;
+  if (key_count == 0) return false;
+  // Branch-free lower bound (the first key >= key): the same index as the branching binary search.
+  const uint64_t* base = keys;
+  uint32_t n = key_count;
+  while (n > 1) {
+    const uint32_t half = n / 2;
+    base = base[half] < key ? base + half : base;
+    n -= half;
   }
+  const uint32_t lo = static_cast<uint32_t>(base - keys) + (*base < key ? 1u : 0u);
   if (lo >= key_count || keys[lo] != key) return false;
   *begin = offsets[lo];
   *end = offsets[lo + 1];

@@ -1,6 +1,7 @@
 #include "gsf/voxel_layer.h"
 
 #include <cmath>
+#include <cstring>
 
 namespace gsf {
 namespace {
@@ -35,7 +36,12 @@ Status VoxelLayer::bind(Arena& arena, const VoxelConfig& config) {
     return Status::InvalidArgument;
   config_ = config;
   voxels_ = arena.allocate<Voxel>(config.max_voxels);
-  const bool ok_index = index_.bind(arena, config.max_voxels);
+  slot_count_ = BoundedHashMap<uint32_t>::slots_for(config.max_voxels);
+  slots_ = arena.allocate<uint32_t>(slot_count_);
+  keys_ = arena.allocate<uint64_t>(config.max_voxels);
+  const bool ok_index = slots_ != nullptr && keys_ != nullptr;
+  if (ok_index) std::memset(slots_, 0, sizeof(uint32_t) * slot_count_);
+  active_slots_ = ok_index ? slot_count_ : 0;  // lookups on a counting or failed bind find nothing
   const bool ok_columns = columns_.bind(arena, config.max_columns);
   column_members_ = arena.allocate<uint32_t>(config.max_voxels);
   column_of_ = arena.allocate<uint32_t>(config.max_voxels);
@@ -62,22 +68,24 @@ uint32_t VoxelLayer::find_cell(int32_t x, int32_t y, int32_t z) const {
   if (x <= -kCoordLimit || x >= kCoordLimit - 1 || y <= -kCoordLimit || y >= kCoordLimit - 1 ||
       z <= -kCoordLimit || z >= kCoordLimit - 1)
     return UINT32_MAX;
-  const uint32_t* v = index_.find(pack3(x, y, z));
-  return v ? *v : UINT32_MAX;
+  return index_find(pack3(x, y, z));
 }
 
 uint32_t VoxelLayer::find(const float p[3]) const {
   const uint64_t k = key_of(p);
   if (k == UINT64_MAX) return UINT32_MAX;
-  const uint32_t* v = index_.find(k);
-  return v ? *v : UINT32_MAX;
+  return index_find(k);
 }
 
-uint64_t VoxelLayer::column_key(float x, float y) const {
-  const float inv = 1.0f / config_.column_size;
-  int32_t cx, cy;
-  if (!cell_coord(x, inv, &cx) || !cell_coord(y, inv, &cy)) return UINT64_MAX;
-  return pack3(cx, cy, 0);
+uint32_t VoxelLayer::index_find(uint64_t key) const {
+  if (active_slots_ == 0) return UINT32_MAX;
+  const uint32_t mask = active_slots_ - 1;
+  for (uint32_t i = static_cast<uint32_t>(mix64(key)) & mask, n = 0; n < active_slots_; ++n, i = (i + 1) & mask) {
+    const uint32_t s = slots_[i];
+    if (s == 0) return UINT32_MAX;
+    if (keys_[s - 1] == key) return s - 1;
+  }
+  return UINT32_MAX;
 }
 
 Status VoxelLayer::build(const ScanView& scan, VoxelStats* stats_out) {
@@ -87,8 +95,13 @@ Status VoxelLayer::build(const ScanView& scan, VoxelStats* stats_out) {
   column_lo_[0] = column_lo_[1] = 0;
   column_hi_[0] = column_hi_[1] = -1;
   if (!bound_) return Status::NotInitialized;
-  index_.clear();
-  columns_.clear();
+  // A scan of n points makes at most n voxels: the index only needs the slots for min(n, max_voxels).
+  if (active_slots_ > 0) std::memset(slots_, 0, sizeof(uint32_t) * active_slots_);
+  {
+    const uint32_t want = BoundedHashMap<uint32_t>::slots_for(scan.count < config_.max_voxels ? scan.count : config_.max_voxels);
+    active_slots_ = want < slot_count_ ? want : slot_count_;
+  }
+  columns_.clear_for(0);
   if (scan.count == 0) return Status::InvalidInput;
   if (scan.points == nullptr || scan.labels == nullptr || scan.stride < 3) return Status::InvalidArgument;
   const bool use_logits = scan.logits != nullptr;
@@ -96,6 +109,15 @@ Status VoxelLayer::build(const ScanView& scan, VoxelStats* stats_out) {
 
   const float min_r2 = config_.min_range * config_.min_range;
   const float max_r2 = config_.max_range * config_.max_range;
+  const float inv_size = 1.0f / config_.voxel_size;
+  Voxel* const voxels = voxels_;
+  uint32_t* const slots = slots_;
+  uint64_t* const keys = keys_;
+  const uint32_t active = active_slots_, mask = active_slots_ - 1, max_voxels = config_.max_voxels;
+  uint32_t count = 0;
+  // Consecutive points of a scan line often share a voxel: the last key found skips the hash lookup.
+  uint64_t last_key = UINT64_MAX;
+  uint32_t last_voxel = 0;
   float prob[kNumClasses];
   stats.points_in = scan.count;
   for (uint32_t i = 0; i < scan.count; ++i) {
@@ -108,33 +130,54 @@ Status VoxelLayer::build(const ScanView& scan, VoxelStats* stats_out) {
     if (c == kIgnoredClass) { ++stats.ignored; continue; }
     if (use_logits) {
       const float* l = scan.logits + static_cast<size_t>(i) * kNumClasses;
+      // Max and finiteness without branches (the max of finite values does not depend on the order).
       float mx = l[0];
-      bool finite = true;
+      uint32_t non_finite = 0;
       for (int k = 0; k < kNumClasses; ++k) {
-        finite = finite && std::isfinite(l[k]);
+        uint32_t bits;
+        std::memcpy(&bits, &l[k], sizeof bits);
+        non_finite |= static_cast<uint32_t>((bits & 0x7F800000u) == 0x7F800000u);
         mx = l[k] > mx ? l[k] : mx;
       }
-      if (!finite) { ++stats.non_finite; continue; }
+      if (non_finite) { ++stats.non_finite; continue; }
+      for (int k = 0; k < kNumClasses; ++k) prob[k] = std::exp(l[k] - mx);
       float sum = 0.0f;
-      for (int k = 0; k < kNumClasses; ++k) sum += (prob[k] = std::exp(l[k] - mx));
+      for (int k = 0; k < kNumClasses; ++k) sum += prob[k];  // same order as before: bit-identical
       const float inv = 1.0f / sum;
       for (int k = 0; k < kNumClasses; ++k) prob[k] *= inv;
     }
-    const uint64_t key = key_of(p);
-    if (key == UINT64_MAX) { ++stats.out_of_range; continue; }
-    bool inserted = false;
-    uint32_t* slot = index_.find_or_insert(key, &inserted);
-    if (slot == nullptr) { ++stats.dropped_points; continue; }
-    if (inserted) {
-      *slot = count_;
-      Voxel& v = voxels_[count_++];
-      v.centroid[0] = v.centroid[1] = v.centroid[2] = 0.0f;
-      v.count = 0;
-      for (int k = 0; k < kNumClasses; ++k) v.prob[k] = 0.0f;
-      v.label = 0;
-      v.pad[0] = v.pad[1] = v.pad[2] = 0;
+    int32_t cx, cy, cz;
+    if (!cell_coord(p[0], inv_size, &cx) || !cell_coord(p[1], inv_size, &cy) || !cell_coord(p[2], inv_size, &cz)) {
+      ++stats.out_of_range;
+      continue;
     }
-    Voxel& v = voxels_[*slot];
+    const uint64_t key = pack3(cx, cy, cz);
+    uint32_t id = last_voxel;
+    if (key != last_key) {
+      // Find or insert (the same probe sequence as a BoundedHashMap of capacity max_voxels).
+      id = UINT32_MAX;
+      for (uint32_t j = static_cast<uint32_t>(mix64(key)) & mask, n = 0; n < active; ++n, j = (j + 1) & mask) {
+        const uint32_t sl = slots[j];
+        if (sl == 0) {
+          if (count >= max_voxels) break;
+          slots[j] = count + 1;
+          keys[count] = key;
+          id = count++;
+          Voxel& v = voxels[id];
+          v.centroid[0] = v.centroid[1] = v.centroid[2] = 0.0f;
+          v.count = 0;
+          for (int k = 0; k < kNumClasses; ++k) v.prob[k] = 0.0f;
+          v.label = 0;
+          v.pad[0] = v.pad[1] = v.pad[2] = 0;
+          break;
+        }
+        if (keys[sl - 1] == key) { id = sl - 1; break; }
+      }
+      if (id == UINT32_MAX) { ++stats.dropped_points; continue; }
+      last_key = key;
+      last_voxel = id;
+    }
+    Voxel& v = voxels[id];
     v.centroid[0] += p[0];
     v.centroid[1] += p[1];
     v.centroid[2] += p[2];
@@ -145,15 +188,16 @@ Status VoxelLayer::build(const ScanView& scan, VoxelStats* stats_out) {
       v.prob[c] += 1.0f;
     }
   }
-  for (uint32_t i = 0; i < count_; ++i) {
-    Voxel& v = voxels_[i];
+  count_ = count;
+  for (uint32_t i = 0; i < count; ++i) {
+    Voxel& v = voxels[i];
     const float inv = 1.0f / static_cast<float>(v.count);
     v.centroid[0] *= inv; v.centroid[1] *= inv; v.centroid[2] *= inv;
+    for (int k = 0; k < kNumClasses; ++k) v.prob[k] *= inv;
     int best = 0;
-    for (int k = 0; k < kNumClasses; ++k) {
-      v.prob[k] *= inv;
-      if (v.prob[k] > v.prob[best]) best = k;
-    }
+    float best_prob = v.prob[0];
+    for (int k = 1; k < kNumClasses; ++k)
+      if (v.prob[k] > best_prob) { best_prob = v.prob[k]; best = k; }
     v.label = static_cast<uint8_t>(best);
   }
   stats.unindexed_voxels = build_columns();
@@ -166,26 +210,29 @@ Status VoxelLayer::build(const ScanView& scan, VoxelStats* stats_out) {
 uint32_t VoxelLayer::build_columns() {
   // Counting sort of voxels into 2-D columns: count, prefix-sum (slot order), fill in voxel order.
   // Voxel centroids lie inside representable cells and column_size >= voxel_size, so every centroid has
-  // a column coordinate.
+  // a column coordinate. column_of_ keeps each voxel's column slot (+1; 0: not indexed) for the fill.
   const float inv = 1.0f / config_.column_size;
   uint32_t unindexed = 0;
+  columns_.clear_for(count_);  // at most one column per voxel
   for (uint32_t i = 0; i < count_; ++i) {
     const Voxel& v = voxels_[i];
-    ColumnCell* cell = columns_.find_or_insert(column_key(v.centroid[0], v.centroid[1]));
+    int32_t c[2];
+    const bool coords = cell_coord(v.centroid[0], inv, &c[0]) && cell_coord(v.centroid[1], inv, &c[1]);
+    ColumnCell* cell = columns_.find_or_insert(coords ? pack3(c[0], c[1], 0) : UINT64_MAX);
     if (cell) {
       cell->count += 1;
-      int32_t c[2];
-      if (cell_coord(v.centroid[0], inv, &c[0]) && cell_coord(v.centroid[1], inv, &c[1])) {
+      if (coords) {
         const bool first = column_lo_[0] > column_hi_[0];
         for (int k = 0; k < 2; ++k) {
           column_lo_[k] = first || c[k] < column_lo_[k] ? c[k] : column_lo_[k];
           column_hi_[k] = first || c[k] > column_hi_[k] ? c[k] : column_hi_[k];
         }
       }
+      column_of_[i] = columns_.slot_of(cell) + 1;
     } else {
       ++unindexed;
+      column_of_[i] = 0;  // not indexed (column capacity exhausted)
     }
-    column_of_[i] = cell ? 1u : 0u;  // 0: not indexed (column capacity exhausted)
   }
   uint32_t running = 0;
   columns_.for_each([&](uint64_t, ColumnCell& c) {
@@ -195,9 +242,8 @@ uint32_t VoxelLayer::build_columns() {
   });
   for (uint32_t i = 0; i < count_; ++i) {
     if (!column_of_[i]) continue;
-    const Voxel& v = voxels_[i];
-    ColumnCell* cell = columns_.find(column_key(v.centroid[0], v.centroid[1]));
-    column_members_[cell->begin + cell->count++] = i;
+    ColumnCell& cell = columns_.at_slot(column_of_[i] - 1);
+    column_members_[cell.begin + cell.count++] = i;
   }
   return unindexed;
 }

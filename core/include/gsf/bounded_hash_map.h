@@ -4,6 +4,10 @@
 // of two chosen at bind() time as the smallest >= capacity / max_load. Inserting beyond `capacity`
 // entries fails (returns nullptr) so probe chains stay short and the worst case per lookup is bounded by
 // the slot count. No erase: the tables are cleared wholesale per scan in O(slots).
+// clear_for(n) is a clear() for a caller that will insert at most n keys this time: only a power-of-two
+// prefix of the slots (>= 2 n, so the load stays <= 0.5) is used until the next clear, which keeps the
+// touched memory proportional to the data, not to the capacity. Lookups see the same keys and values
+// either way; only the slot order of for_each differs.
 #pragma once
 #include <cstdint>
 #include <type_traits>
@@ -38,24 +42,31 @@ class BoundedHashMap {
     used_ = arena.allocate<uint8_t>(slots_);
     values_ = arena.allocate<V>(slots_);
     size_ = 0;
-    if (arena.counting()) { slots_ = 0; return true; }
-    if (!keys_ || !used_ || !values_) { slots_ = 0; return false; }
+    if (arena.counting()) { slots_ = active_ = 0; return true; }
+    if (!keys_ || !used_ || !values_) { slots_ = active_ = 0; return false; }
+    active_ = slots_;
     clear();
     return true;
   }
 
-  void clear() {
-    for (uint32_t i = 0; i < slots_; ++i) used_[i] = 0;
+  void clear() { clear_for(capacity_); }
+  // Clears, then uses only the slots needed for at most `entries` keys (see the header comment).
+  void clear_for(uint32_t entries) {
+    uint8_t* used = used_;
+    const uint32_t n = active_;  // only the previously used prefix can hold keys
+    for (uint32_t i = 0; i < n; ++i) used[i] = 0;
     size_ = 0;
+    const uint32_t want = slots_for(entries < capacity_ ? entries : capacity_);
+    active_ = want < slots_ ? want : slots_;
   }
 
   uint32_t size() const { return size_; }
   uint32_t capacity() const { return capacity_; }
 
   V* find(uint64_t key) {
-    if (slots_ == 0) return nullptr;
-    const uint32_t mask = slots_ - 1;
-    for (uint32_t i = static_cast<uint32_t>(mix64(key)) & mask, n = 0; n < slots_; ++n, i = (i + 1) & mask) {
+    if (active_ == 0) return nullptr;
+    const uint32_t mask = active_ - 1;
+    for (uint32_t i = static_cast<uint32_t>(mix64(key)) & mask, n = 0; n < active_; ++n, i = (i + 1) & mask) {
       if (!used_[i]) return nullptr;
       if (keys_[i] == key) return &values_[i];
     }
@@ -67,9 +78,9 @@ class BoundedHashMap {
   // nullptr when the key is absent and the map already holds `capacity` entries.
   V* find_or_insert(uint64_t key, bool* inserted = nullptr) {
     if (inserted) *inserted = false;
-    if (slots_ == 0) return nullptr;
-    const uint32_t mask = slots_ - 1;
-    for (uint32_t i = static_cast<uint32_t>(mix64(key)) & mask, n = 0; n < slots_; ++n, i = (i + 1) & mask) {
+    if (active_ == 0) return nullptr;
+    const uint32_t mask = active_ - 1;
+    for (uint32_t i = static_cast<uint32_t>(mix64(key)) & mask, n = 0; n < active_; ++n, i = (i + 1) & mask) {
       if (!used_[i]) {
         if (size_ >= capacity_) return nullptr;
         used_[i] = 1;
@@ -84,10 +95,14 @@ class BoundedHashMap {
     return nullptr;
   }
 
+  // The slot of a value pointer returned by find/find_or_insert, and back (valid until the next clear).
+  uint32_t slot_of(const V* value) const { return static_cast<uint32_t>(value - values_); }
+  V& at_slot(uint32_t slot) { return values_[slot]; }
+
   // Iterate occupied slots in slot order (deterministic for a given insertion sequence).
   template <class F>
   void for_each(F&& f) {
-    for (uint32_t i = 0; i < slots_; ++i)
+    for (uint32_t i = 0; i < active_; ++i)
       if (used_[i]) f(keys_[i], values_[i]);
   }
 
@@ -96,6 +111,7 @@ class BoundedHashMap {
   uint8_t* used_ = nullptr;
   V* values_ = nullptr;
   uint32_t slots_ = 0;
+  uint32_t active_ = 0;  // slots in use since the last clear (a power of two <= slots_)
   uint32_t size_ = 0;
   uint32_t capacity_ = 0;
 };

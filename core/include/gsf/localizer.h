@@ -19,7 +19,7 @@
 namespace gsf {
 
 struct StageTimes {  // nanoseconds from the Clock given at init (all zero without one)
-  // match: index lookups and ranking; gsf: the GSF filter and correspondence accumulation; clique: the
+  // match: index lookups and ranking (with the heading votes); gsf: the GSF filter and correspondence accumulation; clique: the
   // hypotheses (cliques + TLS poses); pose: verification and ambiguity.
   uint64_t voxel = 0, cluster = 0, field = 0, triangle = 0, match = 0, gsf = 0, clique = 0, pose = 0, refine = 0, total = 0;
 };

@@ -1,8 +1,9 @@
 // Pose refinement against the map's point layer (paper Table IV "w/ rf"): point-to-plane ICP from the
 // global pose, on long-term structure only (stability weight 1: buildings, poles, fences, ground...).
 //
-// At init the map's refinement points are put in a uniform-grid hash (CSR) and each gets a normal from
-// the PCA of its grid neighbourhood - all in the arena. Per scan: up to max_points query voxel centroids
+// At init the map's refinement points are put in a uniform-grid hash (CSR: the points and their normals
+// are stored sorted by cell, a cell is a key and a start offset) and each gets a normal from the PCA of
+// its grid neighbourhood - all in the arena. Per scan: up to max_points query voxel centroids
 // of long-term classes, a bounded number of Gauss-Newton iterations with a shrinking correspondence
 // radius, nearest neighbours from the 27 surrounding cells, a 6x6 solve per iteration.
 // The refined pose is accepted only if it keeps enough inliers and stays within max_correction of the
@@ -52,15 +53,27 @@ class Refiner {
 
  private:
   bool long_term(int label) const { return (classes_ ? classes_->stability(label) : stability_weight(label)) >= 1.0f; }
-  struct Cell { uint32_t begin, count; };
   uint64_t cell_key(float x, float y, float z) const;
+  // Cell of a key: its index (UINT32_MAX if absent); its points are begin_[c] .. begin_[c + 1] - 1.
+  uint32_t find_cell(uint64_t key) const;
   RefineConfig config_{};
   const ClassTable* classes_ = nullptr;
-  BoundedHashMap<Cell> cells_;
-  uint32_t* order_ = nullptr;   // map point ids grouped by cell
-  float* points_ = nullptr;     // n x 3 (copied for locality)
-  float* normals_ = nullptr;    // n x 3 (0 vector: no reliable normal)
+  // Grid hash: open addressing (column hash + z, linear probing, load <= 0.5) over 4-byte slots holding
+  // cell index + 1 (0 = empty); per cell its key and its first point (the next cell's first point ends
+  // it). 4 B a slot + 12 B a cell (was 17 B a slot + 4 B a point of order).
+  uint32_t* slots_ = nullptr;
+  uint32_t slot_count_ = 0;
+  uint64_t* cell_keys_ = nullptr;  // max_map_points
+  uint32_t* begin_ = nullptr;      // max_map_points + 1
+  uint32_t cells_ = 0;
+  float* points_ = nullptr;     // n x 3, sorted by cell (ascending map order within a cell)
+  float* normals_ = nullptr;    // n x 3, the same order (0 vector: no reliable normal)
   float* query_ = nullptr;      // max_points x 3
+  // Per query point, the grid cell it fell in at the last iteration and the cells found around it
+  // (27 per point; kNotLooked until looked up): the pose moves little between iterations, so the same
+  // cells are found again without probing the grid hash.
+  uint64_t* query_cell_ = nullptr;      // max_points
+  uint32_t* query_neighbours_ = nullptr;  // max_points x 27
   uint32_t n_ = 0;
   bool bound_ = false;
 };

@@ -37,12 +37,12 @@ struct VoxelConfig {
   uint32_t max_columns = 16384;  // gather index cells (hash capacity)
 };
 
-struct Voxel {
+struct Voxel {  // 96 B; what verification, clustering and refinement read sits in the first 20
   float centroid[3];
   uint32_t count;
-  float prob[kNumClasses];  // mean class probability
   uint8_t label;            // dense argmax class
   uint8_t pad[3];
+  float prob[kNumClasses];  // mean class probability
 };
 
 struct VoxelStats {
@@ -83,13 +83,19 @@ class VoxelLayer {
 
  private:
   struct ColumnCell { uint32_t begin, count; };
-  uint64_t column_key(float x, float y) const;
   uint32_t build_columns();  // returns the number of voxels left unindexed
 
   VoxelConfig config_{};
   const ClassTable* classes_ = nullptr;
   Voxel* voxels_ = nullptr;
-  BoundedHashMap<uint32_t> index_;     // voxel key -> voxel index
+  // Voxel key -> voxel index: open addressing (mix64, linear probing, load <= 0.5) over slots that hold
+  // index + 1 (0 = empty); the keys live densely per voxel in keys_, so a probe reads 4 bytes of slot
+  // and then the key of a voxel the scan is about to touch anyway. Only the first active_slots_ slots
+  // (a power of two >= 2 min(points, max_voxels)) are used per scan.
+  uint32_t index_find(uint64_t key) const;
+  uint32_t* slots_ = nullptr;
+  uint64_t* keys_ = nullptr;
+  uint32_t slot_count_ = 0, active_slots_ = 0;
   BoundedHashMap<ColumnCell> columns_; // column key -> range in column_members_
   uint32_t* column_members_ = nullptr; // voxel ids grouped by column
   uint32_t* column_of_ = nullptr;      // scratch: per voxel its column slot order
