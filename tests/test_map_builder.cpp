@@ -3,6 +3,7 @@
 // posed in UTM-size coordinates give the same map as the same drive posed locally.
 #include <catch2/catch.hpp>
 
+#include <algorithm>
 #include <cmath>
 #include <cstring>
 #include <string>
@@ -45,6 +46,7 @@ struct Built {
   std::vector<uint64_t> blob;
   size_t bytes = 0;
   MapView map;
+  mapping::MapBuildStats stats;
   const uint8_t* sections() const { return reinterpret_cast<const uint8_t*>(blob.data()) + 624; }
 };
 
@@ -60,8 +62,7 @@ Built build(const mapping::MapBuilderOptions& options, const Eigen::Vector3d& sh
     if (b.add != Status::Ok) return b;
   }
   builder.set_road_length(120.0f);
-  mapping::MapBuildStats st;
-  b.build = builder.build(&b.blob, &b.bytes, &st);
+  b.build = builder.build(&b.blob, &b.bytes, &b.stats);
   if (b.build == Status::Ok) b.build = load_map(b.blob.data(), b.bytes, &b.map);
   return b;
 }
@@ -137,4 +138,27 @@ TEST_CASE("Poses far from the origin, non-finite poses and bad frame names are r
     INFO("frame '" << name << "'");
     CHECK(build(bad, Eigen::Vector3d::Zero()).add == Status::InvalidArgument);
   }
+}
+
+TEST_CASE("The builder's capacities are options: what they cut is counted, the rest kept by rank") {
+  const Built full = build(mapping::MapBuilderOptions(), Eigen::Vector3d::Zero());
+  REQUIRE(full.build == Status::Ok);
+  CHECK(full.stats.instances_dropped == 0);
+  CHECK(full.stats.field_points_dropped == 0);
+  REQUIRE(full.stats.instances > 6);
+  mapping::MapBuilderOptions small;
+  small.max_instances = 5;
+  small.max_field_points = 50;
+  const Built cut = build(small, Eigen::Vector3d::Zero());
+  REQUIRE(cut.build == Status::Ok);
+  CHECK(cut.stats.instances == 5);
+  CHECK(cut.stats.instances_dropped == full.stats.instances - 5);
+  CHECK(cut.stats.field_points_dropped > 0);
+  // The kept instances are the largest by points (InstanceClustering's ranking), not the first found.
+  uint32_t smallest_kept = UINT32_MAX;
+  for (uint32_t i = 0; i < cut.map.counts.instances; ++i)
+    smallest_kept = std::min(smallest_kept, cut.map.instances[i].point_count);
+  uint32_t larger_in_full = 0;
+  for (uint32_t i = 0; i < full.map.counts.instances; ++i) larger_in_full += full.map.instances[i].point_count > smallest_kept;
+  CHECK(larger_in_full <= 5);
 }

@@ -125,11 +125,11 @@ Status MapBuilder::build(std::vector<uint64_t>* blob, size_t* bytes_out, MapBuil
   vc.max_voxels = nv + 16;
   vc.max_columns = nv + 16;
   ClusterConfig cc = config_.cluster;
-  cc.max_instances = 65535;
+  cc.max_instances = options_.max_instances;
   cc.instance_classes = classes_.instance_classes();
   if (!config_.classes) cc.instance_classes = config_.cluster.instance_classes;
   PoleConfig pc = effective_pole_config(config_);
-  pc.max_instances = 65535;
+  pc.max_instances = options_.max_pole_instances;
   const bool poles_on = (pc.pole_hosts | pc.trunk_hosts) != 0;
   const auto t_cluster = std::chrono::steady_clock::now();
   Workspace ws(VoxelLayer::required_bytes(vc) + InstanceClustering::required_bytes(cc, vc.max_voxels) +
@@ -150,13 +150,17 @@ Status MapBuilder::build(std::vector<uint64_t>* blob, size_t* bytes_out, MapBuil
   sv.count = nv;
   Status s = layer.build(sv, nullptr);
   if (s != Status::Ok) return s;
-  s = clusters.build(layer, nullptr);
+  ClusterStats cs;
+  s = clusters.build(layer, &cs);
   if (s != Status::Ok && s != Status::CapacityExceeded) return s;
+  st.instances_dropped += cs.dropped_capacity;
   // All map instances: the clustered ones, then the geometric poles / trunks in discovery order.
   std::vector<Instance> found(clusters.instances(), clusters.instances() + clusters.size());
   if (poles_on) {
-    s = poles.build(layer, nullptr);
+    PoleStats ps;
+    s = poles.build(layer, &ps);
     if (s != Status::Ok && s != Status::CapacityExceeded) return s;
+    st.instances_dropped += ps.dropped_capacity;
     found.insert(found.end(), poles.instances(), poles.instances() + poles.size());
     st.pole_instances = poles.size();
   }
@@ -169,7 +173,7 @@ Status MapBuilder::build(std::vector<uint64_t>* blob, size_t* bytes_out, MapBuil
   const auto t_fields = std::chrono::steady_clock::now();
   const FieldConfig& fc = config_.field;
   const uint32_t M = fc.inducing_points, G = grid_points(fc), D = kNumClasses;
-  const uint32_t max_pts = 200000;
+  const uint32_t max_pts = options_.max_field_points;
   Workspace fws(FieldSolver::required_bytes(fc, max_pts) + 4096);
   FieldSolver solver;
   if (solver.bind(fws.arena, fc, max_pts) != Status::Ok) return Status::InvalidArgument;
@@ -191,7 +195,10 @@ Status MapBuilder::build(std::vector<uint64_t>* blob, size_t* bytes_out, MapBuil
     mi.point_count = in.point_count;
     mi.label = inst_labels[i] = in.label;
     st.instances_by_class[in.label]++;
-    const uint32_t got = collect_field_points(layer, fc, in.centroid, max_pts, ids.data(), xyz.data(), targets.data(), gl.data());
+    uint32_t total = 0;
+    const uint32_t got = collect_field_points(layer, fc, in.centroid, max_pts, ids.data(), xyz.data(), targets.data(),
+                                              gl.data(), &total);
+    st.field_points_dropped += total - got;
     uint32_t m = 0;
     float* in_i = inputs.data() + size_t(i) * M * 3;
     float* al_i = alpha.data() + size_t(i) * M * D;

@@ -30,6 +30,8 @@ struct MapBuildStats {
   uint32_t map_voxels = 0;
   uint32_t instances = 0;
   uint32_t pole_instances = 0;  // of which geometric poles / trunks (pole_extraction.h)
+  uint32_t instances_dropped = 0;     // clustered instances and poles beyond the options' capacities
+  uint64_t field_points_dropped = 0;  // semantic points beyond max_field_points, over all instances
   uint32_t instances_by_class[kNumClasses] = {};
   uint32_t triangles = 0;
   uint32_t index_keys = 0;
@@ -50,6 +52,14 @@ constexpr double kMaxMapLocalCoordinate = 131072.0;
 
 struct MapBuilderOptions {
   float refine_voxel = 1.0f;  // m; cell of the refinement point layer (<= 0: no layer)
+  // Capacities of the whole-map stages (no hidden constants; what they cut is counted in MapBuildStats).
+  // Clustered instances kept, the largest by points first, and geometric poles / trunks kept, the best
+  // by score first: each at most 65535 (InstanceClustering's and PoleExtraction's limit, ClusterConfig).
+  uint32_t max_instances = 65535;
+  uint32_t max_pole_instances = 65535;
+  // Semantic points gathered per map instance to fit its field (the localizer's match.max_field_points
+  // is the query side's); beyond it the gather order (column by column) decides and the rest is counted.
+  uint32_t max_field_points = 200000;
   // The map origin in the frame of the poses. Not given: the first scan's pose translation rounded (half
   // up) to a whole metre. A whole-metre origin keeps the subtraction exact for poses posed to float
   // precision, so the same drive shifted by whole metres gets the same map-local frame and the same map.
