@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
 # Installs this build tree into a temporary prefix and builds tests/consumer against it with
-# find_package(gsf) (gsf::gsf, gsf::port, gsf::gsf_port), then runs the C++ and the C consumer.
+# find_package(gsf) (gsf::gsf, gsf::port, gsf::gsf_port, gsf::mapping), then runs the C++ and the C
+# consumer and a map tool on gsf::mapping.
 set -euo pipefail
 build=$1
 src=$(cd "$(dirname "$0")" && pwd)
@@ -11,4 +12,6 @@ cmake -S "$src/consumer" -B "$tmp/build" -G Ninja -DCMAKE_PREFIX_PATH="$tmp/pref
 cmake --build "$tmp/build" >/dev/null
 "$tmp/build/app" | grep -q " Ok$"
 "$tmp/build/capp" | grep -q " Ok$"
-echo "2 passed, 0 failed"
+[ -x "$tmp/build/mapapp" ] || { echo "gsf::mapping was not installed"; exit 1; }
+"$tmp/build/mapapp" | grep -q " Ok$"
+echo "3 passed, 0 failed"

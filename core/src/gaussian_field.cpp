@@ -216,4 +216,14 @@ Status FieldSolver::probe(const FieldView& field, const float* chol, const float
   return Status::Ok;
 }
 
+Status fit_instance_field(FieldSolver& solver, const VoxelLayer& layer, const float center[3], const FieldGather& gather,
+                          float* inputs, float* alpha, float* chol, uint32_t* m, uint32_t* gathered, uint32_t* total) {
+  *m = 0;
+  *total = 0;
+  *gathered = collect_field_points(layer, solver.config(), center, gather.capacity, gather.ids, gather.xyz,
+                                   gather.targets, gather.labels, total);
+  return solver.fit(gather.xyz, gather.targets, gather.labels, *gathered, inputs, alpha, chol, m);
+}
+
 }  // namespace gsf
+

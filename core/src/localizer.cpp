@@ -317,13 +317,13 @@ void Localizer::Impl::fit_query_fields(const LocalizerConfig& cfg, LocalizeResul
     q_m[i] = 0;
     if (!cfg.match.use_gsf) continue;
     uint32_t total = 0;
-    const uint32_t got = collect_field_points(voxels, cfg.field, centroids + 3 * i, cfg.match.max_field_points,
-                                              gather_ids, gather_xyz, gather_targets, gather_labels, &total);
-    if (total > got) out.capacity_truncated = true;
-    uint32_t m = 0;
-    if (solver.fit(gather_xyz, gather_targets, gather_labels, got, q_inputs + size_t(i) * M * 3,
-                      q_alpha + size_t(i) * M * kNumClasses, q_chol + size_t(i) * M * M, &m) == Status::Ok)
+    const FieldGather gather{cfg.match.max_field_points, gather_ids, gather_xyz, gather_targets, gather_labels};
+    uint32_t m = 0, got = 0;
+    if (fit_instance_field(solver, voxels, centroids + 3 * i, gather, q_inputs + size_t(i) * M * 3,
+                           q_alpha + size_t(i) * M * kNumClasses, q_chol + size_t(i) * M * M, &m, &got, &total) ==
+        Status::Ok)
       q_m[i] = m;
+    if (total > got) out.capacity_truncated = true;
   }
 }
 

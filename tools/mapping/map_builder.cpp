@@ -195,14 +195,14 @@ Status MapBuilder::build(std::vector<uint64_t>* blob, size_t* bytes_out, MapBuil
     mi.point_count = in.point_count;
     mi.label = inst_labels[i] = in.label;
     st.instances_by_class[in.label]++;
-    uint32_t total = 0;
-    const uint32_t got = collect_field_points(layer, fc, in.centroid, max_pts, ids.data(), xyz.data(), targets.data(),
-                                              gl.data(), &total);
-    st.field_points_dropped += total - got;
-    uint32_t m = 0;
+    // The same per-instance fit as the localizer's query fields (gaussian_field.h).
+    const FieldGather gather{max_pts, ids.data(), xyz.data(), targets.data(), gl.data()};
+    uint32_t m = 0, got = 0, total = 0;
     float* in_i = inputs.data() + size_t(i) * M * 3;
     float* al_i = alpha.data() + size_t(i) * M * D;
-    if (solver.fit(xyz.data(), targets.data(), gl.data(), got, in_i, al_i, chol.data(), &m) == Status::Ok) {
+    const Status fit = fit_instance_field(solver, layer, in.centroid, gather, in_i, al_i, chol.data(), &m, &got, &total);
+    st.field_points_dropped += total - got;
+    if (fit == Status::Ok) {
       mi.inducing_count = m;
       FieldView f{in_i, al_i, m};
       solver.probe(f, chol.data(), grid.data(), G, mean.data() + size_t(i) * G * D, var.data() + size_t(i) * G, nullptr);

@@ -58,6 +58,15 @@ void make_probe_grid(const FieldConfig& config, float yaw_radians, float* out_xy
 uint32_t collect_field_points(const VoxelLayer& layer, const FieldConfig& config, const float center[3], uint32_t max,
                               uint32_t* ids, float* xyz, float* targets, uint8_t* labels, uint32_t* total = nullptr);
 
+// Caller-owned scratch for fit_instance_field: room for `capacity` gathered points.
+struct FieldGather {
+  uint32_t capacity = 0;
+  uint32_t* ids = nullptr;      // capacity
+  float* xyz = nullptr;         // capacity x 3
+  float* targets = nullptr;     // capacity x D
+  uint8_t* labels = nullptr;    // capacity
+};
+
 // Workspace for fitting and probing; all memory comes from the arena at bind().
 class FieldSolver {
  public:
@@ -88,5 +97,12 @@ class FieldSolver {
   float* work_ = nullptr;   // M x G
   bool bound_ = false;
 };
+
+// The per-instance field fit, one function for the query (localizer) and the map (map builder), so
+// their fields cannot drift apart: collect_field_points within solver.config().radius of `center` into
+// `gather`, then FieldSolver::fit into inputs / alpha / chol (*m rows). *gathered: points used; *total:
+// points that matched (more than gathered: truncated by gather.capacity). Returns fit's status.
+Status fit_instance_field(FieldSolver& solver, const VoxelLayer& layer, const float center[3], const FieldGather& gather,
+                          float* inputs, float* alpha, float* chol, uint32_t* m, uint32_t* gathered, uint32_t* total);
 
 }  // namespace gsf
