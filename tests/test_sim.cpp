@@ -29,7 +29,7 @@ TEST_CASE("A scan transformed by its pose lands on the known geometry") {
   std::map<uint32_t, const Primitive*> poles;
   for (const auto& p : w.prims)
     if (p.semantic == 80 && p.shape == Shape::Cylinder) poles[p.instance] = &p;
-  int pole_points = 0, road_points = 0;
+  uint32_t pole_points = 0, road_points = 0;
   std::map<uint16_t, int> classes;
   for (uint32_t i = 0; i < s.size(); ++i) {
     const Eigen::Vector3d q = d.poses[3] * Eigen::Vector3d(s.xyzi[4 * i], s.xyzi[4 * i + 1], s.xyzi[4 * i + 2]);
