@@ -51,15 +51,7 @@ uint8_t kitti_to_nuscenes(uint32_t label) {
 }
 
 Status NuScenesLidarsegWriter::open(const std::string& root, const std::string& seq) {
-  namespace fs = std::filesystem;
-  dir_.clear();
-  const std::string dir = root + "/sequences/" + seq;
-  std::error_code ec;
-  fs::create_directories(fs::path(dir) / "velodyne", ec);
-  if (!ec) fs::create_directories(fs::path(dir) / "lidarseg", ec);
-  if (ec) return Status::IoError;
-  dir_ = dir;
-  return Status::Ok;
+  return detail::make_sequence_dirs(root, seq, "lidarseg", &dir_);
 }
 
 Status NuScenesLidarsegWriter::write_scan(uint32_t frame, const float* xyzi, const uint8_t* lidarseg, uint32_t count) {

@@ -95,6 +95,18 @@ Status InputFile::read_exact(void* dst, size_t bytes) {
   return Status::Ok;
 }
 
+Status make_sequence_dirs(const std::string& root, const std::string& seq, const char* label_sub, std::string* dir) {
+  namespace fs = std::filesystem;
+  dir->clear();
+  const std::string d = root + "/sequences/" + seq;
+  std::error_code ec;
+  fs::create_directories(fs::path(d) / "velodyne", ec);
+  if (!ec) fs::create_directories(fs::path(d) / label_sub, ec);
+  if (ec) return Status::IoError;
+  *dir = d;
+  return Status::Ok;
+}
+
 bool write_file(const std::string& path, std::initializer_list<std::pair<const void*, size_t>> parts) {
   std::ofstream f(path, std::ios::binary | std::ios::trunc);
   for (const auto& p : parts)

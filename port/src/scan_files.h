@@ -30,7 +30,10 @@ Status list_frames(const std::string& dir, const char* sub, const char* ext, std
 // Reads a whole text file (open() time only: allocates). Missing file -> NotFound.
 Status read_text(const std::string& path, std::string* text);
 
-// Writers (host tools: allocate). Writes `parts` to `path`; false unless every byte reached the file.
+// Writers (host tools: allocate). Creates <root>/sequences/<seq>/velodyne and .../<label_sub> and sets
+// *dir to <root>/sequences/<seq> (cleared on failure). IoError when a folder cannot be created.
+Status make_sequence_dirs(const std::string& root, const std::string& seq, const char* label_sub, std::string* dir);
+// Writes `parts` to `path`; false unless every byte reached the file.
 bool write_file(const std::string& path, std::initializer_list<std::pair<const void*, size_t>> parts);
 // <dir>/poses.txt (3x4 row-major LiDAR poses, %.17g so they read back exactly, line i = frame i) and
 // <dir>/calib.txt with an identity Tr. InvalidInput for a non-finite pose, IoError for a failed write.

@@ -213,15 +213,7 @@ Status SemanticKittiSource::read(uint32_t index, ScanBuffer& out) {
 }
 
 Status SemanticKittiWriter::open(const std::string& root, const std::string& seq) {
-  namespace fs = std::filesystem;
-  dir_.clear();
-  const std::string dir = root + "/sequences/" + seq;
-  std::error_code ec;
-  fs::create_directories(fs::path(dir) / "velodyne", ec);
-  if (!ec) fs::create_directories(fs::path(dir) / "labels", ec);
-  if (ec) return Status::IoError;
-  dir_ = dir;
-  return Status::Ok;
+  return detail::make_sequence_dirs(root, seq, "labels", &dir_);
 }
 
 

@@ -41,6 +41,8 @@ void write_result_diagnostics(JsonWriter& j, const LocalizeResult& x, const Quer
   j.key("diagnostics");
   j.begin_object();
   j.field("instances", x.query_instances);
+  j.field("pole_instances", x.pole_instances);
+  j.field("pole_instances_dropped", x.pole_instances_dropped);
   j.field("triangles", x.query_triangles);
   j.field("match_candidates", x.match_candidates);
   j.field("match_dropped", x.match_dropped);
