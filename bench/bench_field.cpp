@@ -12,12 +12,12 @@
 #include <cstring>
 #include <vector>
 
-#include "gsf/gaussian_field.h"
-#include "gsf/instance_clustering.h"
+#include "gsf/detail/gaussian_field.h"
+#include "gsf/detail/instance_clustering.h"
 #include "gsf/map_format.h"
-#include "gsf/sparsify.h"
-#include "gsf/voxel_layer.h"
-#include "gsf/wasserstein.h"
+#include "gsf/detail/sparsify.h"
+#include "gsf/detail/voxel_layer.h"
+#include "gsf/detail/wasserstein.h"
 #include "arena_buffer.h"
 #include "field_ablation.h"
 #include "tiny_world.h"

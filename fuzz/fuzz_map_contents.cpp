@@ -7,7 +7,7 @@
 #include <vector>
 
 #include "fuzz_seed_map.h"
-#include "gsf/crc32.h"
+#include "gsf/detail/crc32.h"
 #include "gsf/map_format.h"
 
 namespace {

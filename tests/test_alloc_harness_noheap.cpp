@@ -14,8 +14,8 @@
 #include <vector>
 
 #include "alloc_counter.h"
-#include "gsf/arena.h"
-#include "gsf/fixed_vector.h"
+#include "gsf/detail/arena.h"
+#include "gsf/detail/fixed_vector.h"
 
 using gsf_test::AllocationScope;
 

@@ -7,12 +7,12 @@
 #include <set>
 #include <vector>
 
-#include "gsf/max_clique.h"
-#include "gsf/pose_solver.h"
-#include "gsf/triangle.h"
-#include "gsf/triangle_index.h"
-#include "gsf/triangle_matcher.h"
-#include "gsf/triangle_matcher.h"
+#include "gsf/detail/max_clique.h"
+#include "gsf/detail/pose_solver.h"
+#include "gsf/detail/triangle.h"
+#include "gsf/detail/triangle_index.h"
+#include "gsf/detail/triangle_matcher.h"
+#include "gsf/detail/triangle_matcher.h"
 #include "arena_buffer.h"
 
 using namespace gsf;

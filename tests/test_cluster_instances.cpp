@@ -14,8 +14,8 @@
 #include <vector>
 
 #include "arena_buffer.h"
-#include "gsf/instance_clustering.h"
-#include "gsf/voxel_layer.h"
+#include "gsf/detail/instance_clustering.h"
+#include "gsf/detail/voxel_layer.h"
 
 using namespace gsf;
 using gsf_test::ArenaBuffer;

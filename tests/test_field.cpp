@@ -5,9 +5,9 @@
 #include <random>
 #include <vector>
 
-#include "gsf/gaussian_field.h"
-#include "gsf/sparsify.h"
-#include "gsf/wasserstein.h"
+#include "gsf/detail/gaussian_field.h"
+#include "gsf/detail/sparsify.h"
+#include "gsf/detail/wasserstein.h"
 #include "arena_buffer.h"
 
 using namespace gsf;

@@ -7,8 +7,8 @@
 
 #include "alloc_counter.h"
 #include "arena_buffer.h"
-#include "gsf/gaussian_field.h"
-#include "gsf/wasserstein.h"
+#include "gsf/detail/gaussian_field.h"
+#include "gsf/detail/wasserstein.h"
 
 using namespace gsf;
 

@@ -5,9 +5,9 @@
 #include <cmath>
 
 #include "field_ablation.h"
-#include "gsf/instance_clustering.h"
-#include "gsf/voxel_layer.h"
-#include "gsf/wasserstein.h"
+#include "gsf/detail/instance_clustering.h"
+#include "gsf/detail/voxel_layer.h"
+#include "gsf/detail/wasserstein.h"
 #include "arena_buffer.h"
 #include "tiny_world.h"
 

@@ -4,9 +4,9 @@
 #include <cmath>
 #include <cstring>
 
-#include "gsf/arena.h"
-#include "gsf/bounded_hash_map.h"
-#include "gsf/fixed_vector.h"
+#include "gsf/detail/arena.h"
+#include "gsf/detail/bounded_hash_map.h"
+#include "gsf/detail/fixed_vector.h"
 #include "gsf/semantic_classes.h"
 #include "gsf/status.h"
 

@@ -1,4 +1,4 @@
-// The GSF filter alone (core/include/gsf/gsf_filter.h): the yaw bin of a rotated triangle, a known
+// The GSF filter alone (core/include/gsf/detail/gsf_filter.h): the yaw bin of a rotated triangle, a known
 // similarity (a field compared with itself seen from a rotated frame), and the caches: hits, and the
 // full-cache paths that compute into scratch without remembering.
 #include <catch2/catch.hpp>
@@ -7,8 +7,8 @@
 #include <vector>
 
 #include "arena_buffer.h"
-#include "gsf/gaussian_field.h"
-#include "gsf/gsf_filter.h"
+#include "gsf/detail/gaussian_field.h"
+#include "gsf/detail/gsf_filter.h"
 #include "gsf/map_format.h"
 
 using namespace gsf;

@@ -6,12 +6,12 @@
 #include <vector>
 
 #include "arena_buffer.h"
-#include "gsf/pose_hypotheses.h"
-#include "gsf/semantic_grid.h"
-#include "gsf/triangle_index.h"
-#include "gsf/triangle_matcher.h"
-#include "gsf/voxel_layer.h"
-#include "gsf/wasserstein.h"
+#include "gsf/detail/pose_hypotheses.h"
+#include "gsf/detail/semantic_grid.h"
+#include "gsf/detail/triangle_index.h"
+#include "gsf/detail/triangle_matcher.h"
+#include "gsf/detail/voxel_layer.h"
+#include "gsf/detail/wasserstein.h"
 #include "test_cloud.h"
 
 using namespace gsf;

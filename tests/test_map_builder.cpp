@@ -50,10 +50,11 @@ struct Built {
   const uint8_t* sections() const { return reinterpret_cast<const uint8_t*>(blob.data()) + 624; }
 };
 
-Built build(const mapping::MapBuilderOptions& options, const Eigen::Vector3d& shift) {
-  LocalizerConfig cfg;
-  cfg.max_scan_points = 262144;
-  mapping::MapBuilder builder(cfg, options);
+Built build(const mapping::MapBuildConfig& options, const Eigen::Vector3d& shift) {
+  mapping::MapBuildConfig config = options;
+  config.stages.max_scan_points = 262144;
+  config.road_length_m = 120.0f;
+  mapping::MapBuilder builder(config);
   Built b;
   for (const auto& s : drive().scans) {
     Eigen::Isometry3d pose = s.truth;
@@ -61,7 +62,6 @@ Built build(const mapping::MapBuilderOptions& options, const Eigen::Vector3d& sh
     b.add = builder.add_scan(s.view(), pose);
     if (b.add != Status::Ok) return b;
   }
-  builder.set_road_length(120.0f);
   b.build = builder.build(&b.blob, &b.bytes, &b.stats);
   if (b.build == Status::Ok) b.build = load_map(b.blob.data(), b.bytes, &b.map);
   return b;
@@ -70,7 +70,7 @@ Built build(const mapping::MapBuilderOptions& options, const Eigen::Vector3d& sh
 }  // namespace
 
 TEST_CASE("The default origin is the first pose rounded half up to a whole metre; the class table is recorded") {
-  const Built local = build(mapping::MapBuilderOptions(), Eigen::Vector3d::Zero());
+  const Built local = build(mapping::MapBuildConfig(), Eigen::Vector3d::Zero());
   REQUIRE(local.build == Status::Ok);
   const Eigen::Vector3d first = drive().scans[0].truth.translation();  // (0, -2.5, 1.73) in the tiny world
   for (int k = 0; k < 3; ++k) CHECK(local.map.georef.origin[k] == std::floor(first[k] + 0.5));
@@ -84,8 +84,8 @@ TEST_CASE("The default origin is the first pose rounded half up to a whole metre
 }
 
 TEST_CASE("A drive shifted by a UTM-size offset gives the same map sections, with the origin shifted exactly") {
-  const Built local = build(mapping::MapBuilderOptions(), Eigen::Vector3d::Zero());
-  const Built utm = build(mapping::MapBuilderOptions(), Eigen::Vector3d(kEast, kNorth, 0.0));
+  const Built local = build(mapping::MapBuildConfig(), Eigen::Vector3d::Zero());
+  const Built utm = build(mapping::MapBuildConfig(), Eigen::Vector3d(kEast, kNorth, 0.0));
   REQUIRE(local.build == Status::Ok);
   REQUIRE(utm.build == Status::Ok);
   CHECK(utm.map.georef.origin[0] == local.map.georef.origin[0] + kEast);
@@ -98,9 +98,9 @@ TEST_CASE("A drive shifted by a UTM-size offset gives the same map sections, wit
 }
 
 TEST_CASE("A given origin and frame are recorded and the sections are relative to that origin") {
-  mapping::MapBuilderOptions zero;
+  mapping::MapBuildConfig zero;
   zero.origin_given = true;  // (0, 0, 0), the simulator's own frame
-  mapping::MapBuilderOptions utm;
+  mapping::MapBuildConfig utm;
   utm.origin_given = true;
   utm.origin = {kEast, kNorth, 0.0};
   utm.frame = "utm-32N";
@@ -124,16 +124,16 @@ TEST_CASE("A given origin and frame are recorded and the sections are relative t
 TEST_CASE("Poses far from the origin, non-finite poses and bad frame names are refused at add_scan") {
   // The old failure: UTM poses kept in a map whose origin is 0 would lose precision in float; the
   // builder now says so at the first scan instead of after accumulating every one.
-  mapping::MapBuilderOptions zero;
+  mapping::MapBuildConfig zero;
   zero.origin_given = true;
   CHECK(build(zero, Eigen::Vector3d(kEast, kNorth, 0.0)).add == Status::InvalidInput);
-  mapping::MapBuilderOptions near = zero;
+  mapping::MapBuildConfig near = zero;
   near.origin = {kEast - 1000.0, kNorth + 1000.0, 0.0};  // 1 km away: fine
   CHECK(build(near, Eigen::Vector3d(kEast, kNorth, 0.0)).build == Status::Ok);
-  const Built nan = build(mapping::MapBuilderOptions(), Eigen::Vector3d(std::nan(""), 0.0, 0.0));
+  const Built nan = build(mapping::MapBuildConfig(), Eigen::Vector3d(std::nan(""), 0.0, 0.0));
   CHECK(nan.add == Status::InvalidInput);
   for (const char* name : {"", "bad\tname", "a-frame-name-that-is-much-too-long"}) {
-    mapping::MapBuilderOptions bad;
+    mapping::MapBuildConfig bad;
     bad.frame = name;
     INFO("frame '" << name << "'");
     CHECK(build(bad, Eigen::Vector3d::Zero()).add == Status::InvalidArgument);
@@ -141,12 +141,12 @@ TEST_CASE("Poses far from the origin, non-finite poses and bad frame names are r
 }
 
 TEST_CASE("The builder's capacities are options: what they cut is counted, the rest kept by rank") {
-  const Built full = build(mapping::MapBuilderOptions(), Eigen::Vector3d::Zero());
+  const Built full = build(mapping::MapBuildConfig(), Eigen::Vector3d::Zero());
   REQUIRE(full.build == Status::Ok);
   CHECK(full.stats.instances_dropped == 0);
   CHECK(full.stats.field_points_dropped == 0);
   REQUIRE(full.stats.instances > 6);
-  mapping::MapBuilderOptions small;
+  mapping::MapBuildConfig small;
   small.max_instances = 5;
   small.max_field_points = 50;
   const Built cut = build(small, Eigen::Vector3d::Zero());

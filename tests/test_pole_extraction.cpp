@@ -18,11 +18,11 @@
 #include <vector>
 
 #include "arena_buffer.h"
-#include "gsf/instance_clustering.h"
-#include "gsf/pole_extraction.h"
+#include "gsf/detail/instance_clustering.h"
+#include "gsf/detail/pole_extraction.h"
 #include "gsf/port/nuscenes.h"
 #include "gsf/port/scan_buffer.h"
-#include "gsf/voxel_layer.h"
+#include "gsf/detail/voxel_layer.h"
 #include "test_cloud.h"
 
 using namespace gsf;

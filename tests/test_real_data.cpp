@@ -30,7 +30,9 @@ Outcome localize_revisit(const char* seq, std::initializer_list<uint32_t> map_fr
   REQUIRE(src.open(root, seq) == Status::Ok);
   LocalizerConfig cfg;
   cfg.match.use_gsf = gsf;
-  mapping::MapBuilder builder(cfg);
+  mapping::MapBuildConfig build_config;
+  build_config.stages = cfg;
+  mapping::MapBuilder builder(build_config);
   port::OwnedScanBuffer buf(200000, true);
   port::LogitModel model;
   auto read = [&](uint32_t i, uint64_t id) {
@@ -107,7 +109,9 @@ std::vector<uint64_t> build_nuscenes_map(const std::string& root, const char* se
   port::KittiReadOptions opt;
   opt.raw_labels = true;
   REQUIRE(src.open(root, seq, opt) == Status::Ok);
-  mapping::MapBuilder builder(cfg);
+  mapping::MapBuildConfig build_config;
+  build_config.stages = cfg;
+  mapping::MapBuilder builder(build_config);
   port::OwnedScanBuffer buf(60000, true);
   port::LogitModel model;
   for (uint32_t i = 0; i < src.size(); ++i) {

@@ -1,4 +1,4 @@
-// Refinement alone (core/include/gsf/refine.h): it pulls a nearby global pose onto the map's point
+// Refinement alone (core/include/gsf/detail/refine.h): it pulls a nearby global pose onto the map's point
 // layer, refuses corrections beyond its limit, rejects an oversized map layer, and ignores map points
 // without a reliable normal.
 #include <catch2/catch.hpp>
@@ -7,9 +7,9 @@
 #include <vector>
 
 #include "arena_buffer.h"
-#include "gsf/refine.h"
+#include "gsf/detail/refine.h"
 #include "gsf/semantic_classes.h"
-#include "gsf/voxel_layer.h"
+#include "gsf/detail/voxel_layer.h"
 #include "test_cloud.h"
 
 using namespace gsf;

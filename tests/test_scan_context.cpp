@@ -5,7 +5,7 @@
 #include <random>
 #include <vector>
 
-#include "scan_context.h"
+#include "baselines/scan_context.h"
 
 using gsf::bench::ScanContextConfig;
 

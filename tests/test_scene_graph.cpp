@@ -10,8 +10,8 @@
 #include <vector>
 #include <algorithm>
 
-#include "gsf/instance_clustering.h"
-#include "gsf/voxel_layer.h"
+#include "gsf/detail/instance_clustering.h"
+#include "gsf/detail/voxel_layer.h"
 #include "test_cloud.h"
 #include "arena_buffer.h"
 

@@ -11,8 +11,8 @@
 
 #include "alloc_counter.h"
 #include "arena_buffer.h"
-#include "gsf/instance_clustering.h"
-#include "gsf/voxel_layer.h"
+#include "gsf/detail/instance_clustering.h"
+#include "gsf/detail/voxel_layer.h"
 #include "test_cloud.h"
 
 using namespace gsf;

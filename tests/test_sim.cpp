@@ -411,7 +411,10 @@ TEST_CASE("tiny-lattice end to end: the map holds every lattice column; queries 
   REQUIRE(md.poses.size() <= 40);
   gsf::LocalizerConfig cfg;
   cfg.max_scan_points = 262144;
-  gsf::mapping::MapBuilder builder(cfg);
+  gsf::mapping::MapBuildConfig build_config;
+  build_config.stages = cfg;
+  build_config.road_length_m = world.road_length();
+  gsf::mapping::MapBuilder builder(build_config);
   auto make = [&](const Raycaster& rc, const Eigen::Isometry3d& pose, uint64_t seed, uint64_t id, SimScan* s,
                   std::vector<float>* logits) {
     rc.scan(pose, sc.lidar, seed, s);
@@ -431,7 +434,6 @@ TEST_CASE("tiny-lattice end to end: the map holds every lattice column; queries 
   for (uint32_t f = 0; f < md.poses.size(); ++f)
     REQUIRE(builder.add_scan(make(map_rc, md.poses[f], scan_seed(sc.world.seed, 0, f), 1000000u + f, &s, &logits),
                              md.poses[f]) == gsf::Status::Ok);
-  builder.set_road_length(world.road_length());
   std::vector<uint64_t> blob;
   size_t bytes = 0;
   gsf::mapping::MapBuildStats st;

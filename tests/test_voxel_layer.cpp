@@ -10,7 +10,7 @@
 #include <vector>
 
 #include "arena_buffer.h"
-#include "gsf/voxel_layer.h"
+#include "gsf/detail/voxel_layer.h"
 #include "test_cloud.h"
 
 using namespace gsf;

@@ -6,7 +6,7 @@
 #include <vector>
 
 #include "gsf/localizer.h"
-#include "gsf/max_clique.h"
+#include "gsf/detail/max_clique.h"
 #include "mapping/map_builder.h"
 
 using namespace gsf;
@@ -65,7 +65,9 @@ TEST_CASE("A lattice where every triangle collides in the hash: matches, corresp
   cfg.match.max_matches_per_triangle = 32;
   cfg.hypotheses.first_budget = 50000;
   cfg.hypotheses.next_budget = 5000;
-  mapping::MapBuilder builder(cfg);
+  mapping::MapBuildConfig build_config;
+  build_config.stages = cfg;
+  mapping::MapBuilder builder(build_config);
   std::vector<float> pts;
   std::vector<uint32_t> labels;
   for (int s = 0; s < 4; ++s) {

@@ -3,7 +3,7 @@
 #include <cmath>
 #include <cstring>
 
-#include "gsf/crc32.h"
+#include "gsf/detail/crc32.h"
 
 namespace gsf {
 

@@ -1,4 +1,4 @@
-#include "gsf/crc32.h"
+#include "gsf/detail/crc32.h"
 
 namespace gsf {
 namespace {

@@ -1,8 +1,8 @@
-#include "gsf/gaussian_field.h"
+#include "gsf/detail/gaussian_field.h"
 
 #include <cmath>
 
-#include "gsf/sparsify.h"
+#include "gsf/detail/sparsify.h"
 
 namespace gsf {
 namespace {

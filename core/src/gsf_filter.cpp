@@ -1,8 +1,8 @@
-#include "gsf/gsf_filter.h"
+#include "gsf/detail/gsf_filter.h"
 
 #include <cmath>
 
-#include "gsf/wasserstein.h"
+#include "gsf/detail/wasserstein.h"
 
 namespace gsf {
 namespace {

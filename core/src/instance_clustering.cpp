@@ -1,4 +1,4 @@
-#include "gsf/instance_clustering.h"
+#include "gsf/detail/instance_clustering.h"
 
 #include <algorithm>
 #include <cmath>

@@ -4,20 +4,20 @@
 #include <cmath>
 #include <new>
 
-#include "gsf/bounded_hash_map.h"
-#include "gsf/fixed_vector.h"
-#include "gsf/gaussian_field.h"
-#include "gsf/gsf_filter.h"
-#include "gsf/instance_clustering.h"
-#include "gsf/pole_extraction.h"
-#include "gsf/pose_hypotheses.h"
-#include "gsf/refine.h"
-#include "gsf/semantic_grid.h"
-#include "gsf/triangle.h"
-#include "gsf/triangle_index.h"
-#include "gsf/triangle_matcher.h"
-#include "gsf/voxel_layer.h"
-#include "gsf/wasserstein.h"
+#include "gsf/detail/bounded_hash_map.h"
+#include "gsf/detail/fixed_vector.h"
+#include "gsf/detail/gaussian_field.h"
+#include "gsf/detail/gsf_filter.h"
+#include "gsf/detail/instance_clustering.h"
+#include "gsf/detail/pole_extraction.h"
+#include "gsf/detail/pose_hypotheses.h"
+#include "gsf/detail/refine.h"
+#include "gsf/detail/semantic_grid.h"
+#include "gsf/detail/triangle.h"
+#include "gsf/detail/triangle_index.h"
+#include "gsf/detail/triangle_matcher.h"
+#include "gsf/detail/voxel_layer.h"
+#include "gsf/detail/wasserstein.h"
 
 namespace gsf {
 namespace {

@@ -1,4 +1,4 @@
-#include "gsf/max_clique.h"
+#include "gsf/detail/max_clique.h"
 
 #include <cmath>
 

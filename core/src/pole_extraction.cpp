@@ -1,4 +1,4 @@
-#include "gsf/pole_extraction.h"
+#include "gsf/detail/pole_extraction.h"
 
 #include <algorithm>
 #include <cmath>

@@ -1,10 +1,10 @@
-#include "gsf/pose_hypotheses.h"
+#include "gsf/detail/pose_hypotheses.h"
 
 #include <algorithm>
 #include <cmath>
 #include <new>
 
-#include "gsf/pose_solver.h"
+#include "gsf/detail/pose_solver.h"
 
 namespace gsf {
 

@@ -1,4 +1,4 @@
-#include "gsf/pose_solver.h"
+#include "gsf/detail/pose_solver.h"
 
 #include <cmath>
 

@@ -1,4 +1,4 @@
-#include "gsf/refine.h"
+#include "gsf/detail/refine.h"
 
 #include <algorithm>
 #include <cmath>

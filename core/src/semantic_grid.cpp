@@ -1,8 +1,8 @@
-#include "gsf/semantic_grid.h"
+#include "gsf/detail/semantic_grid.h"
 
 #include <cmath>
 
-#include "gsf/voxel_layer.h"
+#include "gsf/detail/voxel_layer.h"
 
 namespace gsf {
 

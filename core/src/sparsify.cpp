@@ -1,8 +1,8 @@
-#include "gsf/sparsify.h"
+#include "gsf/detail/sparsify.h"
 
 #include <algorithm>
 
-#include "gsf/rng.h"
+#include "gsf/detail/rng.h"
 #include "gsf/semantic_classes.h"
 
 namespace gsf {

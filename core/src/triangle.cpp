@@ -1,4 +1,4 @@
-#include "gsf/triangle.h"
+#include "gsf/detail/triangle.h"
 
 #include <cmath>
 

@@ -1,4 +1,4 @@
-#include "gsf/triangle_index.h"
+#include "gsf/detail/triangle_index.h"
 
 #include <algorithm>
 #include <cmath>

@@ -1,8 +1,8 @@
-#include "gsf/triangle_matcher.h"
+#include "gsf/detail/triangle_matcher.h"
 
 #include <cmath>
 
-#include "gsf/bounded_hash_map.h"
+#include "gsf/detail/bounded_hash_map.h"
 
 namespace gsf {
 namespace {

@@ -1,4 +1,4 @@
-#include "gsf/voxel_layer.h"
+#include "gsf/detail/voxel_layer.h"
 
 #include <cmath>
 #include <cstring>

@@ -1,8 +1,8 @@
-#include "gsf/wasserstein.h"
+#include "gsf/detail/wasserstein.h"
 
 #include <cmath>
 
-#include "gsf/gaussian_field.h"
+#include "gsf/detail/gaussian_field.h"
 #include "gsf/semantic_classes.h"
 
 namespace gsf {

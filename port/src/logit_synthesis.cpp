@@ -2,8 +2,8 @@
 
 #include <cmath>
 
-#include "gsf/bounded_hash_map.h"
-#include "gsf/rng.h"
+#include "gsf/detail/bounded_hash_map.h"
+#include "gsf/detail/rng.h"
 #include "gsf/semantic_classes.h"
 
 namespace gsf::port {

@@ -10,9 +10,10 @@
 
 int main() {
   gsf::LocalizerConfig cfg;
-  gsf::mapping::MapBuilderOptions options;
-  options.frame = "consumer";
-  gsf::mapping::MapBuilder builder(cfg, options);
+  gsf::mapping::MapBuildConfig build_config;
+  build_config.stages = cfg;
+  build_config.frame = "consumer";
+  gsf::mapping::MapBuilder builder(build_config);
   std::vector<float> xyzi;
   std::vector<uint32_t> labels;
   for (int pole = 0; pole < 12; ++pole) {  // 12 poles (SemanticKITTI 80), 4 m apart in x, 2 rows

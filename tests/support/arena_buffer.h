@@ -3,7 +3,7 @@
 #include <cstdint>
 #include <vector>
 
-#include "gsf/arena.h"
+#include "gsf/detail/arena.h"
 
 namespace gsf_test {
 

@@ -5,8 +5,8 @@
 #include <cstring>
 #include <vector>
 
-#include "gsf/gaussian_field.h"
-#include "gsf/sparsify.h"
+#include "gsf/detail/gaussian_field.h"
+#include "gsf/detail/sparsify.h"
 
 namespace gsf_test {
 

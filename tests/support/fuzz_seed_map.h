@@ -8,7 +8,7 @@
 
 #include "gsf/map_format.h"
 #include "gsf/semantic_classes.h"
-#include "gsf/triangle.h"
+#include "gsf/detail/triangle.h"
 
 namespace gsf_test {
 

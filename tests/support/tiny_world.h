@@ -78,15 +78,16 @@ inline TinyWorld* build_sim_world(const gsf::sim::SimConfig& sc, const gsf::Clas
     // The simulator's world frame is already local: an explicit zero origin keeps the fixture's map
     // (and so tests/data/tiny_golden.txt) what it was before maps had an origin. The default origin
     // (first pose, rounded) is tested in test_map_builder.cpp and by the CLI's shifted-world test.
-    gsf::mapping::MapBuilderOptions options;
-    options.origin_given = true;
-    gsf::mapping::MapBuilder builder(t->config, options);
+    gsf::mapping::MapBuildConfig build_config;
+    build_config.stages = t->config;
+    build_config.origin_given = true;
+    build_config.road_length_m = world.road_length();
+    gsf::mapping::MapBuilder builder(build_config);
     for (uint32_t f = 0; f < md.poses.size(); ++f) {
       QueryScan s;
       make_scan(map_rc, sc, md.poses[f], gsf::sim::scan_seed(sc.world.seed, 0, f), 1000000u + f, &s, classes);
       builder.add_scan(s.view(), md.poses[f]);
     }
-    builder.set_road_length(world.road_length());
     builder.build(&t->blob, &t->bytes, &t->build_stats);
     gsf::load_map(t->blob.data(), t->bytes, &t->map);
     for (uint32_t f = 0; f < qd.poses.size(); ++f) {

@@ -37,7 +37,7 @@ int cmd_build_map(int argc, char** argv) {
   if (!resolve_label_set(args.get("classes"), args.get("dataset"), args.get("sequence"), &labels, &err))
     return usage_error("build-map", err);
   cfg.classes = labels.config_table();
-  mapping::MapBuilderOptions options;
+  mapping::MapBuildConfig options;
   if (args.has("origin")) {
     double o[3] = {0, 0, 0};
     if (!args.get_doubles("origin", 2, 3, o, nullptr, &err)) return usage_error("build-map", err);
@@ -61,7 +61,9 @@ int cmd_build_map(int argc, char** argv) {
   size_t bytes = 0;
   mapping::MapBuildStats st;
   uint32_t failed_scan = UINT32_MAX;
-  s = build_map(*src, cfg, options, logits, road, &blob, &bytes, &st, !args.flag("quiet"), &failed_scan);
+  options.stages = cfg;
+  options.road_length_m = road;
+  s = build_map(*src, options, logits, &blob, &bytes, &st, !args.flag("quiet"), &failed_scan);
   if (s != Status::Ok) {
     if (failed_scan != UINT32_MAX && s == Status::InvalidInput)
       std::fprintf(stderr, "gsf build-map: failed: %s at scan %u (file %u): its pose is more than %.0f m from the map "
@@ -85,7 +87,7 @@ int cmd_build_map(int argc, char** argv) {
               st.georef.origin[1], st.georef.origin[2], st.georef.frame);
   if (st.instances_dropped > 0 || st.field_points_dropped > 0)
     std::printf("  capacity: %u instances and %llu field points beyond the builder's capacities were left out "
-                "(MapBuilderOptions)\n", st.instances_dropped, static_cast<unsigned long long>(st.field_points_dropped));
+                "(MapBuildConfig)\n", st.instances_dropped, static_cast<unsigned long long>(st.field_points_dropped));
   return 0;
 }
 

@@ -57,7 +57,10 @@ int cmd_demo(int argc, char** argv) {
   std::vector<uint64_t> blob;
   size_t bytes = 0;
   mapping::MapBuildStats st;
-  s = build_map(*src, default_config(), mapping::MapBuilderOptions(), LogitMode::Synthetic, sum.road_length_m, &blob, &bytes, &st, !quiet);
+  mapping::MapBuildConfig build_config;
+  build_config.stages = default_config();
+  build_config.road_length_m = sum.road_length_m;
+  s = build_map(*src, build_config, LogitMode::Synthetic, &blob, &bytes, &st, !quiet);
   if (s != Status::Ok) {
     std::fprintf(stderr, "gsf demo: map build failed: %s\n", to_string(s));
     return 1;

@@ -199,17 +199,17 @@ double path_length(port::ScanSource& src) {
   return len;
 }
 
-Status build_map(port::ScanSource& src, const LocalizerConfig& config, const mapping::MapBuilderOptions& options,
-                 LogitMode logits, float road_length, std::vector<uint64_t>* blob, size_t* bytes,
+Status build_map(port::ScanSource& src, const mapping::MapBuildConfig& config, LogitMode logits,
+                 std::vector<uint64_t>* blob, size_t* bytes,
                  mapping::MapBuildStats* stats, bool progress, uint32_t* failed_scan) {
   if (failed_scan) *failed_scan = UINT32_MAX;
-  mapping::MapBuilder builder(config, options);
+  mapping::MapBuilder builder(config);
   port::OwnedScanBuffer buf(kMaxScanPoints, true);
   for (uint32_t i = 0; i < src.size(); ++i) {
     Eigen::Isometry3d pose;
     Status s = src.pose(i, &pose);
     if (s != Status::Ok) return s;
-    s = read_scan(src, i, buf.buffer(), logits, 1000000u + src.frame_id(i), config.classes);
+    s = read_scan(src, i, buf.buffer(), logits, 1000000u + src.frame_id(i), config.stages.classes);
     if (s != Status::Ok) return s;
     s = builder.add_scan(buf.buffer().view(), pose);
     if (s != Status::Ok) {
@@ -221,7 +221,6 @@ Status build_map(port::ScanSource& src, const LocalizerConfig& config, const map
       std::fprintf(stderr, "\r  build-map: accumulated %u / %u scans", i + 1, src.size());
   }
   if (progress) std::fprintf(stderr, "\n");
-  builder.set_road_length(road_length);
   mapping::Progress cb;
   if (progress)
     cb = [](const char* stage, uint64_t done, uint64_t total) {

@@ -15,7 +15,7 @@
 #include "gsf/port/clock.h"
 #include "json_writer.h"
 #include "result_json.h"
-#include "scan_context.h"
+#include "baselines/scan_context.h"
 #include "svg.h"
 
 namespace gsf::cli {

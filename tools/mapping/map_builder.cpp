@@ -6,16 +6,16 @@
 #include <cstring>
 #include <memory>
 
-#include "gsf/arena.h"
+#include "gsf/detail/arena.h"
 #include "gsf/class_table.h"
-#include "gsf/fixed_vector.h"
-#include "gsf/gaussian_field.h"
-#include "gsf/instance_clustering.h"
-#include "gsf/pole_extraction.h"
+#include "gsf/detail/fixed_vector.h"
+#include "gsf/detail/gaussian_field.h"
+#include "gsf/detail/instance_clustering.h"
+#include "gsf/detail/pole_extraction.h"
 #include "gsf/map_format.h"
-#include "gsf/triangle.h"
-#include "gsf/triangle_index.h"
-#include "gsf/voxel_layer.h"
+#include "gsf/detail/triangle.h"
+#include "gsf/detail/triangle_index.h"
+#include "gsf/detail/voxel_layer.h"
 
 namespace gsf::mapping {
 namespace {
@@ -42,8 +42,8 @@ struct Workspace {
 
 }  // namespace
 
-MapBuilder::MapBuilder(const LocalizerConfig& config, const MapBuilderOptions& options)
-    : config_(config), classes_(label_set(config)), options_(options), georef_(local_georeference()) {
+MapBuilder::MapBuilder(const MapBuildConfig& config)
+    : config_(config.stages), classes_(label_set(config.stages)), options_(config), georef_(local_georeference()) {
   if (config_.classes) config_.classes = &classes_;
   scan_arena_.resize(VoxelLayer::required_bytes(config_.voxel) + 64);
   georef_valid_ = set_frame_name(&georef_, options_.frame.c_str());
@@ -260,7 +260,7 @@ Status MapBuilder::build(std::vector<uint64_t>* blob, size_t* bytes_out, MapBuil
 
   // Semantic layer for whole-scan verification of pose hypotheses.
   std::vector<uint32_t> sem_keys, sem_cells;
-  if (semantic_.cell > 0.0f) build_semantic_layer(layer, semantic_, &sem_keys, &sem_cells);
+  if (options_.semantic_layer.cell > 0.0f) build_semantic_layer(layer, options_.semantic_layer, &sem_keys, &sem_cells);
   st.semantic_tiles = static_cast<uint32_t>(sem_keys.size());
 
   MapView view;
@@ -270,11 +270,11 @@ Status MapBuilder::build(std::vector<uint64_t>* blob, size_t* bytes_out, MapBuil
   view.counts.triangles = nt;
   view.counts.index_keys = key_count;
   view.counts.refine_points = st.refine_points;
-  view.counts.road_length_m = road_length_;
+  view.counts.road_length_m = options_.road_length_m;
   view.counts.semantic_tiles = st.semantic_tiles;
   if (st.semantic_tiles > 0) {
-    view.params.semantic_cell = semantic_.cell;
-    view.params.semantic_tile_cells = semantic_.tile_cells;
+    view.params.semantic_cell = options_.semantic_layer.cell;
+    view.params.semantic_tile_cells = options_.semantic_layer.tile_cells;
   }
   view.semantic_tile_keys = sem_keys.empty() ? nullptr : sem_keys.data();
   view.semantic_cells = sem_cells.empty() ? nullptr : sem_cells.data();

@@ -30,7 +30,7 @@ struct MapBuildStats {
   uint32_t map_voxels = 0;
   uint32_t instances = 0;
   uint32_t pole_instances = 0;  // of which geometric poles / trunks (pole_extraction.h)
-  uint32_t instances_dropped = 0;     // clustered instances and poles beyond the options' capacities
+  uint32_t instances_dropped = 0;     // clustered instances and poles beyond the config's capacities
   uint64_t field_points_dropped = 0;  // semantic points beyond max_field_points, over all instances
   uint32_t instances_by_class[kNumClasses] = {};
   uint32_t triangles = 0;
@@ -50,7 +50,17 @@ using Progress = std::function<void(const char* stage, uint64_t done, uint64_t t
 // either side) and the semantic layer's tile keys (32768 tiles either side) reach well beyond it.
 constexpr double kMaxMapLocalCoordinate = 131072.0;
 
-struct MapBuilderOptions {
+// Everything the builder is configured by (one struct, no setters, no hidden constants).
+struct MapBuildConfig {
+  // The localizer's stage settings and label set: the map is built with the same stages as the query, and
+  // records the parameters the localizer checks at init. Its per-scan capacities are raised for the
+  // whole map; its label set (stages.classes, copied) maps raw labels, decides instance classes,
+  // geometric pole / trunk hosts and stabilities; the map records its id.
+  LocalizerConfig stages;
+  // The semantic layer used to verify pose hypotheses; cell <= 0 leaves it out of the map.
+  SemanticLayerConfig semantic_layer;
+  // Length of the mapped road (m), recorded in the map's counts for reporting; 0 if unknown.
+  float road_length_m = 0.0f;
   float refine_voxel = 1.0f;  // m; cell of the refinement point layer (<= 0: no layer)
   // Capacities of the whole-map stages (no hidden constants; what they cut is counted in MapBuildStats).
   // Clustered instances kept, the largest by points first, and geometric poles / trunks kept, the best
@@ -70,19 +80,13 @@ struct MapBuilderOptions {
 
 class MapBuilder {
  public:
-  // `config` supplies the stages' settings; its per-scan capacities are raised for the whole map. Its
-  // label set (config.classes, copied) maps the scans' raw labels and decides instance classes,
-  // geometric pole / trunk hosts and stabilities, as in the localizer; the map records its id.
-  explicit MapBuilder(const LocalizerConfig& config, const MapBuilderOptions& options = MapBuilderOptions());
-  // `frame_T_lidar`: the scan's pose in the map's frame (options.frame). InvalidArgument for a bad origin
-  // or frame name in the options, InvalidInput for a non-finite pose or one beyond
+  explicit MapBuilder(const MapBuildConfig& config);
+  // `frame_T_lidar`: the scan's pose in the map's frame (config.frame). InvalidArgument for a bad origin
+  // or frame name in the config, InvalidInput for a non-finite pose or one beyond
   // kMaxMapLocalCoordinate from the origin (the scan is then not added).
   Status add_scan(const ScanView& scan, const Eigen::Isometry3d& frame_T_lidar);
   // The map's georeference: final once the first scan was added (or at once when the origin was given).
   const MapGeoreference& georeference() const { return georef_; }
-  void set_road_length(float metres) { road_length_ = metres; }
-  // The semantic layer used to verify pose hypotheses; cell <= 0 leaves it out of the map.
-  void set_semantic_layer(const SemanticLayerConfig& c) { semantic_ = c; }
   // Serialises the map into `blob` (16-byte aligned words); *bytes is the map's size.
   Status build(std::vector<uint64_t>* blob, size_t* bytes, MapBuildStats* stats, const Progress& progress = nullptr);
 
@@ -92,14 +96,12 @@ class MapBuilder {
     double prob[kNumClasses] = {};
     uint64_t count = 0;
   };
-  LocalizerConfig config_;
-  ClassTable classes_;  // copy of the label set; config_.classes points here
-  MapBuilderOptions options_;
+  LocalizerConfig config_;  // options_.stages, with classes pointing at classes_
+  ClassTable classes_;      // copy of the label set
+  MapBuildConfig options_;
   MapGeoreference georef_;
   bool georef_valid_ = false;
   bool origin_fixed_ = false;
-  float road_length_ = 0.0f;
-  SemanticLayerConfig semantic_;
   MapBuildStats stats_;
   std::unordered_map<uint64_t, Accum> voxels_;
   std::vector<uint8_t> scan_arena_;

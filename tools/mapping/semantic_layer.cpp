@@ -5,7 +5,7 @@
 #include <cmath>
 #include <map>
 
-#include "gsf/semantic_grid.h"
+#include "gsf/detail/semantic_grid.h"
 
 namespace gsf::mapping {
 

@@ -1,11 +1,11 @@
-// Builds the map's semantic layer (core/include/gsf/semantic_grid.h) from the map's voxels: per
+// Builds the map's semantic layer (core/include/gsf/detail/semantic_grid.h) from the map's voxels: per
 // bird's-eye cell, the classes that make at least `min_share` of the cell's ground voxels (ground
 // classes) or of its above-ground voxels (every other class). Host side; uses the heap.
 #pragma once
 #include <cstdint>
 #include <vector>
 
-#include "gsf/voxel_layer.h"
+#include "gsf/detail/voxel_layer.h"
 
 namespace gsf::mapping {
 

@@ -3,7 +3,7 @@
 #include <algorithm>
 #include <cmath>
 
-#include "gsf/rng.h"
+#include "gsf/detail/rng.h"
 
 namespace gsf::sim {
 namespace {

@@ -6,10 +6,10 @@
 #include <filesystem>
 #include <fstream>
 
-#include "gsf/bounded_hash_map.h"
+#include "gsf/detail/bounded_hash_map.h"
 #include "gsf/port/nuscenes.h"
 #include "gsf/port/semantic_kitti.h"
-#include "gsf/rng.h"
+#include "gsf/detail/rng.h"
 
 namespace gsf::sim {
 namespace {

@@ -4,8 +4,8 @@
 #include <cmath>
 #include <string_view>
 
-#include "gsf/bounded_hash_map.h"
-#include "gsf/rng.h"
+#include "gsf/detail/bounded_hash_map.h"
+#include "gsf/detail/rng.h"
 
 namespace gsf::sim {
 namespace {

@@ -5,16 +5,16 @@
 #include <cstdint>
 
 #include "gsf/class_table.h"
-#include "gsf/gaussian_field.h"
-#include "gsf/gsf_filter.h"
-#include "gsf/instance_clustering.h"
+#include "gsf/detail/gaussian_field.h"
+#include "gsf/detail/gsf_filter.h"
+#include "gsf/detail/instance_clustering.h"
 #include "gsf/map_format.h"
-#include "gsf/pole_extraction.h"
-#include "gsf/pose_hypotheses.h"
-#include "gsf/refine.h"
+#include "gsf/detail/pole_extraction.h"
+#include "gsf/detail/pose_hypotheses.h"
+#include "gsf/detail/refine.h"
 #include "gsf/status.h"
-#include "gsf/triangle.h"
-#include "gsf/voxel_layer.h"
+#include "gsf/detail/triangle.h"
+#include "gsf/detail/voxel_layer.h"
 
 namespace gsf {
 

@@ -9,7 +9,7 @@
 
 #include <Eigen/Geometry>
 
-#include "gsf/arena.h"
+#include "gsf/detail/arena.h"
 #include "gsf/config.h"
 #include "gsf/map_format.h"
 #include "gsf/platform.h"

@@ -12,9 +12,9 @@
 #include <cstdint>
 
 #include "gsf/georeference.h"
-#include "gsf/semantic_grid.h"
+#include "gsf/detail/semantic_grid.h"
 #include "gsf/status.h"
-#include "gsf/triangle.h"
+#include "gsf/detail/triangle.h"
 
 namespace gsf {
 

@@ -1,3 +1,6 @@
+// Internal (gsf/detail): a pipeline stage or building block, not part of the stable interface; it may
+// change between versions. The stable interface is localizer.h, config.h, map_format.h, scan.h, status.h,
+// platform.h, class_table.h, georeference.h and the C API gsf.h.
 // The metric-semantic layer (bottom of the scene graph): a scan voxelised into a bounded hash of voxels,
 // each with its centroid, point count, mean class-probability vector and argmax label; plus a coarse
 // 2-D column index for radius gathers (the neighbourhood each instance's field is trained on).
@@ -19,8 +22,8 @@
 #pragma once
 #include <cstdint>
 
-#include "gsf/arena.h"
-#include "gsf/bounded_hash_map.h"
+#include "gsf/detail/arena.h"
+#include "gsf/detail/bounded_hash_map.h"
 #include "gsf/class_table.h"
 #include "gsf/scan.h"
 #include "gsf/semantic_classes.h"

@@ -1,3 +1,6 @@
+// Internal (gsf/detail): a pipeline stage or building block, not part of the stable interface; it may
+// change between versions. The stable interface is localizer.h, config.h, map_format.h, scan.h, status.h,
+// platform.h, class_table.h, georeference.h and the C API gsf.h.
 // Pose refinement against the map's point layer (paper Table IV "w/ rf"): point-to-plane ICP from the
 // global pose, on long-term structure only (stability weight 1: buildings, poles, fences, ground...).
 //
@@ -14,11 +17,11 @@
 
 #include <Eigen/Geometry>
 
-#include "gsf/arena.h"
-#include "gsf/bounded_hash_map.h"
+#include "gsf/detail/arena.h"
+#include "gsf/detail/bounded_hash_map.h"
 #include "gsf/class_table.h"
 #include "gsf/status.h"
-#include "gsf/voxel_layer.h"
+#include "gsf/detail/voxel_layer.h"
 
 namespace gsf {
 

@@ -1,3 +1,6 @@
+// Internal (gsf/detail): a pipeline stage or building block, not part of the stable interface; it may
+// change between versions. The stable interface is localizer.h, config.h, map_format.h, scan.h, status.h,
+// platform.h, class_table.h, georeference.h and the C API gsf.h.
 // Geometric pole / trunk instances from host classes: for label sets that have no pole or trunk class
 // (nuScenes-lidarseg keeps them inside static.manmade and static.vegetation), find thin, tall,
 // vertical and isolated structures among the voxels of the "host" classes and return them as Instance
@@ -38,12 +41,12 @@
 #pragma once
 #include <cstdint>
 
-#include "gsf/arena.h"
+#include "gsf/detail/arena.h"
 #include "gsf/class_table.h"
-#include "gsf/instance_clustering.h"
+#include "gsf/detail/instance_clustering.h"
 #include "gsf/semantic_classes.h"
 #include "gsf/status.h"
-#include "gsf/voxel_layer.h"
+#include "gsf/detail/voxel_layer.h"
 
 namespace gsf {
 

@@ -1,3 +1,6 @@
+// Internal (gsf/detail): a pipeline stage or building block, not part of the stable interface; it may
+// change between versions. The stable interface is localizer.h, config.h, map_format.h, scan.h, status.h,
+// platform.h, class_table.h, georeference.h and the C API gsf.h.
 // The map's triangle hash index as plain CSR arrays (it lives in the map blob): sorted unique keys,
 // offsets (key_count + 1) and triangle ids grouped by key. Lookup is a binary search: O(log keys),
 // bounded. TriangleMatcher (triangle_matcher.h) queries the 27 neighbouring keys of a query triangle,
@@ -6,7 +9,7 @@
 #include <cstdint>
 
 #include "gsf/status.h"
-#include "gsf/triangle.h"
+#include "gsf/detail/triangle.h"
 
 namespace gsf {
 

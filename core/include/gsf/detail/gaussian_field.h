@@ -1,3 +1,6 @@
+// Internal (gsf/detail): a pipeline stage or building block, not part of the stable interface; it may
+// change between versions. The stable interface is localizer.h, config.h, map_format.h, scan.h, status.h,
+// platform.h, class_table.h, georeference.h and the C API gsf.h.
 // The Gaussian semantic field (GSF, the middle layer of the scene graph): per instance, a sparse GP
 // f: R^2 or R^3 -> R^D from positions around the instance to class-probability vectors.
 //
@@ -10,10 +13,10 @@
 #pragma once
 #include <cstdint>
 
-#include "gsf/arena.h"
+#include "gsf/detail/arena.h"
 #include "gsf/semantic_classes.h"
 #include "gsf/status.h"
-#include "gsf/voxel_layer.h"
+#include "gsf/detail/voxel_layer.h"
 
 namespace gsf {
 

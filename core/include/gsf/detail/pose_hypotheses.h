@@ -1,3 +1,6 @@
+// Internal (gsf/detail): a pipeline stage or building block, not part of the stable interface; it may
+// change between versions. The stable interface is localizer.h, config.h, map_format.h, scan.h, status.h,
+// platform.h, class_table.h, georeference.h and the C API gsf.h.
 // Pose hypotheses from the correspondences: the consistency graph is built once, then cliques are
 // peeled one after another. Each maximum clique gives a weighted TLS pose (paper Eq. 8); every
 // correspondence that agrees with that pose is removed before the next search, so the next clique is a
@@ -15,10 +18,10 @@
 
 #include <Eigen/Geometry>
 
-#include "gsf/arena.h"
-#include "gsf/fixed_vector.h"
-#include "gsf/max_clique.h"
-#include "gsf/semantic_grid.h"
+#include "gsf/detail/arena.h"
+#include "gsf/detail/fixed_vector.h"
+#include "gsf/detail/max_clique.h"
+#include "gsf/detail/semantic_grid.h"
 #include "gsf/status.h"
 
 namespace gsf {

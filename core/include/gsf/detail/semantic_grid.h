@@ -1,3 +1,6 @@
+// Internal (gsf/detail): a pipeline stage or building block, not part of the stable interface; it may
+// change between versions. The stable interface is localizer.h, config.h, map_format.h, scan.h, status.h,
+// platform.h, class_table.h, georeference.h and the C API gsf.h.
 // The map's compact semantic layer and the whole-scan verification of a pose hypothesis.
 //
 // Layer: a bird's-eye grid of `cell` metre cells grouped in square tiles of tile_cells x tile_cells,

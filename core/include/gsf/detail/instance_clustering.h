@@ -1,3 +1,6 @@
+// Internal (gsf/detail): a pipeline stage or building block, not part of the stable interface; it may
+// change between versions. The stable interface is localizer.h, config.h, map_format.h, scan.h, status.h,
+// platform.h, class_table.h, georeference.h and the C API gsf.h.
 // The object layer (top of the scene graph): instances clustered inside instantiable classes.
 //
 // Connected components over the voxel layer: two voxels of the same instantiable class are connected
@@ -15,11 +18,11 @@
 #pragma once
 #include <cstdint>
 
-#include "gsf/arena.h"
+#include "gsf/detail/arena.h"
 #include "gsf/class_table.h"
 #include "gsf/semantic_classes.h"
 #include "gsf/status.h"
-#include "gsf/voxel_layer.h"
+#include "gsf/detail/voxel_layer.h"
 
 namespace gsf {
 

@@ -1,3 +1,6 @@
+// Internal (gsf/detail): a pipeline stage or building block, not part of the stable interface; it may
+// change between versions. The stable interface is localizer.h, config.h, map_format.h, scan.h, status.h,
+// platform.h, class_table.h, georeference.h and the C API gsf.h.
 // Coarse matching of one query triangle against the map's triangle index, ranked and then capped.
 //
 // Every map triangle found under the 27 neighbouring keys that passes Outram's acceptance rules (labels
@@ -14,10 +17,10 @@
 #pragma once
 #include <cstdint>
 
-#include "gsf/arena.h"
+#include "gsf/detail/arena.h"
 #include "gsf/status.h"
-#include "gsf/triangle.h"
-#include "gsf/triangle_index.h"
+#include "gsf/detail/triangle.h"
+#include "gsf/detail/triangle_index.h"
 
 namespace gsf {
 

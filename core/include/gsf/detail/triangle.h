@@ -1,3 +1,6 @@
+// Internal (gsf/detail): a pipeline stage or building block, not part of the stable interface; it may
+// change between versions. The stable interface is localizer.h, config.h, map_format.h, scan.h, status.h,
+// platform.h, class_table.h, georeference.h and the C API gsf.h.
 // Triangle descriptors over the object layer (Outram / STD style): each instance with its K nearest
 // instances forms triangles; the key is the sorted, quantised side lengths (permutation invariant).
 //
@@ -7,9 +10,9 @@
 #pragma once
 #include <cstdint>
 
-#include "gsf/arena.h"
-#include "gsf/bounded_hash_map.h"
-#include "gsf/fixed_vector.h"
+#include "gsf/detail/arena.h"
+#include "gsf/detail/bounded_hash_map.h"
+#include "gsf/detail/fixed_vector.h"
 #include "gsf/status.h"
 
 namespace gsf {

@@ -1,4 +1,4 @@
-#include "scan_context.h"
+#include "baselines/scan_context.h"
 
 #include <algorithm>
 #include <cmath>

@@ -1,3 +1,6 @@
+// Internal (gsf/detail): a pipeline stage or building block, not part of the stable interface; it may
+// change between versions. The stable interface is localizer.h, config.h, map_format.h, scan.h, status.h,
+// platform.h, class_table.h, georeference.h and the C API gsf.h.
 // The GSF fine filter (paper Sec. III-B/C): the similarity omega in [0, 1] of a query instance's
 // Gaussian semantic field and a map instance's, under the yaw hypothesis of a triangle match.
 //
@@ -10,9 +13,9 @@
 #pragma once
 #include <cstdint>
 
-#include "gsf/arena.h"
-#include "gsf/bounded_hash_map.h"
-#include "gsf/gaussian_field.h"
+#include "gsf/detail/arena.h"
+#include "gsf/detail/bounded_hash_map.h"
+#include "gsf/detail/gaussian_field.h"
 #include "gsf/map_format.h"
 #include "gsf/semantic_classes.h"
 #include "gsf/status.h"
