@@ -12,14 +12,14 @@
 #include <cstring>
 #include <vector>
 
+#include "arena_buffer.h"
+#include "field_ablation.h"
 #include "gsf/detail/gaussian_field.h"
 #include "gsf/detail/instance_clustering.h"
-#include "gsf/map_format.h"
 #include "gsf/detail/sparsify.h"
 #include "gsf/detail/voxel_layer.h"
 #include "gsf/detail/wasserstein.h"
-#include "arena_buffer.h"
-#include "field_ablation.h"
+#include "gsf/map_format.h"
 #include "tiny_world.h"
 
 using namespace gsf;
@@ -32,7 +32,8 @@ int main() {
   const gsf_test::TinyWorld& w = gsf_test::tiny_world();
   const LocalizerConfig& cfg = w.config;
   const uint32_t P = 4096;
-  Buffer buf(VoxelLayer::required_bytes(cfg.voxel) + InstanceClustering::required_bytes(cfg.cluster, cfg.voxel.max_voxels) +
+  Buffer buf(VoxelLayer::required_bytes(cfg.voxel) +
+             InstanceClustering::required_bytes(cfg.cluster, cfg.voxel.max_voxels) +
              FieldSolver::required_bytes(cfg.field, P) + W2Exact::required_bytes(kMaxGridPoints) + (1 << 20));
   VoxelLayer layer;
   InstanceClustering clusters;
@@ -59,13 +60,14 @@ int main() {
     clusters.build(layer, nullptr);
     for (uint32_t i = 0; i < clusters.size(); ++i) {
       const float* c = clusters.instance(i).centroid;
-      const uint32_t n = collect_field_points(layer, cfg.field, c, static_cast<uint32_t>(ids.size()), ids.data(), xyz.data(), tgt.data(), lab.data());
+      const uint32_t n = collect_field_points(layer, cfg.field, c, static_cast<uint32_t>(ids.size()), ids.data(),
+                                              xyz.data(), tgt.data(), lab.data());
       if (n < 80) continue;
       ++neighbourhoods;
       for (int mi = 0; mi < 4; ++mi)
         for (int semantic = 0; semantic < 2; ++semantic)
-          miou_sum[semantic][mi] += gsf_test::reconstruction_miou(cfg.field, xyz.data(), tgt.data(), lab.data(), n, Ms[mi],
-                                                                  semantic != 0, 7 + q);
+          miou_sum[semantic][mi] += gsf_test::reconstruction_miou(cfg.field, xyz.data(), tgt.data(), lab.data(), n,
+                                                                  Ms[mi], semantic != 0, 7 + q);
     }
   }
   std::printf("Fig. 4 ablation on %d simulated instance neighbourhoods (tiny world queries):\n", neighbourhoods);
@@ -97,9 +99,11 @@ int main() {
         if (d < 60.0) cands.push_back(k);
       }
       if (truth < 0 || cands.size() < 3) continue;
-      const uint32_t n = collect_field_points(layer, cfg.field, qi.centroid, static_cast<uint32_t>(ids.size()), ids.data(), xyz.data(), tgt.data(), lab.data());
+      const uint32_t n = collect_field_points(layer, cfg.field, qi.centroid, static_cast<uint32_t>(ids.size()),
+                                              ids.data(), xyz.data(), tgt.data(), lab.data());
       uint32_t used = 0;
-      if (solver.fit(xyz.data(), tgt.data(), lab.data(), n, in.data(), al.data(), ch.data(), &used) != Status::Ok) continue;
+      if (solver.fit(xyz.data(), tgt.data(), lab.data(), n, in.data(), al.data(), ch.data(), &used) != Status::Ok)
+        continue;
       solver.probe(FieldView{in.data(), al.data(), used}, ch.data(), grid.data(), G, qm.data(), qv.data(), qc.data());
       std::vector<float> mgrid(G * 3);
       make_probe_grid(cfg.field, 0.0f, mgrid.data());
@@ -109,31 +113,37 @@ int main() {
         const MapInstance& m = map.instances[k];
         // Exact path: the map field's covariance from its stored inducing inputs.
         std::vector<float> mch(M * M);
-        FieldView mf{map.field_inputs + size_t(k) * M * 3, map.field_alpha + size_t(k) * M * kNumClasses, m.inducing_count};
+        FieldView mf{map.field_inputs + size_t(k) * M * 3, map.field_alpha + size_t(k) * M * kNumClasses,
+                     m.inducing_count};
         if (m.inducing_count == 0 || solver.factor(mf.inputs, mf.m, mch.data()) != Status::Ok) continue;
         // factor() uses an m x m layout; probe expects the same m.
         solver.probe(mf, mch.data(), mgrid.data(), G, mm.data(), mv.data(), mc.data());
         double e = 0;
         exact.w2_squared(qm.data(), qc.data(), mm.data(), mc.data(), G, weights, &e);
         const double mean_term = w2_mean_term(qm.data(), mm.data(), G, weights);
-        const ObservedW2 fast = w2_squared_diag_observed(qm.data(), qv.data(), map.grid_mean + size_t(k) * G * kNumClasses,
-                                                         map.grid_var + size_t(k) * G, G, weights,
-                                                         cfg.gsf.observed_variance * cfg.field.signal_variance,
-                                                         cfg.gsf.normalize_mass, cfg.gsf.covariance_weight);
+        const ObservedW2 fast = w2_squared_diag_observed(
+            qm.data(), qv.data(), map.grid_mean + size_t(k) * G * kNumClasses, map.grid_var + size_t(k) * G, G, weights,
+            cfg.gsf.observed_variance * cfg.field.signal_variance, cfg.gsf.normalize_mass, cfg.gsf.covariance_weight);
         const double v[3] = {e, mean_term, fast.used ? fast.w2 / fast.used : 1e300};
         for (int p = 0; p < 3; ++p)
-          if (v[p] < best[p]) { best[p] = v[p]; arg[p] = static_cast<int>(k); }
+          if (v[p] < best[p]) {
+            best[p] = v[p];
+            arg[p] = static_cast<int>(k);
+          }
       }
       ++cases;
       for (int p = 0; p < 3; ++p) top1[p] += arg[p] == truth;
       agree += arg[0] == arg[2];
     }
   }
-  std::printf("\nSimilarity paths on %d query instances with a known true map instance (same-label candidates within 60 m):\n", cases);
+  std::printf(
+      "\nSimilarity paths on %d query instances with a known true map instance (same-label candidates within 60 m):\n",
+      cases);
   std::printf("| path | top-1 = true instance |\n| --- | --- |\n");
   std::printf("| exact W2 (mean + covariance, paper) | %.1f%% |\n", 100.0 * top1[0] / std::max(1, cases));
   std::printf("| exact W2 mean term only | %.1f%% |\n", 100.0 * top1[1] / std::max(1, cases));
-  std::printf("| fast: observed-only diagonal mean term (localizer default) | %.1f%% |\n", 100.0 * top1[2] / std::max(1, cases));
+  std::printf("| fast: observed-only diagonal mean term (localizer default) | %.1f%% |\n",
+              100.0 * top1[2] / std::max(1, cases));
   std::printf("fast and exact pick the same top candidate in %.1f%% of cases\n", 100.0 * agree / std::max(1, cases));
   return 0;
 }

@@ -14,9 +14,9 @@
 #include "arena_buffer.h"
 #include "gsf/detail/instance_clustering.h"
 #include "gsf/detail/pole_extraction.h"
+#include "gsf/detail/voxel_layer.h"
 #include "gsf/port/nuscenes.h"
 #include "gsf/port/semantic_kitti.h"
-#include "gsf/detail/voxel_layer.h"
 
 using namespace gsf;
 
@@ -25,10 +25,16 @@ namespace {
 const char* colour(int c) {
   switch (c) {
     case kCar: return "#4a6fe3";
-    case kTruck: case kOtherVehicle: case kBicycle: case kMotorcycle: return "#7b8ef0";
-    case kPerson: case kBicyclist: case kMotorcyclist: return "#e040fb";
+    case kTruck:
+    case kOtherVehicle:
+    case kBicycle:
+    case kMotorcycle: return "#7b8ef0";
+    case kPerson:
+    case kBicyclist:
+    case kMotorcyclist: return "#e040fb";
     case kRoad: return "#c8c8c8";
-    case kParking: case kOtherGround: return "#d7c8e0";
+    case kParking:
+    case kOtherGround: return "#d7c8e0";
     case kSidewalk: return "#e8d8c0";
     case kTerrain: return "#d4dca0";
     case kBuilding: return "#6d7f99";
@@ -45,7 +51,8 @@ const char* colour(int c) {
 
 int main(int argc, char** argv) {
   if (argc < 6) {
-    std::fprintf(stderr, "usage: %s nuscenes|kitti <dataset_root> <scene> <frame_index> <out.svg> [half_width_m]\n", argv[0]);
+    std::fprintf(stderr, "usage: %s nuscenes|kitti <dataset_root> <scene> <frame_index> <out.svg> [half_width_m]\n",
+                 argv[0]);
     return 2;
   }
   const bool kitti = std::strcmp(argv[1], "kitti") == 0;
@@ -58,13 +65,22 @@ int main(int argc, char** argv) {
   port::KittiReadOptions ro;
   ro.load_logits = false;
   if (kitti) {
-    if (sk.open(argv[2], argv[3], ro) != Status::Ok) { std::fprintf(stderr, "cannot open %s/%s\n", argv[2], argv[3]); return 1; }
+    if (sk.open(argv[2], argv[3], ro) != Status::Ok) {
+      std::fprintf(stderr, "cannot open %s/%s\n", argv[2], argv[3]);
+      return 1;
+    }
     src = &sk;
   } else {
-    if (nus.open(argv[2], argv[3], ro) != Status::Ok) { std::fprintf(stderr, "cannot open %s/%s\n", argv[2], argv[3]); return 1; }
+    if (nus.open(argv[2], argv[3], ro) != Status::Ok) {
+      std::fprintf(stderr, "cannot open %s/%s\n", argv[2], argv[3]);
+      return 1;
+    }
     src = &nus;
   }
-  if (src->read(index, buf.buffer()) != Status::Ok) { std::fprintf(stderr, "cannot read frame %u\n", index); return 1; }
+  if (src->read(index, buf.buffer()) != Status::Ok) {
+    std::fprintf(stderr, "cannot read frame %u\n", index);
+    return 1;
+  }
   port::ScanBuffer& b = buf.buffer();
   std::vector<uint32_t> truth(b.labels, b.labels + b.count);
   if (kitti)  // the nuScenes situation: poles inside manmade, trunks inside vegetation
@@ -169,8 +185,9 @@ int main(int argc, char** argv) {
   if (!f) return 1;
   std::fwrite(svg.data(), 1, svg.size(), f);
   std::fclose(f);
-  std::printf("%u instances (%u segments, %u wide, %u crowded, %u chains, %u short, %u tilted, %u thick); %u true; wrote %s\n",
-              poles.size(), ps.segments, ps.segments_wide, ps.segments_crowded, ps.chains, ps.rejected_short,
-              ps.rejected_tilt, ps.rejected_thick, gt_count, argv[5]);
+  std::printf(
+      "%u instances (%u segments, %u wide, %u crowded, %u chains, %u short, %u tilted, %u thick); %u true; wrote %s\n",
+      poles.size(), ps.segments, ps.segments_wide, ps.segments_crowded, ps.chains, ps.rejected_short, ps.rejected_tilt,
+      ps.rejected_thick, gt_count, argv[5]);
   return 0;
 }

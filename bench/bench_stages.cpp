@@ -31,9 +31,9 @@
 
 #include "gsf/localizer.h"
 #include "gsf/map_format.h"
+#include "gsf/pipeline.h"
 #include "gsf/port/clock.h"
 #include "gsf/port/scan_buffer.h"
-#include "gsf/pipeline.h"
 
 using namespace gsf;
 
@@ -45,7 +45,11 @@ namespace {
 // power of two >= 2 x points, so the load stays <= 0.5), cleared after use through the list of touched
 // slots. No range filter, no labels, no logits: the least any voxelisation of the scan has to do.
 struct FloorTable {
-  struct Slot { uint64_t key; uint32_t count; uint32_t used; };
+  struct Slot {
+    uint64_t key;
+    uint32_t count;
+    uint32_t used;
+  };
   std::vector<Slot> slots;
   std::vector<uint32_t> touched;
   explicit FloorTable(uint32_t max_points) {
@@ -94,6 +98,7 @@ class IcountClock final : public Clock {
     if (pread(fd_, &v, sizeof v, kIcountMagic) != static_cast<ssize_t>(sizeof v)) v = 0;
     return v;
   }
+
  private:
   int fd_;
 };
@@ -105,36 +110,68 @@ struct Fnv {
     const uint8_t* b = static_cast<const uint8_t*>(p);
     for (size_t i = 0; i < n; ++i) h = (h ^ b[i]) * 1099511628211ULL;
   }
-  template <class T> void add(const T& v) { bytes(&v, sizeof v); }
+  template <class T>
+  void add(const T& v) {
+    bytes(&v, sizeof v);
+  }
 };
 
 void digest(Fnv& f, const LocalizeResult& r) {
   f.add(static_cast<int>(r.status));
   f.bytes(r.map_T_scan.matrix().data(), sizeof(double) * 16);
-  f.add(r.inliers); f.add(r.clique_size); f.add(r.score); f.add(r.ambiguity);
-  f.add(r.query_instances); f.add(r.query_triangles); f.add(r.triangle_matches); f.add(r.gsf_survivors);
-  f.add(r.correspondences); f.add(r.match_candidates); f.add(r.match_dropped); f.add(r.tie_ordered_triangles);
-  f.add(r.headings_kept); f.add(r.heading_dropped); f.add(r.candidate_pairs); f.add(r.candidate_pairs_dropped);
-  f.add(r.correspondences_dropped); f.add(r.clique_searches); f.add(r.hypotheses); f.add(r.chosen_hypothesis);
-  f.add(r.verified); f.add(r.clique_nodes); f.add(r.field_probes); f.add(r.field_comparisons); f.add(r.refined);
-  f.add(r.budget_exhausted); f.add(r.capacity_truncated);
+  f.add(r.inliers);
+  f.add(r.clique_size);
+  f.add(r.score);
+  f.add(r.ambiguity);
+  f.add(r.query_instances);
+  f.add(r.query_triangles);
+  f.add(r.triangle_matches);
+  f.add(r.gsf_survivors);
+  f.add(r.correspondences);
+  f.add(r.match_candidates);
+  f.add(r.match_dropped);
+  f.add(r.tie_ordered_triangles);
+  f.add(r.headings_kept);
+  f.add(r.heading_dropped);
+  f.add(r.candidate_pairs);
+  f.add(r.candidate_pairs_dropped);
+  f.add(r.correspondences_dropped);
+  f.add(r.clique_searches);
+  f.add(r.hypotheses);
+  f.add(r.chosen_hypothesis);
+  f.add(r.verified);
+  f.add(r.clique_nodes);
+  f.add(r.field_probes);
+  f.add(r.field_comparisons);
+  f.add(r.refined);
+  f.add(r.budget_exhausted);
+  f.add(r.capacity_truncated);
   for (uint32_t k = 0; k < kMaxReportedHypotheses; ++k) {
     const HypothesisReport& h = r.hypothesis[k];
-    f.add(h.x); f.add(h.y); f.add(h.yaw_deg); f.add(h.clique_size); f.add(h.inliers); f.add(h.support);
-    f.add(h.verified_score); f.add(h.verified_voxels);
+    f.add(h.x);
+    f.add(h.y);
+    f.add(h.yaw_deg);
+    f.add(h.clique_size);
+    f.add(h.inliers);
+    f.add(h.support);
+    f.add(h.verified_score);
+    f.add(h.verified_voxels);
   }
 }
 
 // ---- stages ----------------------------------------------------------------------------------------
 constexpr int kStages = 12;  // floor, the nine stage times, unattributed, total
-const char* const kStageNames[kStages] = {"floor", "voxel layer", "clustering", "query fields", "triangles",
-                                          "matching", "GSF filter", "hypotheses", "verification",
-                                          "refinement", "unattributed", "total query"};
+const char* const kStageNames[kStages] = {"floor",        "voxel layer", "clustering",   "query fields",
+                                          "triangles",    "matching",    "GSF filter",   "hypotheses",
+                                          "verification", "refinement",  "unattributed", "total query"};
 
 void stage_ns(const StageTimes& t, double out[kStages]) {
   const uint64_t parts[9] = {t.voxel, t.cluster, t.field, t.triangle, t.match, t.gsf, t.clique, t.pose, t.refine};
   uint64_t sum = 0;
-  for (int k = 0; k < 9; ++k) { out[1 + k] = double(parts[k]); sum += parts[k]; }
+  for (int k = 0; k < 9; ++k) {
+    out[1 + k] = double(parts[k]);
+    sum += parts[k];
+  }
   out[10] = double(t.total > sum ? t.total - sum : 0);
   out[11] = double(t.total);
 }
@@ -173,8 +210,9 @@ int main(int argc, char** argv) {
   const uint32_t repeat = std::max(1, std::atoi(arg(argc, argv, "--repeat", "3")));
   const std::string count_mode = arg(argc, argv, "--count", "");
   if (map_path.empty() || dataset.empty()) {
-    std::fprintf(stderr, "usage: bench_stages --map MAP --dataset DIR [--sequence 01] [--limit N] [--repeat R] "
-                         "[--count floor|instance|gsf|gsf+refine]\n");
+    std::fprintf(stderr,
+                 "usage: bench_stages --map MAP --dataset DIR [--sequence 01] [--limit N] [--repeat R] "
+                 "[--count floor|instance|gsf|gsf+refine]\n");
     return 2;
   }
   std::vector<uint64_t> blob;  // 16-byte aligned (vector of uint64_t from operator new)
@@ -194,14 +232,20 @@ int main(int argc, char** argv) {
   }
   Status s;
   auto src = cli::open_source(dataset, sequence, &s);
-  if (s != Status::Ok || src->size() == 0) { std::fprintf(stderr, "cannot open %s seq %s\n", dataset.c_str(), sequence.c_str()); return 1; }
+  if (s != Status::Ok || src->size() == 0) {
+    std::fprintf(stderr, "cannot open %s seq %s\n", dataset.c_str(), sequence.c_str());
+    return 1;
+  }
   const uint32_t nq = limit ? std::min(limit, src->size()) : src->size();
 
   const bool counting = !count_mode.empty();
   port::SteadyClock steady;
   const std::string icount_file = arg(argc, argv, "--icount-file", "");
   const int icount_fd = icount_file.empty() ? -1 : open(icount_file.c_str(), O_RDONLY);
-  if (!icount_file.empty() && icount_fd < 0) { std::fprintf(stderr, "cannot open %s\n", icount_file.c_str()); return 1; }
+  if (!icount_file.empty() && icount_fd < 0) {
+    std::fprintf(stderr, "cannot open %s\n", icount_file.c_str());
+    return 1;
+  }
   IcountClock icount(icount_fd);
   Clock& clock = icount_fd >= 0 ? static_cast<Clock&>(icount) : static_cast<Clock&>(steady);
   Mode modes[3] = {{"instance", false, false, {}, {}, {}, {}, {}, 0},
@@ -222,7 +266,10 @@ int main(int argc, char** argv) {
     md.cfg.refine.enabled = md.refine;
     md.workspace.assign(Localizer::required_bytes(md.cfg) / 8 + 2, 0);
     s = md.loc.init(md.cfg, map, md.workspace.data(), md.workspace.size() * 8, counting ? nullptr : &clock);
-    if (s != Status::Ok) { std::fprintf(stderr, "init %s: %s\n", md.name, to_string(s)); return 1; }
+    if (s != Status::Ok) {
+      std::fprintf(stderr, "init %s: %s\n", md.name, to_string(s));
+      return 1;
+    }
   }
   const LocalizerConfig base = cli::default_config();
   FloorTable floor_table(cli::kMaxScanPoints);
@@ -232,7 +279,8 @@ int main(int argc, char** argv) {
   port::OwnedScanBuffer buf(cli::kMaxScanPoints, true);
 
   for (uint32_t q = 0; q < nq; ++q) {
-    if (cli::read_scan(*src, q, buf.buffer(), cli::LogitMode::Synthetic, 2000000u + src->frame_id(q)) != Status::Ok) continue;
+    if (cli::read_scan(*src, q, buf.buffer(), cli::LogitMode::Synthetic, 2000000u + src->frame_id(q)) != Status::Ok)
+      continue;
     const ScanView view = buf.buffer().view();
     points.push_back(view.count);
     double best_floor = 1e300;
@@ -249,7 +297,10 @@ int main(int argc, char** argv) {
           const uint32_t nv = bench_floor_bucket(view, base.voxel.voxel_size, floor_table);
           const double ns = double(clock.now_ns() - t0);
           best_floor = std::min(best_floor, ns);
-          if (r == 0) { voxels.push_back(nv); floor_digest.add(nv); }
+          if (r == 0) {
+            voxels.push_back(nv);
+            floor_digest.add(nv);
+          }
           continue;
         }
         if (!active[which]) continue;
@@ -283,7 +334,8 @@ int main(int argc, char** argv) {
 
   const double f = median(floor_ns);
   std::printf("repetitions per scan: %u (each cell: median over scans of the fastest repetition)\n", repeat);
-  if (icount_fd >= 0) std::printf("UNITS: the 'us' columns are thousands of guest INSTRUCTIONS (qemu plugin count), not times\n");
+  if (icount_fd >= 0)
+    std::printf("UNITS: the 'us' columns are thousands of guest INSTRUCTIONS (qemu plugin count), not times\n");
   std::printf("\n");
   std::printf("| stage | GSF off us | x floor | GSF on us | x floor | GSF + refine us | x floor |\n");
   std::printf("| --- | ---: | ---: | ---: | ---: | ---: | ---: |\n");
@@ -306,7 +358,9 @@ int main(int argc, char** argv) {
               median(modes[1].per_scan[11]) / median(modes[0].per_scan[11]), median(on_off));
   std::printf("GSF + refine / GSF on (total query): ratio of medians %.3f, median of per-scan ratios %.3f\n",
               median(modes[2].per_scan[11]) / median(modes[1].per_scan[11]), median(rf_on));
-  std::printf("floor median %.1f us; 'unattributed' = total minus the nine stage times (result assembly, "
-              "correspondence ranking)\n", f / 1e3);
+  std::printf(
+      "floor median %.1f us; 'unattributed' = total minus the nine stage times (result assembly, "
+      "correspondence ranking)\n",
+      f / 1e3);
   return 0;
 }

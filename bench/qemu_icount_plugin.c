@@ -5,8 +5,8 @@
  * written into the file at that offset first, so the read returns it. Built for the host by
  * bench/stages.sh --arm64-counts:
  *   cc -shared -fPIC -O2 -o qemu_icount_plugin.so bench/qemu_icount_plugin.c
- *   qemu-aarch64 -plugin ./qemu_icount_plugin.so,out=/dev/shm/gsf_icount ... bench_stages --icount-file /dev/shm/gsf_icount
- * The declarations below are the qemu plugin API (version 1, QEMU 7.2) this file uses. */
+ *   qemu-aarch64 -plugin ./qemu_icount_plugin.so,out=/dev/shm/gsf_icount ... bench_stages --icount-file
+ * /dev/shm/gsf_icount The declarations below are the qemu plugin API (version 1, QEMU 7.2) this file uses. */
 #include <fcntl.h>
 #include <stdint.h>
 #include <stdio.h>
@@ -23,7 +23,8 @@ typedef void (*qemu_plugin_vcpu_syscall_cb_t)(qemu_plugin_id_t id, unsigned int 
                                               uint64_t a2, uint64_t a3, uint64_t a4, uint64_t a5, uint64_t a6,
                                               uint64_t a7, uint64_t a8);
 void qemu_plugin_register_vcpu_tb_trans_cb(qemu_plugin_id_t id, qemu_plugin_vcpu_tb_trans_cb_t cb);
-void qemu_plugin_register_vcpu_tb_exec_inline(struct qemu_plugin_tb* tb, enum qemu_plugin_op op, void* ptr, uint64_t imm);
+void qemu_plugin_register_vcpu_tb_exec_inline(struct qemu_plugin_tb* tb, enum qemu_plugin_op op, void* ptr,
+                                              uint64_t imm);
 size_t qemu_plugin_tb_n_insns(const struct qemu_plugin_tb* tb);
 void qemu_plugin_register_vcpu_syscall_cb(qemu_plugin_id_t id, qemu_plugin_vcpu_syscall_cb_t cb);
 
@@ -42,7 +43,14 @@ static void on_tb(qemu_plugin_id_t id, struct qemu_plugin_tb* tb) {
 
 static void on_syscall(qemu_plugin_id_t id, unsigned int vcpu, int64_t num, uint64_t a1, uint64_t a2, uint64_t a3,
                        uint64_t a4, uint64_t a5, uint64_t a6, uint64_t a7, uint64_t a8) {
-  (void)id; (void)vcpu; (void)a1; (void)a2; (void)a5; (void)a6; (void)a7; (void)a8;
+  (void)id;
+  (void)vcpu;
+  (void)a1;
+  (void)a2;
+  (void)a5;
+  (void)a6;
+  (void)a7;
+  (void)a8;
   if (num == AARCH64_NR_PREAD64 && a3 == 8 && a4 == GSF_ICOUNT_MAGIC && out_fd >= 0) {
     const uint64_t v = insns;
     if (pwrite(out_fd, &v, sizeof v, (off_t)GSF_ICOUNT_MAGIC) != (ssize_t)sizeof v) perror("qemu_icount_plugin");

@@ -16,8 +16,9 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   gsf::port::KittiReadOptions opt;
   opt.drop_non_finite = flags & 1;
   opt.require_labels = flags & 2;
-  const gsf::Status s = gsf::port::parse_scan(p, bin, (flags & 4) ? p + bin : nullptr, lab,
-                                              (flags & 8) ? p + bin + lab : nullptr, rest - bin - lab, opt, buf.buffer());
+  const gsf::Status s =
+      gsf::port::parse_scan(p, bin, (flags & 4) ? p + bin : nullptr, lab, (flags & 8) ? p + bin + lab : nullptr,
+                            rest - bin - lab, opt, buf.buffer());
   if (s == gsf::Status::Ok) {
     if (buf.buffer().count > buf.buffer().capacity) __builtin_trap();
     for (uint32_t i = 0; i < buf.buffer().count; ++i)

@@ -4,8 +4,10 @@
 // want the EIGEN_RUNTIME_NO_MALLOC check to report instead of abort.
 #include <stdexcept>
 #define EIGEN_RUNTIME_NO_MALLOC
-#define eigen_assert(x) \
-  do { if (!(x)) throw std::runtime_error("eigen_assert: " #x); } while (0)
+#define eigen_assert(x)                                      \
+  do {                                                       \
+    if (!(x)) throw std::runtime_error("eigen_assert: " #x); \
+  } while (0)
 
 #include <catch2/catch.hpp>
 
@@ -75,9 +77,7 @@ TEST_CASE("EIGEN_RUNTIME_NO_MALLOC: fixed-size math passes, dynamic allocation i
   try {
     Eigen::MatrixXf c = preallocated * preallocated;  // temporary needs heap: must be refused
     gsf_test::escape(c.data());
-  } catch (const std::runtime_error&) {
-    caught = true;
-  }
+  } catch (const std::runtime_error&) { caught = true; }
   Eigen::internal::set_is_malloc_allowed(true);
   CHECK(caught);
   CHECK(preallocated(0, 0) == Approx(b(0, 0)));

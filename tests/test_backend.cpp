@@ -7,13 +7,12 @@
 #include <set>
 #include <vector>
 
+#include "arena_buffer.h"
 #include "gsf/detail/max_clique.h"
 #include "gsf/detail/pose_solver.h"
 #include "gsf/detail/triangle.h"
 #include "gsf/detail/triangle_index.h"
 #include "gsf/detail/triangle_matcher.h"
-#include "gsf/detail/triangle_matcher.h"
-#include "arena_buffer.h"
 
 using namespace gsf;
 
@@ -24,13 +23,18 @@ std::vector<float> random_points(int n, uint32_t seed, float extent = 40.0f) {
   std::mt19937 rng(seed);
   std::uniform_real_distribution<float> u(-extent, extent), z(0, 4);
   std::vector<float> p(n * 3);
-  for (int i = 0; i < n; ++i) { p[3 * i] = u(rng); p[3 * i + 1] = u(rng); p[3 * i + 2] = z(rng); }
+  for (int i = 0; i < n; ++i) {
+    p[3 * i] = u(rng);
+    p[3 * i + 1] = u(rng);
+    p[3 * i + 2] = z(rng);
+  }
   return p;
 }
 
 Eigen::Isometry3d some_pose() {
   Eigen::Isometry3d t = Eigen::Isometry3d::Identity();
-  t.linear() = (Eigen::AngleAxisd(1.1, Eigen::Vector3d::UnitZ()) * Eigen::AngleAxisd(0.05, Eigen::Vector3d::UnitX())).toRotationMatrix();
+  t.linear() = (Eigen::AngleAxisd(1.1, Eigen::Vector3d::UnitZ()) * Eigen::AngleAxisd(0.05, Eigen::Vector3d::UnitX()))
+                   .toRotationMatrix();
   t.translation() = Eigen::Vector3d(120.0, -35.0, 2.0);
   return t;
 }
@@ -40,7 +44,8 @@ TEST_CASE("Triangles: canonical order, permutation-invariant key") {
   const float p[9] = {0, 0, 0, 3, 0, 0, 0, 4, 0};  // sides 3, 4, 5
   const uint8_t labels[3] = {1, 2, 3};
   for (auto perm : {std::array<uint32_t, 3>{0, 1, 2}, {2, 0, 1}, {1, 2, 0}, {2, 1, 0}}) {
-    const Triangle t = make_triangle(perm[0], perm[1], perm[2], p + 3 * perm[0], p + 3 * perm[1], p + 3 * perm[2], labels);
+    const Triangle t =
+        make_triangle(perm[0], perm[1], perm[2], p + 3 * perm[0], p + 3 * perm[1], p + 3 * perm[2], labels);
     CHECK(t.side[0] == Approx(3));
     CHECK(t.side[1] == Approx(4));
     CHECK(t.side[2] == Approx(5));
@@ -112,7 +117,8 @@ TEST_CASE("Triangle index: lookup equals brute force, validate rejects bad array
   std::vector<uint64_t> keys(n), scratch(n);
   std::vector<uint32_t> offsets(n + 1), entries(n);
   uint32_t kc = 0;
-  REQUIRE(build_triangle_index(tris.data(), n, tc.side_bin, keys.data(), offsets.data(), entries.data(), &kc, scratch.data()) == Status::Ok);
+  REQUIRE(build_triangle_index(tris.data(), n, tc.side_bin, keys.data(), offsets.data(), entries.data(), &kc,
+                               scratch.data()) == Status::Ok);
   TriangleIndexView idx{keys.data(), offsets.data(), entries.data(), kc, n};
   REQUIRE(idx.validate(n) == Status::Ok);
   for (uint32_t k = 0; k < kc; k += 7) {

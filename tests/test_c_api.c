@@ -257,7 +257,7 @@ static void test_init_rejects(const gsf_map* map) {
   CHECK(gsf_workspace_bytes(&bad) == 0);
   bad = cfg;
   bad.label_set = GSF_LABEL_SET_NUSCENES_LIDARSEG;  // the map was built with SemanticKITTI's
-  CHECK(gsf_workspace_bytes(&bad) > wb);              // the geometric-pole stage
+  CHECK(gsf_workspace_bytes(&bad) > wb);            // the geometric-pole stage
   {
     unsigned char* big = block(gsf_workspace_bytes(&bad));
     CHECK_STATUS(gsf_localizer_init(storage, sb, &bad, map, big, gsf_workspace_bytes(&bad), &loc),

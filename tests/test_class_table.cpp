@@ -138,12 +138,12 @@ TEST_CASE("Class table text: a valid file with comments, tabs, CRLF and default 
       "   # indented comment\n"
       "0 unlabeled ignored 0\n"
       "17\tvehicle.car\tcar\t0.5\tinstance   # trailing comment\r\n"
-      "18 vehicle.parked car .5\n"          // role: what car already has
+      "18 vehicle.parked car .5\n"  // role: what car already has
       "28 static.manmade building 1 host:pole\n"
       "30 static.vegetation vegetation 0.50 host:trunk\n"
-      "80 pole pole 1.0\n"                  // role: library default (instance)
+      "80 pole pole 1.0\n"  // role: library default (instance)
       "24 road road 1.0\n"
-      "65535 last ignored 0.0";             // no final newline
+      "65535 last ignored 0.0";  // no final newline
   ClassTable t;
   port::ClassTableParseError e;
   REQUIRE(parse(text, &t, &e) == Status::Ok);
@@ -182,7 +182,12 @@ TEST_CASE("Class table text: a valid file with comments, tabs, CRLF and default 
 }
 
 TEST_CASE("Class table text: every defect is rejected with its status, line and field") {
-  struct Case { const char* text; Status status; uint32_t line, field; const char* says; };
+  struct Case {
+    const char* text;
+    Status status;
+    uint32_t line, field;
+    const char* says;
+  };
   const std::string long_line = "1 a car 0.5 #" + std::string(300, 'x') + "\n";
   const Case cases[] = {
       {"", Status::CorruptData, 0, 0, "no entries"},

@@ -116,7 +116,10 @@ struct Scene {
       const double d = std::sqrt((in.centroid[0] - p[0]) * (in.centroid[0] - p[0]) +
                                  (in.centroid[1] - p[1]) * (in.centroid[1] - p[1]) +
                                  (in.centroid[2] - p[2]) * (in.centroid[2] - p[2]));
-      if (d < *dist) { *dist = d; best = static_cast<int>(i); }
+      if (d < *dist) {
+        *dist = d;
+        best = static_cast<int>(i);
+      }
     }
     return best;
   }
@@ -428,8 +431,14 @@ TEST_CASE("Real SemanticKITTI scans: car instances against the ground-truth inst
       ++gt_cars;
       uint32_t best = 0, best_k = UINT32_MAX;
       for (const auto& kv : share[g.first])
-        if (kv.second > best) { best = kv.second; best_k = kv.first; }
-      if (2 * best >= g.second) { ++recovered; ++owners[best_k]; }
+        if (kv.second > best) {
+          best = kv.second;
+          best_k = kv.first;
+        }
+      if (2 * best >= g.second) {
+        ++recovered;
+        ++owners[best_k];
+      }
     }
     uint32_t cars = 0, poles = 0, trunks = 0, signs = 0;
     for (uint32_t k = 0; k < s.clusters.size(); ++k) {
@@ -439,14 +448,15 @@ TEST_CASE("Real SemanticKITTI scans: car instances against the ground-truth inst
       trunks += l == kTrunk;
       signs += l == kTrafficSign;
     }
-    WARN(f << ": " << gt_cars << " GT cars (>= 50 pts), " << recovered << " with >= half their points in one car instance, "
-           << owners.size() << " distinct owners; instances: " << cars << " cars, " << poles << " poles, " << trunks
-           << " trunks, " << signs << " signs; voxels " << s.vs.voxels);
+    WARN(f << ": " << gt_cars << " GT cars (>= 50 pts), " << recovered
+           << " with >= half their points in one car instance, " << owners.size()
+           << " distinct owners; instances: " << cars << " cars, " << poles << " poles, " << trunks << " trunks, "
+           << signs << " signs; voxels " << s.vs.voxels);
     CHECK(gt_cars >= 3);
-    CHECK(recovered * 10 >= gt_cars * 8);            // >= 80% of real cars found as one piece
-    CHECK(owners.size() * 10 >= recovered * 7);      // parked rows merge at 1 m, but not wholesale
-    CHECK(cars <= gt_points.size() + 10);            // few spurious car blobs
+    CHECK(recovered * 10 >= gt_cars * 8);        // >= 80% of real cars found as one piece
+    CHECK(owners.size() * 10 >= recovered * 7);  // parked rows merge at 1 m, but not wholesale
+    CHECK(cars <= gt_points.size() + 10);        // few spurious car blobs
     CHECK(s.clusters.size() <= s.cc.max_instances);
-    CHECK(poles + trunks + signs >= 2);              // the street furniture the localizer needs
+    CHECK(poles + trunks + signs >= 2);  // the street furniture the localizer needs
   }
 }

@@ -5,10 +5,10 @@
 #include <random>
 #include <vector>
 
+#include "arena_buffer.h"
 #include "gsf/detail/gaussian_field.h"
 #include "gsf/detail/sparsify.h"
 #include "gsf/detail/wasserstein.h"
-#include "arena_buffer.h"
 
 using namespace gsf;
 
@@ -72,7 +72,9 @@ TEST_CASE("The posterior mean interpolates the targets as noise goes to zero") {
   std::vector<float> xyz(20 * 3), y(20 * kNumClasses);
   std::vector<uint8_t> lab(20, 0);
   for (int i = 0; i < 20; ++i) {
-    xyz[3 * i] = u(rng); xyz[3 * i + 1] = u(rng); xyz[3 * i + 2] = 0;
+    xyz[3 * i] = u(rng);
+    xyz[3 * i + 1] = u(rng);
+    xyz[3 * i + 2] = 0;
     for (int d = 0; d < kNumClasses; ++d) y[i * kNumClasses + d] = p(rng);
   }
   std::vector<float> in(kMaxInducing * 3), alpha(kMaxInducing * kNumClasses), chol(kMaxInducing * kMaxInducing);
@@ -80,7 +82,8 @@ TEST_CASE("The posterior mean interpolates the targets as noise goes to zero") {
   REQUIRE(solver.fit(xyz.data(), y.data(), lab.data(), 20, in.data(), alpha.data(), chol.data(), &m) == Status::Ok);
   REQUIRE(m == 20);
   std::vector<float> mean(20 * kNumClasses), var(20);
-  REQUIRE(solver.probe(FieldView{in.data(), alpha.data(), m}, chol.data(), xyz.data(), 20, mean.data(), var.data(), nullptr) == Status::Ok);
+  REQUIRE(solver.probe(FieldView{in.data(), alpha.data(), m}, chol.data(), xyz.data(), 20, mean.data(), var.data(),
+                       nullptr) == Status::Ok);
   for (int i = 0; i < 20 * kNumClasses; ++i) CHECK(mean[i] == Approx(y[i]).margin(0.02));
   for (int i = 0; i < 20; ++i) CHECK(var[i] < 0.01f);
 }
@@ -147,7 +150,10 @@ TEST_CASE("W2: zero for identical, symmetric, 1-D and diagonal closed forms, tri
   CHECK(d == Approx(9.0 + (2.0 - 0.5) * (2.0 - 0.5)).epsilon(1e-5));
   // Diagonal covariances: the diagonal path is exact.
   std::vector<float> dg1(g * g, 0), dg2(g * g, 0), v1(g), v2(g);
-  for (int i = 0; i < g; ++i) { dg1[i * g + i] = v1[i] = 0.1f + i; dg2[i * g + i] = v2[i] = 2.0f / (1 + i); }
+  for (int i = 0; i < g; ++i) {
+    dg1[i * g + i] = v1[i] = 0.1f + i;
+    dg2[i * g + i] = v2[i] = 2.0f / (1 + i);
+  }
   exact.w2_squared(m1.data(), dg1.data(), m2.data(), dg2.data(), g, w, &d);
   CHECK(d == Approx(w2_squared_diag(m1.data(), v1.data(), m2.data(), v2.data(), g, w)).epsilon(1e-4));
   // The observed-only path with everything observed and covariance weight 1 equals the diagonal path.
@@ -160,7 +166,8 @@ TEST_CASE("W2: zero for identical, symmetric, 1-D and diagonal closed forms, tri
   std::vector<float> base(kNumClasses, 0), car(kNumClasses, 0), pole(kNumClasses, 0);
   car[kTruck] = 1.0f;
   pole[kPole] = 1.0f;
-  CHECK(w2_mean_term(base.data(), car.data(), 1, w_stab.data()) * 10 == Approx(w2_mean_term(base.data(), pole.data(), 1, w_stab.data())));
+  CHECK(w2_mean_term(base.data(), car.data(), 1, w_stab.data()) * 10 ==
+        Approx(w2_mean_term(base.data(), pole.data(), 1, w_stab.data())));
 }
 
 TEST_CASE("W2 between fields is invariant when data and grid move rigidly together") {
@@ -176,8 +183,12 @@ TEST_CASE("W2 between fields is invariant when data and grid move rigidly togeth
   std::vector<float> xa(n * 3), xb(n * 3), ya(n * kNumClasses, 0), yb(n * kNumClasses, 0);
   std::vector<uint8_t> la(n), lb(n);
   for (int i = 0; i < n; ++i) {
-    xa[3 * i] = u(rng); xa[3 * i + 1] = u(rng); xa[3 * i + 2] = 0;
-    xb[3 * i] = u(rng); xb[3 * i + 1] = u(rng); xb[3 * i + 2] = 0;
+    xa[3 * i] = u(rng);
+    xa[3 * i + 1] = u(rng);
+    xa[3 * i + 2] = 0;
+    xb[3 * i] = u(rng);
+    xb[3 * i + 1] = u(rng);
+    xb[3 * i + 2] = 0;
     la[i] = xa[3 * i] > 0 ? kVegetation : kRoad;
     lb[i] = xb[3 * i + 1] > 1 ? kTerrain : kRoad;
     ya[i * kNumClasses + la[i]] = 1;
@@ -187,18 +198,24 @@ TEST_CASE("W2 between fields is invariant when data and grid move rigidly togeth
     const float c = std::cos(yaw), s = std::sin(yaw);
     std::vector<float> ra(xa), rb(xb);
     for (int i = 0; i < n; ++i) {
-      ra[3 * i] = c * xa[3 * i] - s * xa[3 * i + 1]; ra[3 * i + 1] = s * xa[3 * i] + c * xa[3 * i + 1];
-      rb[3 * i] = c * xb[3 * i] - s * xb[3 * i + 1]; rb[3 * i + 1] = s * xb[3 * i] + c * xb[3 * i + 1];
+      ra[3 * i] = c * xa[3 * i] - s * xa[3 * i + 1];
+      ra[3 * i + 1] = s * xa[3 * i] + c * xa[3 * i + 1];
+      rb[3 * i] = c * xb[3 * i] - s * xb[3 * i + 1];
+      rb[3 * i + 1] = s * xb[3 * i] + c * xb[3 * i + 1];
     }
     const uint32_t G = grid_points(fc);
-    std::vector<float> grid(G * 3), in(kMaxInducing * 3), al(kMaxInducing * kNumClasses), ch(kMaxInducing * kMaxInducing);
-    std::vector<float> in2(in), al2(al), ch2(ch), m1(G * kNumClasses), m2(G * kNumClasses), v1(G), v2(G), c1(G * G), c2(G * G);
+    std::vector<float> grid(G * 3), in(kMaxInducing * 3), al(kMaxInducing * kNumClasses),
+        ch(kMaxInducing * kMaxInducing);
+    std::vector<float> in2(in), al2(al), ch2(ch), m1(G * kNumClasses), m2(G * kNumClasses), v1(G), v2(G), c1(G * G),
+        c2(G * G);
     make_probe_grid(fc, yaw, grid.data());
     uint32_t ma = 0, mb = 0;
     REQUIRE(solver.fit(ra.data(), ya.data(), la.data(), n, in.data(), al.data(), ch.data(), &ma) == Status::Ok);
-    REQUIRE(solver.probe(FieldView{in.data(), al.data(), ma}, ch.data(), grid.data(), G, m1.data(), v1.data(), c1.data()) == Status::Ok);
+    REQUIRE(solver.probe(FieldView{in.data(), al.data(), ma}, ch.data(), grid.data(), G, m1.data(), v1.data(),
+                         c1.data()) == Status::Ok);
     REQUIRE(solver.fit(rb.data(), yb.data(), lb.data(), n, in2.data(), al2.data(), ch2.data(), &mb) == Status::Ok);
-    REQUIRE(solver.probe(FieldView{in2.data(), al2.data(), mb}, ch2.data(), grid.data(), G, m2.data(), v2.data(), c2.data()) == Status::Ok);
+    REQUIRE(solver.probe(FieldView{in2.data(), al2.data(), mb}, ch2.data(), grid.data(), G, m2.data(), v2.data(),
+                         c2.data()) == Status::Ok);
     float w[kNumClasses];
     stability_weights(w);
     double d = 0;

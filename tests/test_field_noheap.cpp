@@ -27,7 +27,9 @@ TEST_CASE("Fields and W2 never allocate after bind") {
       ch(2 * M * M), mean(2 * G * kNumClasses), var(2 * G), cov(2 * G * G);
   std::vector<uint8_t> lab(n);
   for (uint32_t i = 0; i < n; ++i) {
-    xyz[3 * i] = u(rng); xyz[3 * i + 1] = u(rng); xyz[3 * i + 2] = 0;
+    xyz[3 * i] = u(rng);
+    xyz[3 * i + 1] = u(rng);
+    xyz[3 * i + 2] = 0;
     lab[i] = static_cast<uint8_t>(i % 5 == 0 ? kPole : (xyz[3 * i] > 0 ? kVegetation : kRoad));
     tgt[i * kNumClasses + lab[i]] = 1.0f;
   }

@@ -4,11 +4,11 @@
 
 #include <cmath>
 
+#include "arena_buffer.h"
 #include "field_ablation.h"
 #include "gsf/detail/instance_clustering.h"
 #include "gsf/detail/voxel_layer.h"
 #include "gsf/detail/wasserstein.h"
-#include "arena_buffer.h"
 #include "tiny_world.h"
 
 using namespace gsf;
@@ -19,7 +19,8 @@ using Buffer = gsf_test::ArenaBuffer;
 
 TEST_CASE("Fig. 4 on simulated scans: semantic sparsification reconstructs at least as well as random") {
   const auto& w = gsf_test::tiny_world();
-  Buffer buf(VoxelLayer::required_bytes(w.config.voxel) + InstanceClustering::required_bytes(w.config.cluster, w.config.voxel.max_voxels));
+  Buffer buf(VoxelLayer::required_bytes(w.config.voxel) +
+             InstanceClustering::required_bytes(w.config.cluster, w.config.voxel.max_voxels));
   VoxelLayer layer;
   InstanceClustering clusters;
   REQUIRE(layer.bind(buf.arena, w.config.voxel) == Status::Ok);
@@ -34,10 +35,12 @@ TEST_CASE("Fig. 4 on simulated scans: semantic sparsification reconstructs at le
     clusters.build(layer, nullptr);
     for (uint32_t i = 0; i < clusters.size() && count < 40; ++i) {
       const float* c = clusters.instance(i).centroid;
-      const uint32_t n = collect_field_points(layer, w.config.field, c, static_cast<uint32_t>(ids.size()), ids.data(), xyz.data(), tgt.data(), lab.data());
+      const uint32_t n = collect_field_points(layer, w.config.field, c, static_cast<uint32_t>(ids.size()), ids.data(),
+                                              xyz.data(), tgt.data(), lab.data());
       if (n < 80) continue;
       for (uint32_t m : {8u, 16u, 32u}) {
-        semantic += gsf_test::reconstruction_miou(w.config.field, xyz.data(), tgt.data(), lab.data(), n, m, true, 3 + q);
+        semantic +=
+            gsf_test::reconstruction_miou(w.config.field, xyz.data(), tgt.data(), lab.data(), n, m, true, 3 + q);
         random += gsf_test::reconstruction_miou(w.config.field, xyz.data(), tgt.data(), lab.data(), n, m, false, 3 + q);
       }
       ++count;
@@ -55,7 +58,8 @@ TEST_CASE("Identical zone columns with different surroundings differ more than o
   const uint32_t G = grid_points(cfg.field);
   float weights[kNumClasses];
   stability_weights(weights);
-  Buffer buf(VoxelLayer::required_bytes(cfg.voxel) + InstanceClustering::required_bytes(cfg.cluster, cfg.voxel.max_voxels) +
+  Buffer buf(VoxelLayer::required_bytes(cfg.voxel) +
+             InstanceClustering::required_bytes(cfg.cluster, cfg.voxel.max_voxels) +
              FieldSolver::required_bytes(cfg.field, 4096));
   VoxelLayer layer;
   InstanceClustering clusters;
@@ -88,10 +92,12 @@ TEST_CASE("Identical zone columns with different surroundings differ more than o
         else if (std::fabs(dy) < 0.7 && std::fabs(std::fabs(dx) - 10.0) < 0.7) twins.push_back(static_cast<int>(k));
       }
       if (self < 0 || twins.empty()) continue;
-      const uint32_t n = collect_field_points(layer, w.config.field, qi.centroid, static_cast<uint32_t>(ids.size()), ids.data(), xyz.data(), tgt.data(), lab.data());
+      const uint32_t n = collect_field_points(layer, w.config.field, qi.centroid, static_cast<uint32_t>(ids.size()),
+                                              ids.data(), xyz.data(), tgt.data(), lab.data());
       uint32_t used = 0;
       REQUIRE(solver.fit(xyz.data(), tgt.data(), lab.data(), n, in.data(), al.data(), ch.data(), &used) == Status::Ok);
-      REQUIRE(solver.probe(FieldView{in.data(), al.data(), used}, ch.data(), grid.data(), G, qm.data(), qv.data(), nullptr) == Status::Ok);
+      REQUIRE(solver.probe(FieldView{in.data(), al.data(), used}, ch.data(), grid.data(), G, qm.data(), qv.data(),
+                           nullptr) == Status::Ok);
       auto dist = [&](int k) {
         const ObservedW2 r = w2_squared_diag_observed(qm.data(), qv.data(), map.grid_mean + size_t(k) * G * kNumClasses,
                                                       map.grid_var + size_t(k) * G, G, weights,

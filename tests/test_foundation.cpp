@@ -117,7 +117,7 @@ TEST_CASE("Status names are distinct and never null") {
 TEST_CASE("Semantic class table round trips and stability follows Table III") {
   for (int c = 0; c < kNumClasses; ++c) CHECK(class_from_kitti(kitti_from_class(c)) == c);
   CHECK(class_from_kitti(10) == kCar);
-  CHECK(class_from_kitti(252) == kCar);      // moving-car folds into car
+  CHECK(class_from_kitti(252) == kCar);                // moving-car folds into car
   CHECK(class_from_kitti((7u << 16) | 80u) == kPole);  // instance id in the high bits is ignored
   CHECK(class_from_kitti(0) == kIgnoredClass);
   CHECK(class_from_kitti(52) == kIgnoredClass);

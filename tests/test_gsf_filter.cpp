@@ -94,7 +94,10 @@ OneMap make_map(FieldSolver& solver, const FieldConfig& fc, const Neighbourhood&
 TEST_CASE("triangle_yaw_bin: a triangle rotated by yaw lands in round(yaw / bin width)") {
   const float m0[3] = {0, 0, 1}, m1[3] = {7, 1, 2}, m2[3] = {2, 5, 0};
   const float* m[3] = {m0, m1, m2};
-  struct Case { double deg; uint32_t bin; };
+  struct Case {
+    double deg;
+    uint32_t bin;
+  };
   for (const Case c : {Case{0, 0}, Case{50, 5}, Case{123, 12}, Case{181, 18}, Case{359, 0}, Case{-94, 27}}) {
     // map = R(yaw) query + t, so the query vertices are R(-yaw) (m - t).
     float q[3][3];
@@ -122,10 +125,10 @@ TEST_CASE("GSF similarity: a field against itself seen from a rotated frame is ~
   // The scan sees the neighbourhood rotated: map = R(50 deg) scan, so scan = R(-50 deg) map.
   const Fitted q = fit(solver, fc, nb, -50.0 * kPi / 180.0);
   const QueryFields qf{q.inputs.data(), q.alpha.data(), q.chol.data(), &q.m, fc.inducing_points};
-  const float at_yaw = filter.similarity(qf, 0, map.view, 0, 5);      // 50 deg
-  const float near_yaw = filter.similarity(qf, 0, map.view, 0, 4);    // 40 deg
-  const float quarter = filter.similarity(qf, 0, map.view, 0, 14);    // 140 deg
-  const float opposite = filter.similarity(qf, 0, map.view, 0, 23);   // 230 deg
+  const float at_yaw = filter.similarity(qf, 0, map.view, 0, 5);     // 50 deg
+  const float near_yaw = filter.similarity(qf, 0, map.view, 0, 4);   // 40 deg
+  const float quarter = filter.similarity(qf, 0, map.view, 0, 14);   // 140 deg
+  const float opposite = filter.similarity(qf, 0, map.view, 0, 23);  // 230 deg
   INFO("omega at 50 deg " << at_yaw << ", 40 deg " << near_yaw << ", 140 deg " << quarter << ", 230 deg " << opposite);
   CHECK(at_yaw > 0.99f);
   CHECK(at_yaw <= 1.0f);
@@ -175,7 +178,7 @@ TEST_CASE("GSF filter caches: hits cost nothing, full caches compute into scratc
   CHECK(b.similarity(qf, 0, map.view, 2, 9) == s_other_bin);
   CHECK(b.probes() == 2);  // one cached, one into scratch
   CHECK(b.similarity(qf, 0, map.view, 2, 9) == s_other_bin);
-  CHECK(b.comparisons() == 3);  // the similarity cache is full: not remembered
+  CHECK(b.comparisons() == 3);                       // the similarity cache is full: not remembered
   CHECK(b.similarity(qf, 0, map.view, 0, 2) == s0);  // the one remembered
   CHECK(b.comparisons() == 3);
   // reset() forgets everything.

@@ -27,18 +27,28 @@ struct Index {
   TriangleIndexView view;
   explicit Index(std::vector<Triangle> t, float bin) : tris(std::move(t)) {
     const uint32_t n = static_cast<uint32_t>(tris.size());
-    keys.resize(n + 1); scratch.resize(n + 1); offsets.resize(n + 2); entries.resize(n + 1);
+    keys.resize(n + 1);
+    scratch.resize(n + 1);
+    offsets.resize(n + 2);
+    entries.resize(n + 1);
     uint32_t kc = 0;
     build_triangle_index(tris.data(), n, bin, keys.data(), offsets.data(), entries.data(), &kc, scratch.data());
-    view.keys = keys.data(); view.offsets = offsets.data(); view.entries = entries.data();
-    view.key_count = kc; view.entry_count = n;
+    view.keys = keys.data();
+    view.offsets = offsets.data();
+    view.entries = entries.data();
+    view.key_count = kc;
+    view.entry_count = n;
   }
 };
 
 Triangle triangle_with_sides(uint32_t id0, float s0, float s1, float s2) {
   Triangle t{};
-  t.v[0] = id0; t.v[1] = id0 + 1; t.v[2] = id0 + 2;
-  t.side[0] = s0; t.side[1] = s1; t.side[2] = s2;
+  t.v[0] = id0;
+  t.v[1] = id0 + 1;
+  t.v[2] = id0 + 2;
+  t.side[0] = s0;
+  t.side[1] = s1;
+  t.side[2] = s2;
   for (int k = 0; k < 3; ++k) t.label[k] = kPole;
   return t;
 }
@@ -81,8 +91,12 @@ TEST_CASE("Tied query sides are tried in both vertex orders") {
   TriangleMatcher matcher;
   REQUIRE(matcher.bind(buf.arena, 16) == Status::Ok);
   Triangle q = triangle_with_sides(10, 5.0f, 5.04f, 8.0f);  // canonical (a, b, c)
-  q.label[0] = kPole; q.label[1] = kTrunk; q.label[2] = kPole;
-  idx.tris[0].label[0] = kPole; idx.tris[0].label[1] = kTrunk; idx.tris[0].label[2] = kPole;
+  q.label[0] = kPole;
+  q.label[1] = kTrunk;
+  q.label[2] = kPole;
+  idx.tris[0].label[0] = kPole;
+  idx.tris[0].label[1] = kTrunk;
+  idx.tris[0].label[2] = kPole;
   // Without ties only the canonical order is tried.
   TriangleMatchStats st = matcher.match(q, idx.view, idx.tris.data(), tc, 0.0f);
   CHECK(st.orders == 1);
@@ -163,8 +177,11 @@ struct LatticeLayer {
       }
     std::sort(keys.begin(), keys.end());
     cells.assign(keys.size() * T * T, kCellObserved | class_bit(kRoad));
-    view.cell = 1.0f; view.tile_cells = T; view.tile_count = static_cast<uint32_t>(keys.size());
-    view.tile_keys = keys.data(); view.cells = cells.data();
+    view.cell = 1.0f;
+    view.tile_cells = T;
+    view.tile_count = static_cast<uint32_t>(keys.size());
+    view.tile_keys = keys.data();
+    view.cells = cells.data();
     for (int c = 0; c < 8; ++c) set(8.0f * c + 0.5f, 0.5f, class_bit(kPole));
     for (float x = 26.0f; x < 28.5f; x += 1.0f)
       for (float y = 2.0f; y < 4.5f; y += 1.0f) set(x, y, class_bit(kVegetation));

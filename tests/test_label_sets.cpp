@@ -54,12 +54,14 @@ ClassTable nuscenes_without_hosts() {
 TEST_CASE("What nuScenes-lidarseg would label: poles, signs and fences are manmade, trunks vegetation") {
   ClassTable nus;
   nuscenes_lidarseg_class_table(&nus);
-  for (uint32_t kitti : {50u, 51u, 52u, 80u, 81u}) CHECK(nus.library_class(port::kitti_to_nuscenes(kitti)) == kBuilding);
+  for (uint32_t kitti : {50u, 51u, 52u, 80u, 81u})
+    CHECK(nus.library_class(port::kitti_to_nuscenes(kitti)) == kBuilding);
   for (uint32_t kitti : {70u, 71u}) CHECK(nus.library_class(port::kitti_to_nuscenes(kitti)) == kVegetation);
   CHECK(nus.library_class(port::kitti_to_nuscenes(10u | (7u << 16))) == kCar);  // instance bits ignored
   CHECK(nus.library_class(port::kitti_to_nuscenes(40)) == kRoad);
   CHECK(nus.library_class(port::kitti_to_nuscenes(72)) == kTerrain);
-  for (uint32_t kitti : {0u, 1u, 99u, 12345u}) CHECK(nus.library_class(port::kitti_to_nuscenes(kitti)) == kIgnoredClass);
+  for (uint32_t kitti : {0u, 1u, 99u, 12345u})
+    CHECK(nus.library_class(port::kitti_to_nuscenes(kitti)) == kIgnoredClass);
   // Every SemanticKITTI id gives a valid lidarseg class (the writer refuses > 31).
   for (uint32_t kitti = 0; kitti < 65536; ++kitti) REQUIRE(port::kitti_to_nuscenes(kitti) <= 31);
 }
@@ -73,7 +75,8 @@ TEST_CASE("Synthetic logits relabel in the scan's own label set") {
   std::vector<uint32_t> relabel(labels.size());
   port::LogitModel m;
   m.confusion_scale = 3.0f;  // enough confusions to see the relabelling
-  port::synthesize_logits(m, 7, labels.data(), static_cast<uint32_t>(labels.size()), logits.data(), relabel.data(), &nus);
+  port::synthesize_logits(m, 7, labels.data(), static_cast<uint32_t>(labels.size()), logits.data(), relabel.data(),
+                          &nus);
   uint32_t changed = 0;
   for (size_t i = 0; i < labels.size(); ++i) {
     const int c = nus.library_class(relabel[i]);
@@ -93,7 +96,8 @@ TEST_CASE("A nuScenes-labelled world localizes through geometric poles and trunk
   REQUIRE(w.bytes > 0);
   // The map holds geometric poles / trunks (the labels have none) and records them as instance labels.
   CHECK(w.build_stats.pole_instances > 0);
-  CHECK(w.build_stats.instances_by_class[kPole] + w.build_stats.instances_by_class[kTrunk] == w.build_stats.pole_instances);
+  CHECK(w.build_stats.instances_by_class[kPole] + w.build_stats.instances_by_class[kTrunk] ==
+        w.build_stats.pole_instances);
   CHECK((w.map.params.instance_class_mask & class_bit(kPole)) != 0);
   CHECK((w.map.params.instance_class_mask & class_bit(kTrafficSign)) == 0);
 
@@ -143,7 +147,8 @@ TEST_CASE("A map of one label set refuses a localizer of another, and the budget
   CHECK(b.poles >= PoleExtraction::required_bytes(effective_pole_config(w.config), w.config.voxel.max_voxels));
   CHECK(b.total == Localizer::required_bytes(w.config));
   CHECK(b.voxel + b.cluster + b.poles + b.field + b.triangle + b.match + b.gsf_cache + b.correspondence + b.clique +
-            b.refine + b.other == b.total);
+            b.refine + b.other ==
+        b.total);
   // init copies the table: the localizer keeps working after the caller's table is gone.
   ClassTable* temp = new ClassTable(w.classes);
   LocalizerConfig cfg = w.config;

@@ -56,12 +56,13 @@ TEST_CASE("Tiny lattice: verification localizes lattice queries the maximum cliq
                             << ", gsf " << verified_gsf.zone_ok);
   REQUIRE(paper_instance.zone >= 8);
   // Measured (instance / gsf, of 10): x86-64 3 / 5 with the paper's pipeline, 8 / 5 with hypotheses
-  // and verification; ARM64 4 / 4 and 7 / 7. Ten queries are few, and the last bits of floating point differ between the
-  // ISAs, so the bars are on what holds on both: verification adds successes in both modes together
-  // and its better mode localizes most of the zone.
+  // and verification; ARM64 4 / 4 and 7 / 7. Ten queries are few, and the last bits of floating point differ between
+  // the ISAs, so the bars are on what holds on both: verification adds successes in both modes together and its better
+  // mode localizes most of the zone.
   const int paper = paper_instance.zone_ok + paper_gsf.zone_ok;
   const int verified = verified_instance.zone_ok + verified_gsf.zone_ok;
   CHECK(verified >= paper + 3);
   CHECK(std::max(verified_instance.zone_ok, verified_gsf.zone_ok) * 10 >= paper_instance.zone * 6);
-  CHECK(std::max(verified_instance.zone_ok, verified_gsf.zone_ok) > std::max(paper_instance.zone_ok, paper_gsf.zone_ok));
+  CHECK(std::max(verified_instance.zone_ok, verified_gsf.zone_ok) >
+        std::max(paper_instance.zone_ok, paper_gsf.zone_ok));
 }

@@ -75,8 +75,8 @@ void run_gsf_vs_instance(const LocalizerConfig& cfg, bool paper) {
     }
   }
   const int n = static_cast<int>(w.queries.size());
-  INFO("GSF " << ok_gsf << "/" << n << " (zone " << zone_gsf << "/" << zone << "), instance-only " << ok_inst << "/" << n
-              << " (zone " << zone_inst << "/" << zone << ")");
+  INFO("GSF " << ok_gsf << "/" << n << " (zone " << zone_gsf << "/" << zone << "), instance-only " << ok_inst << "/"
+              << n << " (zone " << zone_inst << "/" << zone << ")");
   CHECK(ok_gsf >= n * 6 / 10);
   CHECK(zone >= 4);
   CHECK(zone_gsf >= zone * 3 / 4);
@@ -102,7 +102,8 @@ TEST_CASE("A rigidly transformed scan gives the correspondingly transformed pose
     const auto& q = w.queries[k];
     LocalizeResult r1;
     // Well-constrained queries only: with few inliers an unrefined pose carries degrees of error.
-    if (loc.localize(q.view(), &r1) != Status::Ok || !gsf_test::pose_ok(r1.map_T_scan, q.truth) || r1.inliers < 7) continue;
+    if (loc.localize(q.view(), &r1) != Status::Ok || !gsf_test::pose_ok(r1.map_T_scan, q.truth) || r1.inliers < 7)
+      continue;
     // Points p' = S p: the same place seen by a sensor moved by S^-1, so the pose becomes T S^-1.
     Eigen::Isometry3d S = Eigen::Isometry3d::Identity();
     S.linear() = Eigen::AngleAxisd(0.8, Eigen::Vector3d::UnitZ()).toRotationMatrix();
@@ -169,7 +170,9 @@ TEST_CASE("Hostile input gets a status and the localizer stays usable") {
   CHECK(loc.localize(huge.view(), &r) == Status::InvalidInput);
   gsf_test::QueryScan one_voxel = w.queries[0];
   for (size_t i = 0; i < one_voxel.labels.size(); ++i) {
-    one_voxel.xyzi[4 * i] = 5.0f; one_voxel.xyzi[4 * i + 1] = 5.0f; one_voxel.xyzi[4 * i + 2] = 0.1f;
+    one_voxel.xyzi[4 * i] = 5.0f;
+    one_voxel.xyzi[4 * i + 1] = 5.0f;
+    one_voxel.xyzi[4 * i + 2] = 0.1f;
     one_voxel.labels[i] = 80;
   }
   CHECK(loc.localize(one_voxel.view(), &r) == Status::NoSolution);
@@ -271,8 +274,8 @@ TEST_CASE("The per-stage budget is the layout itself: its parts sum to required_
     LocalizerConfig cfg = tiny_world().config;
     cfg.refine.enabled = refine;
     const Localizer::Budget b = Localizer::budget(cfg);
-    const size_t parts = b.voxel + b.cluster + b.poles + b.field + b.triangle + b.match + b.gsf_cache + b.correspondence +
-                         b.clique + b.refine;
+    const size_t parts = b.voxel + b.cluster + b.poles + b.field + b.triangle + b.match + b.gsf_cache +
+                         b.correspondence + b.clique + b.refine;
     INFO("refine " << refine << ": parts " << parts << ", other " << b.other << ", total " << b.total);
     CHECK(b.total == Localizer::required_bytes(cfg));
     CHECK(parts + b.other == b.total);

@@ -32,7 +32,9 @@ TEST_CASE("localize() never allocates after init") {
 // a nuScenes-labelled world (class-table lookups, geometric pole extraction).
 TEST_CASE("localize() never allocates after init with refinement on, on a lattice, nor with geometric poles") {
   for (int which = 0; which < 3; ++which) {
-    const auto& w = which == 0 ? gsf_test::tiny_world() : which == 1 ? gsf_test::tiny_lattice_world() : gsf_test::tiny_nuscenes_world();
+    const auto& w = which == 0   ? gsf_test::tiny_world()
+                    : which == 1 ? gsf_test::tiny_lattice_world()
+                                 : gsf_test::tiny_nuscenes_world();
     LocalizerConfig cfg = w.config;
     cfg.refine.enabled = which == 0;
     cfg.refine.max_map_points = w.map.counts.refine_points + 1;
@@ -52,8 +54,10 @@ TEST_CASE("localize() never allocates after init with refinement on, on a lattic
         ++calls;
       }
     const uint64_t allocations = scope.allocations();  // before INFO, which allocates its message
-    INFO((which == 0 ? "tiny world, refinement" : which == 1 ? "tiny lattice" : "tiny nuScenes-labelled world") << ": "
-         << ok << " of " << calls << " answered");
+    INFO((which == 0   ? "tiny world, refinement"
+          : which == 1 ? "tiny lattice"
+                       : "tiny nuScenes-labelled world")
+         << ": " << ok << " of " << calls << " answered");
     CHECK(allocations == 0);
     CHECK(ok * 2 > calls);
     if (which == 0) CHECK(refined > 0);

@@ -117,7 +117,8 @@ TEST_CASE("A given origin and frame are recorded and the sections are relative t
   const Eigen::Vector3d first = drive().scans[0].truth.translation();
   double nearest = 1e9;
   for (uint32_t i = 0; i < a.map.counts.instances; ++i)
-    nearest = std::min(nearest, std::hypot(a.map.instances[i].centroid[0] - first.x(), a.map.instances[i].centroid[1] - first.y()));
+    nearest = std::min(
+        nearest, std::hypot(a.map.instances[i].centroid[0] - first.x(), a.map.instances[i].centroid[1] - first.y()));
   CHECK(nearest < 40.0);  // the map is around the drive, not 5,000 km away
 }
 
@@ -159,6 +160,7 @@ TEST_CASE("The builder's capacities are options: what they cut is counted, the r
   for (uint32_t i = 0; i < cut.map.counts.instances; ++i)
     smallest_kept = std::min(smallest_kept, cut.map.instances[i].point_count);
   uint32_t larger_in_full = 0;
-  for (uint32_t i = 0; i < full.map.counts.instances; ++i) larger_in_full += full.map.instances[i].point_count > smallest_kept;
+  for (uint32_t i = 0; i < full.map.counts.instances; ++i)
+    larger_in_full += full.map.instances[i].point_count > smallest_kept;
   CHECK(larger_in_full <= 5);
 }

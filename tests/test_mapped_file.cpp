@@ -66,7 +66,8 @@ TEST_CASE("Missing, empty and non-regular files: IoError, or an empty buffer loa
 
 TEST_CASE("Reopening replaces the contents; closing empties") {
   const char a[] = "first file", b[] = "the second, longer file";
-  const std::string pa = write_tmp("mapped_file_a.bin", a, sizeof(a)), pb = write_tmp("mapped_file_b.bin", b, sizeof(b));
+  const std::string pa = write_tmp("mapped_file_a.bin", a, sizeof(a)),
+                    pb = write_tmp("mapped_file_b.bin", b, sizeof(b));
   port::MappedFile f;
   REQUIRE(f.open(pa) == Status::Ok);
   CHECK(f.size() == sizeof(a));

@@ -20,9 +20,9 @@
 #include "arena_buffer.h"
 #include "gsf/detail/instance_clustering.h"
 #include "gsf/detail/pole_extraction.h"
+#include "gsf/detail/voxel_layer.h"
 #include "gsf/port/nuscenes.h"
 #include "gsf/port/scan_buffer.h"
-#include "gsf/detail/voxel_layer.h"
 #include "test_cloud.h"
 
 using namespace gsf;
@@ -99,12 +99,12 @@ TEST_CASE("A pole among a wall and a bush is extracted, and only the pole") {
   Cloud c;
   std::mt19937 rng(7);
   ground(c, 15.0f);
-  cylinder(c, 5.0f, 3.0f, -1.7f, 5.0f, 0.12f, kManmade);            // the pole
-  wall(c, -6.0f, -8.0f, 8.0f, -1.7f, 2.5f, kManmade);               // a building wall
-  wall(c, 8.0f, -9.0f, -3.0f, -1.7f, 4.0f, kManmade);               // another, ending in a corner
+  cylinder(c, 5.0f, 3.0f, -1.7f, 5.0f, 0.12f, kManmade);  // the pole
+  wall(c, -6.0f, -8.0f, 8.0f, -1.7f, 2.5f, kManmade);     // a building wall
+  wall(c, 8.0f, -9.0f, -3.0f, -1.7f, 4.0f, kManmade);     // another, ending in a corner
   wall(c, 8.0f, -3.0f, -3.0f, -1.7f, 4.0f, kManmade);
-  blob(c, rng, 2.0f, -6.0f, -0.9f, 1.3f, 4000, kVeg);               // a bush
-  blob(c, rng, -2.0f, 7.0f, -1.0f, 0.4f, 300, kVeg);                // a small shrub (thin but low)
+  blob(c, rng, 2.0f, -6.0f, -0.9f, 1.3f, 4000, kVeg);  // a bush
+  blob(c, rng, -2.0f, 7.0f, -1.0f, 0.4f, 300, kVeg);   // a small shrub (thin but low)
   Pipeline p(near_config(), PoleConfig());
   REQUIRE(p.run(c.view()) == Status::Ok);
   INFO("segments " << p.ps.segments << " wide " << p.ps.segments_wide << " crowded " << p.ps.segments_crowded
@@ -139,8 +139,8 @@ TEST_CASE("A trunk under its canopy is a trunk; a pole 0.7 m in front of a wall 
   Cloud c;
   std::mt19937 rng(11);
   ground(c, 15.0f);
-  cylinder(c, -4.0f, 4.0f, -1.7f, 3.2f, 0.25f, kVeg);     // trunk
-  blob(c, rng, -4.0f, 4.0f, 3.0f, 2.2f, 8000, kVeg);      // canopy
+  cylinder(c, -4.0f, 4.0f, -1.7f, 3.2f, 0.25f, kVeg);  // trunk
+  blob(c, rng, -4.0f, 4.0f, 3.0f, 2.2f, 8000, kVeg);   // canopy
   wall(c, 6.1f, -8.0f, 8.0f, -1.7f, 3.0f, kManmade);
   cylinder(c, 5.4f, 0.0f, -1.7f, 5.0f, 0.12f, kManmade);  // pole 0.7 m in front of the wall
   Pipeline p(near_config(), PoleConfig());
@@ -234,8 +234,8 @@ TEST_CASE("A rigid motion of the scene moves the extracted instances with it") {
   std::mt19937 rng(5);
   ground(c, 20.0f);
   const float spots[5][2] = {{-8, 3}, {-3, -6}, {4, 7}, {9, -2}, {1, 1}};
-  for (int k = 0; k < 5; ++k) cylinder(c, spots[k][0], spots[k][1], -1.7f, 3.0f + 0.5f * k, 0.08f + 0.04f * k,
-                                       k % 2 ? kVeg : kManmade);
+  for (int k = 0; k < 5; ++k)
+    cylinder(c, spots[k][0], spots[k][1], -1.7f, 3.0f + 0.5f * k, 0.08f + 0.04f * k, k % 2 ? kVeg : kManmade);
   wall(c, -14.0f, -10.0f, 10.0f, -1.7f, 3.0f, kManmade);
   blob(c, rng, 6.0f, -9.0f, -0.8f, 1.5f, 4000, kVeg);
   Pipeline p(near_config(), PoleConfig());
@@ -255,13 +255,16 @@ TEST_CASE("A rigid motion of the scene moves the extracted instances with it") {
     INFO("yaw " << yaw);
     REQUIRE(p.poles.size() == base.size());
     for (const Instance& b : base) {
-      const float moved[3] = {cs * b.centroid[0] - sn * b.centroid[1] + tx, sn * b.centroid[0] + cs * b.centroid[1] + ty,
-                              b.centroid[2] + tz};
+      const float moved[3] = {cs * b.centroid[0] - sn * b.centroid[1] + tx,
+                              sn * b.centroid[0] + cs * b.centroid[1] + ty, b.centroid[2] + tz};
       float best = 1e9f;
       uint8_t label = 255;
       for (uint32_t k = 0; k < p.poles.size(); ++k) {
         const float d = hdist(p.poles.instance(k).centroid, moved);
-        if (d < best) { best = d; label = p.poles.instance(k).label; }
+        if (d < best) {
+          best = d;
+          label = p.poles.instance(k).label;
+        }
       }
       CHECK(best < 0.1f);
       CHECK(label == b.label);
@@ -290,17 +293,39 @@ TEST_CASE("Pole extraction validates bind and build arguments; required_bytes is
   };
   PoleConfig c = pc;
   CHECK(bad(c, 0));
-  c.max_instances = 0; CHECK(bad(c)); c = pc;
-  c.trunk_hosts |= c.pole_hosts; CHECK(bad(c)); c = pc;
-  c.max_diameter[1] = 0.0f; CHECK(bad(c)); c = pc;
-  c.max_diameter[0] = NAN; CHECK(bad(c)); c = pc;
-  c.min_height[0] = -1.0f; CHECK(bad(c)); c = pc;
-  c.max_tilt_deg = 0.0f; CHECK(bad(c)); c = pc;
-  c.max_tilt_deg = 90.0f; CHECK(bad(c)); c = pc;
-  c.link_radius = 0.0f; CHECK(bad(c)); c = pc;
-  c.ring_width = -0.1f; CHECK(bad(c)); c = pc;
-  c.max_gap = INFINITY; CHECK(bad(c)); c = pc;
-  c.stability[0] = 1.5f; CHECK(bad(c)); c = pc;
+  c.max_instances = 0;
+  CHECK(bad(c));
+  c = pc;
+  c.trunk_hosts |= c.pole_hosts;
+  CHECK(bad(c));
+  c = pc;
+  c.max_diameter[1] = 0.0f;
+  CHECK(bad(c));
+  c = pc;
+  c.max_diameter[0] = NAN;
+  CHECK(bad(c));
+  c = pc;
+  c.min_height[0] = -1.0f;
+  CHECK(bad(c));
+  c = pc;
+  c.max_tilt_deg = 0.0f;
+  CHECK(bad(c));
+  c = pc;
+  c.max_tilt_deg = 90.0f;
+  CHECK(bad(c));
+  c = pc;
+  c.link_radius = 0.0f;
+  CHECK(bad(c));
+  c = pc;
+  c.ring_width = -0.1f;
+  CHECK(bad(c));
+  c = pc;
+  c.max_gap = INFINITY;
+  CHECK(bad(c));
+  c = pc;
+  c.stability[0] = 1.5f;
+  CHECK(bad(c));
+  c = pc;
 
   Cloud s;
   ground(s, 10.0f);
@@ -413,7 +438,10 @@ KittiScore score_kitti(const Cloud& c, bool signs_and_fences, const PoleConfig& 
     uint8_t label = 0;
     for (uint32_t g = 0; g < gt.size(); ++g) {
       const float d = hdist(p.poles.instance(k).centroid, gt.instance(g).centroid);
-      if (d < best) { best = d; label = gt.instance(g).label; }
+      if (d < best) {
+        best = d;
+        label = gt.instance(g).label;
+      }
     }
     if (best <= 1.0f) {
       ++s.correct;
@@ -424,7 +452,10 @@ KittiScore score_kitti(const Cloud& c, bool signs_and_fences, const PoleConfig& 
     if (gt.instance(g).extent[2] < 2.0f) continue;
     ++s.gt_tall;
     for (uint32_t k = 0; k < p.poles.size(); ++k)
-      if (hdist(p.poles.instance(k).centroid, gt.instance(g).centroid) <= 1.0f) { ++s.found_tall; break; }
+      if (hdist(p.poles.instance(k).centroid, gt.instance(g).centroid) <= 1.0f) {
+        ++s.found_tall;
+        break;
+      }
   }
   return s;
 }
@@ -448,18 +479,26 @@ TEST_CASE("Real SemanticKITTI: extraction from relabelled hosts against the true
       Cloud c;
       REQUIRE(read_kitti(root + f, &c));
       const KittiScore s = score_kitti(c, signs_and_fences, PoleConfig());
-      std::printf("%s %s: extracted %u, within 1 m of a true pole/trunk %u (label right %u); true %u, >= 2 m tall %u, "
-                  "found %u\n", signs_and_fences ? "[+sign,fence,other-structure]" : "[pole,trunk only]", f,
-                  s.extracted, s.correct, s.kind_right, s.gt, s.gt_tall, s.found_tall);
-      total.extracted += s.extracted; total.correct += s.correct; total.gt += s.gt;
-      total.gt_tall += s.gt_tall; total.found_tall += s.found_tall; total.kind_right += s.kind_right;
+      std::printf(
+          "%s %s: extracted %u, within 1 m of a true pole/trunk %u (label right %u); true %u, >= 2 m tall %u, "
+          "found %u\n",
+          signs_and_fences ? "[+sign,fence,other-structure]" : "[pole,trunk only]", f, s.extracted, s.correct,
+          s.kind_right, s.gt, s.gt_tall, s.found_tall);
+      total.extracted += s.extracted;
+      total.correct += s.correct;
+      total.gt += s.gt;
+      total.gt_tall += s.gt_tall;
+      total.found_tall += s.found_tall;
+      total.kind_right += s.kind_right;
     }
     const double precision = double(total.correct) / std::max(1u, total.extracted);
     const double recall = double(total.found_tall) / std::max(1u, total.gt_tall);
-    WARN("SemanticKITTI, 10 scans, " << (signs_and_fences ? "signs/fences/other-structure also manmade" : "pole->building only")
-         << ": extracted " << total.extracted << ", correct " << total.correct << " (precision " << precision
-         << "), tall true " << total.gt_tall << ", found " << total.found_tall << " (recall " << recall
-         << "), label right " << total.kind_right);
+    WARN("SemanticKITTI, 10 scans, " << (signs_and_fences ? "signs/fences/other-structure also manmade"
+                                                          : "pole->building only")
+                                     << ": extracted " << total.extracted << ", correct " << total.correct
+                                     << " (precision " << precision << "), tall true " << total.gt_tall << ", found "
+                                     << total.found_tall << " (recall " << recall << "), label right "
+                                     << total.kind_right);
     // Measured (docs/pole-extraction.md): 69 extracted, precision 0.86, recall 0.66 (pole/trunk only);
     // 62 extracted, precision 0.84, recall 0.49 (signs, fences, other-structure also manmade).
     CHECK(precision >= 0.75);
@@ -483,7 +522,7 @@ struct SceneResult {
   double path_m = 0;
   uint32_t scans = 0, scan_instances = 0, scan_instances_in_map = 0, map_voxels = 0;
   uint32_t near_scan_instances = 0, near_scan_instances_in_map = 0;  // within 30 m of the sensor
-  uint32_t map_near_path = 0;                                         // map instances within 20 m of the path
+  uint32_t map_near_path = 0;                                        // map instances within 20 m of the path
 };
 
 bool run_scene(const std::string& root, const char* scene, SceneResult* out) {
@@ -543,7 +582,10 @@ bool run_scene(const std::string& root, const char* scene, SceneResult* out) {
     for (const auto& w : s) {
       bool found = false;
       for (const auto& m : out->map_instances)
-        if (std::hypot(w[0] - m[0], w[1] - m[1]) <= 1.0f) { found = true; break; }
+        if (std::hypot(w[0] - m[0], w[1] - m[1]) <= 1.0f) {
+          found = true;
+          break;
+        }
       ++out->scan_instances;
       out->scan_instances_in_map += found;
       if (w[3] <= 30.0f) {
@@ -577,14 +619,15 @@ TEST_CASE("Real nuScenes-lidarseg: poles and trunks from static.manmade and stat
     const double near100 = 100.0 * r.map_near_path / r.path_m;
     const double consistent = double(r.scan_instances_in_map) / std::max(1u, r.scan_instances);
     const double near_consistent = double(r.near_scan_instances_in_map) / std::max(1u, r.near_scan_instances);
-    std::printf("nuScenes scene %s: %u scans, %.1f m path; per scan %.1f instances (%.1f within 30 m); map of %u "
-                "voxels: %zu instances (%u poles, %zu trunks) = %.1f per 100 m, %u within 20 m of the path = %.1f per "
-                "100 m; single-scan instances with a map instance within 1 m: %u of %u (%.2f), within 30 m: %u of %u "
-                "(%.2f)\n",
-                scene, r.scans, r.path_m, double(r.scan_instances) / r.scans, double(r.near_scan_instances) / r.scans,
-                r.map_voxels, r.map_instances.size(), poles, r.map_instances.size() - poles, per100, r.map_near_path,
-                near100, r.scan_instances_in_map, r.scan_instances, consistent, r.near_scan_instances_in_map,
-                r.near_scan_instances, near_consistent);
+    std::printf(
+        "nuScenes scene %s: %u scans, %.1f m path; per scan %.1f instances (%.1f within 30 m); map of %u "
+        "voxels: %zu instances (%u poles, %zu trunks) = %.1f per 100 m, %u within 20 m of the path = %.1f per "
+        "100 m; single-scan instances with a map instance within 1 m: %u of %u (%.2f), within 30 m: %u of %u "
+        "(%.2f)\n",
+        scene, r.scans, r.path_m, double(r.scan_instances) / r.scans, double(r.near_scan_instances) / r.scans,
+        r.map_voxels, r.map_instances.size(), poles, r.map_instances.size() - poles, per100, r.map_near_path, near100,
+        r.scan_instances_in_map, r.scan_instances, consistent, r.near_scan_instances_in_map, r.near_scan_instances,
+        near_consistent);
     // Measured (docs/pole-extraction.md): 15.8-19.9 per scan (9.2-11.2 within 30 m), 117-150 per 100 m
     // (21-36 within 20 m of the path), consistency 0.48-0.58 (0.48-0.65 within 30 m).
     CHECK(double(r.near_scan_instances) / r.scans >= 5.0);
@@ -605,12 +648,15 @@ TEST_CASE("Real nuScenes-lidarseg: poles and trunks from static.manmade and stat
     if (closest > 20.0) continue;
     ++near;
     for (const auto& o : b.map_instances)
-      if (std::hypot(m[0] - o[0], m[1] - o[1]) <= 1.0f) { ++again; break; }
+      if (std::hypot(m[0] - o[0], m[1] - o[1]) <= 1.0f) {
+        ++again;
+        break;
+      }
   }
   std::printf("nuScenes 0002 map instances within 20 m of 0004's path: %u, of which in 0004's map within 1 m: %u\n",
               near, again);
   WARN("nuScenes 0002 vs 0004 maps: " << near << " instances of 0002 near 0004's path, " << again
-       << " found again within 1 m");
+                                      << " found again within 1 m");
   // Measured: 26 near, 16 found again (0.62).
   CHECK(near >= 10);
   CHECK(again * 2 >= near);

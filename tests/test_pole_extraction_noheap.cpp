@@ -12,9 +12,9 @@
 #include "alloc_counter.h"
 #include "arena_buffer.h"
 #include "gsf/detail/pole_extraction.h"
+#include "gsf/detail/voxel_layer.h"
 #include "gsf/port/nuscenes.h"
 #include "gsf/port/scan_buffer.h"
-#include "gsf/detail/voxel_layer.h"
 #include "test_cloud.h"
 
 using namespace gsf;

@@ -71,11 +71,11 @@ TEST_CASE("Malformed files give a status, count 0, and the source stays usable")
   const uint32_t labels[2] = {40, 40};
   for (uint32_t f = 0; f < 6; ++f) REQUIRE(w.write_scan(f, pts, labels, nullptr, 2) == Status::Ok);
   const fs::path dir = fs::path(root) / "sequences" / "00";
-  write_bytes(dir / "velodyne" / "000001.bin", std::string(20, '\0'));           // not a multiple of 16
-  write_bytes(dir / "labels" / "000002.label", std::string(4, '\0'));            // 1 label for 2 points
-  fs::remove(dir / "labels" / "000003.label");                                   // missing labels
+  write_bytes(dir / "velodyne" / "000001.bin", std::string(20, '\0'));  // not a multiple of 16
+  write_bytes(dir / "labels" / "000002.label", std::string(4, '\0'));   // 1 label for 2 points
+  fs::remove(dir / "labels" / "000003.label");                          // missing labels
   const float nan_pts[8] = {5, 0, 0, 0, std::nanf(""), 0, 0, 0};
-  REQUIRE(w.write_scan(4, nan_pts, labels, nullptr, 2) == Status::Ok);           // NaN point
+  REQUIRE(w.write_scan(4, nan_pts, labels, nullptr, 2) == Status::Ok);  // NaN point
   SemanticKittiSource src;
   REQUIRE(src.open(root, "00") == Status::Ok);
   OwnedScanBuffer buf(16, false);
@@ -147,7 +147,8 @@ TEST_CASE("Real SemanticKITTI samples: counts, labels and revisit poses") {
       REQUIRE(src.read(i, buf.buffer()) == Status::Ok);
       CHECK(buf.buffer().count >= 120067u);
       CHECK(buf.buffer().count <= 126661u);
-      for (uint32_t k = 0; k < buf.buffer().count; k += 97) CHECK(class_from_kitti(buf.buffer().labels[k]) != kUnknownClass);
+      for (uint32_t k = 0; k < buf.buffer().count; k += 97)
+        CHECK(class_from_kitti(buf.buffer().labels[k]) != kUnknownClass);
       Eigen::Isometry3d p;
       CHECK(src.pose(i, &p) == Status::Ok);
       ++scans;

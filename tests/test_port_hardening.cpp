@@ -95,12 +95,20 @@ TEST_CASE("Every logits defect is CorruptData (or InvalidInput for NaN), count 0
   const std::vector<char> good = read_bytes(file);
   REQUIRE(good.size() == 12 + logits.size() * 4);
 
-  struct Case { const char* what; std::vector<char> bytes; Status expected; };
+  struct Case {
+    const char* what;
+    std::vector<char> bytes;
+    Status expected;
+  };
   std::vector<Case> cases;
   cases.push_back({"empty file", {}, Status::CorruptData});
   cases.push_back({"truncated header", std::vector<char>(good.begin(), good.begin() + 8), Status::CorruptData});
   cases.push_back({"header only", std::vector<char>(good.begin(), good.begin() + 12), Status::CorruptData});
-  auto patched = [&](size_t at, char v) { std::vector<char> b = good; b[at] = v; return b; };
+  auto patched = [&](size_t at, char v) {
+    std::vector<char> b = good;
+    b[at] = v;
+    return b;
+  };
   cases.push_back({"bad magic", patched(3, 'X'), Status::CorruptData});
   cases.push_back({"version 2", patched(4, 2), Status::CorruptData});
   cases.push_back({"D = 18", patched(6, 18), Status::CorruptData});
@@ -134,8 +142,9 @@ TEST_CASE("Every logits defect is CorruptData (or InvalidInput for NaN), count 0
   for (const Case& c : cases) {
     INFO("parse_scan: " << c.what);
     const char dummy = 0;
-    CHECK(parse_scan(kTwoPoints, sizeof(kTwoPoints), kTwoLabels, sizeof(kTwoLabels), c.bytes.empty() ? &dummy : c.bytes.data(),
-                     c.bytes.size(), KittiReadOptions{}, buf.buffer()) == c.expected);
+    CHECK(parse_scan(kTwoPoints, sizeof(kTwoPoints), kTwoLabels, sizeof(kTwoLabels),
+                     c.bytes.empty() ? &dummy : c.bytes.data(), c.bytes.size(), KittiReadOptions{},
+                     buf.buffer()) == c.expected);
     CHECK(buf.buffer().count == 0);
   }
   // A NaN logit is a non-finite point: drop_non_finite removes that point only.
@@ -402,7 +411,7 @@ TEST_CASE("nuScenes: mapping, ego drop, capacity after the drop, and every rejec
   CHECK(small.buffer().count == 0);
   CHECK(src.read(1, buf.buffer()) == Status::CorruptData);  // class 32, in the last chunk
   CHECK(buf.buffer().count == 0);
-  CHECK(src.read(2, buf.buffer()) == Status::CorruptData);  // one label short
+  CHECK(src.read(2, buf.buffer()) == Status::CorruptData);   // one label short
   CHECK(src.read(3, buf.buffer()) == Status::InvalidInput);  // NaN intensity
   CHECK(buf.buffer().count == 0);
   CHECK(src.read(4, buf.buffer()) == Status::CorruptData);  // .bin not a multiple of 16
@@ -456,7 +465,8 @@ TEST_CASE("Real SemanticKITTI: every revisit and negative pair's T_gt, every lab
     REQUIRE(src.open(root, seq) == Status::Ok);
     for (uint32_t i = 0; i < src.size(); ++i) {
       REQUIRE(src.read(i, buf.buffer()) == Status::Ok);
-      for (uint32_t k = 0; k < buf.buffer().count; ++k) unknown += class_from_kitti(buf.buffer().labels[k]) == kUnknownClass;
+      for (uint32_t k = 0; k < buf.buffer().count; ++k)
+        unknown += class_from_kitti(buf.buffer().labels[k]) == kUnknownClass;
       points += buf.buffer().count;
     }
   }

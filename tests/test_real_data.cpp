@@ -6,8 +6,8 @@
 
 #include <filesystem>
 
-#include "gsf/localizer.h"
 #include "gsf/class_table.h"
+#include "gsf/localizer.h"
 #include "gsf/port/logit_synthesis.h"
 #include "gsf/port/nuscenes.h"
 #include "gsf/port/semantic_kitti.h"
@@ -37,7 +37,8 @@ Outcome localize_revisit(const char* seq, std::initializer_list<uint32_t> map_fr
   port::LogitModel model;
   auto read = [&](uint32_t i, uint64_t id) {
     REQUIRE(src.read(i, buf.buffer()) == Status::Ok);
-    port::synthesize_logits(model, id, buf.buffer().labels, buf.buffer().count, buf.buffer().logits, buf.buffer().labels);
+    port::synthesize_logits(model, id, buf.buffer().labels, buf.buffer().count, buf.buffer().logits,
+                            buf.buffer().labels);
     buf.buffer().has_logits = true;
   };
   int query_index = -1;
@@ -164,7 +165,8 @@ NuScenesRun localize_nuscenes(const std::string& root, const char* map_seq, cons
     LocalizeResult r;
     const bool ok = loc.localize(buf.buffer().view(), &r) == Status::Ok;
     const Eigen::Isometry3d d = r.map_frame_T_scan.inverse() * truth;  // nuScenes poses are the map's frame
-    const bool right = ok && d.translation().norm() < 5.0 && Eigen::AngleAxisd(d.rotation()).angle() < 10.0 * M_PI / 180.0;
+    const bool right =
+        ok && d.translation().norm() < 5.0 && Eigen::AngleAxisd(d.rotation()).angle() < 10.0 * M_PI / 180.0;
     const bool answered = ok && r.ambiguity <= 0.5;
     double nearest = 1e9;
     for (const auto& p : drive) nearest = std::min(nearest, (p - truth.translation()).head<2>().norm());
@@ -188,14 +190,15 @@ TEST_CASE("Real nuScenes-lidarseg: the opposite-direction revisit localizes, the
     return;
   }
   const NuScenesRun fwd = localize_nuscenes(root, "0004", "0002");
-  INFO("map 0004, queries 0002: " << fwd.correct_pose << " correct poses of " << fwd.overlap << " overlapping; answered "
-       << fwd.answered_right << " right, " << fwd.answered_wrong << " wrong of " << fwd.queries);
+  INFO("map 0004, queries 0002: " << fwd.correct_pose << " correct poses of " << fwd.overlap
+                                  << " overlapping; answered " << fwd.answered_right << " right, " << fwd.answered_wrong
+                                  << " wrong of " << fwd.queries);
   CHECK(fwd.overlap >= 13);
   CHECK(fwd.correct_pose >= 6);
   CHECK(fwd.answered_wrong == 0);
   const NuScenesRun distractor = localize_nuscenes(root, "0001", "0002");
   INFO("map 0001, queries 0002: answered " << distractor.answered_right + distractor.answered_wrong << " of "
-       << distractor.queries);
+                                           << distractor.queries);
   CHECK(distractor.overlap == 0);
   CHECK(distractor.answered_wrong == 0);
 }

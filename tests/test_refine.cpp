@@ -8,8 +8,8 @@
 
 #include "arena_buffer.h"
 #include "gsf/detail/refine.h"
-#include "gsf/semantic_classes.h"
 #include "gsf/detail/voxel_layer.h"
+#include "gsf/semantic_classes.h"
 #include "test_cloud.h"
 
 using namespace gsf;
@@ -74,7 +74,9 @@ Eigen::Isometry3d perturbed(const Eigen::Isometry3d& truth) {
   return truth * d;
 }
 
-double metres(const Eigen::Isometry3d& a, const Eigen::Isometry3d& b) { return (a.translation() - b.translation()).norm(); }
+double metres(const Eigen::Isometry3d& a, const Eigen::Isometry3d& b) {
+  return (a.translation() - b.translation()).norm();
+}
 double degrees(const Eigen::Isometry3d& a, const Eigen::Isometry3d& b) {
   return Eigen::AngleAxisd(a.linear().transpose() * b.linear()).angle() * 180.0 / M_PI;
 }

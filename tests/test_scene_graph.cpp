@@ -2,18 +2,18 @@
 // invariance, and a real SemanticKITTI scan.
 #include <catch2/catch.hpp>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <cstring>
 #include <fstream>
 #include <random>
 #include <vector>
-#include <algorithm>
 
+#include "arena_buffer.h"
 #include "gsf/detail/instance_clustering.h"
 #include "gsf/detail/voxel_layer.h"
 #include "test_cloud.h"
-#include "arena_buffer.h"
 
 using namespace gsf;
 
@@ -64,9 +64,18 @@ TEST_CASE("Voxel layer + clustering recover the synthetic objects") {
   int seen = 0;
   for (uint32_t i = 0; i < clusters.size(); ++i) {
     const Instance& in = clusters.instance(i);
-    if (in.label == kPole) { CHECK(std::hypot(in.centroid[0] - 10, in.centroid[1]) < 0.1f); seen |= 1; }
-    if (in.label == kTrunk) { CHECK(std::hypot(in.centroid[0], in.centroid[1] - 12) < 0.1f); seen |= 2; }
-    if (in.label == kCar) { CHECK(std::hypot(in.centroid[0] + 10, in.centroid[1] + 5.1f) < 0.3f); seen |= 4; }
+    if (in.label == kPole) {
+      CHECK(std::hypot(in.centroid[0] - 10, in.centroid[1]) < 0.1f);
+      seen |= 1;
+    }
+    if (in.label == kTrunk) {
+      CHECK(std::hypot(in.centroid[0], in.centroid[1] - 12) < 0.1f);
+      seen |= 2;
+    }
+    if (in.label == kCar) {
+      CHECK(std::hypot(in.centroid[0] + 10, in.centroid[1] + 5.1f) < 0.3f);
+      seen |= 4;
+    }
     CHECK(in.stability == stability_weight(in.label));
   }
   CHECK(seen == 7);
@@ -115,10 +124,10 @@ TEST_CASE("Bad points are counted and skipped; empty scans and bad views are rej
   c.add(5, 0, 0, 80);
   c.add(std::nanf(""), 0, 0, 80);
   c.add(INFINITY, 1, 0, 80);
-  c.add(0.5f, 0, 0, 80);      // inside min_range
-  c.add(500, 0, 0, 80);       // beyond max_range
-  c.add(6, 0, 0, 12345);      // unknown label id
-  c.add(7, 0, 0, 0);          // unlabeled: ignored
+  c.add(0.5f, 0, 0, 80);  // inside min_range
+  c.add(500, 0, 0, 80);   // beyond max_range
+  c.add(6, 0, 0, 12345);  // unknown label id
+  c.add(7, 0, 0, 0);      // unlabeled: ignored
   VoxelStats st;
   REQUIRE(layer.build(c.view(), &st) == Status::Ok);
   CHECK(st.non_finite == 2);

@@ -82,7 +82,8 @@ TEST_CASE("Voxel layer, clustering and gathers never allocate after bind") {
   ClusterConfig few = cc;
   few.max_instances = 2;
   gsf_test::ArenaBuffer buf(VoxelLayer::required_bytes(vc) + InstanceClustering::required_bytes(cc, vc.max_voxels) +
-                            VoxelLayer::required_bytes(tight) + InstanceClustering::required_bytes(few, tight.max_voxels));
+                            VoxelLayer::required_bytes(tight) +
+                            InstanceClustering::required_bytes(few, tight.max_voxels));
   VoxelLayer layer, small_layer;
   InstanceClustering clusters, small_clusters;
   REQUIRE(layer.bind(buf.arena, vc) == Status::Ok);

@@ -100,13 +100,13 @@ TEST_CASE("Each voxel is the exact mean of its points, in order of first inserti
   VoxelLayer l;
   REQUIRE(l.bind(buf.arena, vc) == Status::Ok);
   Cloud c;
-  c.add(10.1f, 3.2f, 0.1f, 72);                 // voxel 0: terrain, cell (20, 6, 0)
-  c.add(5.1f, 0.1f, 0.1f, 80);                  // voxel 1: cell (10, 0, 0)
-  c.add(5.3f, 0.2f, 0.3f, 80 | (7u << 16));     // instance bits do not change the class
+  c.add(10.1f, 3.2f, 0.1f, 72);              // voxel 0: terrain, cell (20, 6, 0)
+  c.add(5.1f, 0.1f, 0.1f, 80);               // voxel 1: cell (10, 0, 0)
+  c.add(5.3f, 0.2f, 0.3f, 80 | (7u << 16));  // instance bits do not change the class
   c.add(5.4f, 0.4f, 0.2f, 80);
-  c.add(5.2f, 0.3f, 0.4f, 40);                  // one road point among three pole points
+  c.add(5.2f, 0.3f, 0.4f, 40);  // one road point among three pole points
   c.add(10.4f, 3.4f, 0.4f, 72);
-  c.add(-5.1f, -0.1f, -0.1f, 10);               // voxel 2: negative coordinates, cell (-11, -1, -1)
+  c.add(-5.1f, -0.1f, -0.1f, 10);  // voxel 2: negative coordinates, cell (-11, -1, -1)
   VoxelStats st;
   REQUIRE(l.build(c.view(), &st) == Status::Ok);
   REQUIRE(l.size() == 3);
@@ -164,11 +164,16 @@ TEST_CASE("With logits, a voxel holds the mean softmax and its label is the argm
     l0[kCar] = car;
   };
   // All in voxel cell (12, 0, 0) = [4.8, 5.2) x [0, 0.4)^2.
-  c.add(4.85f, 0.05f, 0.05f, 80); add_logits(static_cast<float>(lean), 0.0f);
-  c.add(4.90f, 0.10f, 0.10f, 80); add_logits(static_cast<float>(lean), 0.0f);
-  c.add(4.95f, 0.15f, 0.15f, 10); add_logits(0.0f, static_cast<float>(std::log(99.0)));
-  c.add(5.00f, 0.20f, 0.20f, 80); add_logits(std::nanf(""), 0.0f);  // non-finite logits: rejected
-  c.add(5.05f, 0.25f, 0.25f, 0);  add_logits(0.0f, 9.0f);            // unlabeled: ignored despite logits
+  c.add(4.85f, 0.05f, 0.05f, 80);
+  add_logits(static_cast<float>(lean), 0.0f);
+  c.add(4.90f, 0.10f, 0.10f, 80);
+  add_logits(static_cast<float>(lean), 0.0f);
+  c.add(4.95f, 0.15f, 0.15f, 10);
+  add_logits(0.0f, static_cast<float>(std::log(99.0)));
+  c.add(5.00f, 0.20f, 0.20f, 80);
+  add_logits(std::nanf(""), 0.0f);  // non-finite logits: rejected
+  c.add(5.05f, 0.25f, 0.25f, 0);
+  add_logits(0.0f, 9.0f);  // unlabeled: ignored despite logits
   VoxelStats st;
   REQUIRE(l.build(c.view(), &st) == Status::Ok);
   CHECK(st.non_finite == 1);
@@ -200,19 +205,19 @@ TEST_CASE("Bad points are counted and skipped; statuses for unusable scans") {
   VoxelLayer l;
   REQUIRE(l.bind(buf.arena, vc) == Status::Ok);
   Cloud c;
-  c.add(2.5f, 0, 0, 80);                   // exactly at min_range: kept
-  c.add(2.49f, 0, 0, 80);                  // inside: gated
-  c.add(0, 0, 79.9f, 80);                  // kept
-  c.add(0, 80.1f, 0, 80);                  // beyond: gated
-  c.add(1e30f, 0, 0, 80);                  // finite but absurd: gated, no overflow
+  c.add(2.5f, 0, 0, 80);   // exactly at min_range: kept
+  c.add(2.49f, 0, 0, 80);  // inside: gated
+  c.add(0, 0, 79.9f, 80);  // kept
+  c.add(0, 80.1f, 0, 80);  // beyond: gated
+  c.add(1e30f, 0, 0, 80);  // finite but absurd: gated, no overflow
   c.add(std::nanf(""), 5, 0, 80);
   c.add(5, INFINITY, 0, 80);
   c.add(5, 0, -INFINITY, 80);
-  c.add(6, 0, 0, 12345);                   // not a SemanticKITTI id
-  c.add(7, 0, 0, 0);                       // unlabeled
-  c.add(8, 0, 0, 1);                       // outlier
-  c.add(9, 0, 0, 52);                      // other-structure
-  c.add(10, 0, 0, 99);                     // other-object
+  c.add(6, 0, 0, 12345);  // not a SemanticKITTI id
+  c.add(7, 0, 0, 0);      // unlabeled
+  c.add(8, 0, 0, 1);      // outlier
+  c.add(9, 0, 0, 52);     // other-structure
+  c.add(10, 0, 0, 99);    // other-object
   VoxelStats st;
   REQUIRE(l.build(c.view(), &st) == Status::Ok);
   CHECK(st.points_in == 13);
@@ -250,7 +255,8 @@ TEST_CASE("Bad points are counted and skipped; statuses for unusable scans") {
   CHECK(l.build(v, nullptr) == Status::InvalidArgument);
   // Stride > 4: only x, y, z are read.
   std::vector<float> wide;
-  for (uint32_t i = 0; i < c.labels.size(); ++i) wide.insert(wide.end(), {c.pts[4 * i], c.pts[4 * i + 1], c.pts[4 * i + 2], 0, 0, 0});
+  for (uint32_t i = 0; i < c.labels.size(); ++i)
+    wide.insert(wide.end(), {c.pts[4 * i], c.pts[4 * i + 1], c.pts[4 * i + 2], 0, 0, 0});
   v = c.view();
   v.points = wide.data();
   v.stride = 6;
@@ -311,7 +317,7 @@ TEST_CASE("Gather-index column overflow is reported; the indexed voxels are stil
   }
   VoxelStats st;
   CHECK(l.build(c.view(), &st) == Status::CapacityExceeded);
-  CHECK(l.size() == 12);            // all voxels are in the layer
+  CHECK(l.size() == 12);  // all voxels are in the layer
   CHECK(st.dropped_points == 0);
   CHECK(st.unindexed_voxels == 6);  // the last three columns are not searchable
   const float center[3] = {10.0f, 0.0f, 0.0f};

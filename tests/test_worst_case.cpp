@@ -5,14 +5,15 @@
 #include <random>
 #include <vector>
 
-#include "gsf/localizer.h"
 #include "gsf/detail/max_clique.h"
+#include "gsf/localizer.h"
 #include "mapping/map_builder.h"
 
 using namespace gsf;
 
 TEST_CASE("A dense random consistency graph: the clique search stops at its node budget with a valid clique") {
-  std::vector<uint64_t> mem((ConsistencyGraph::required_bytes(256) + MaxCliqueSolver::required_bytes(256) + 4096) / 8 + 2);
+  std::vector<uint64_t> mem((ConsistencyGraph::required_bytes(256) + MaxCliqueSolver::required_bytes(256) + 4096) / 8 +
+                            2);
   Arena arena(mem.data(), mem.size() * 8);
   ConsistencyGraph g;
   MaxCliqueSolver solver;
@@ -109,8 +110,8 @@ TEST_CASE("A lattice where every triangle collides in the hash: matches, corresp
     CHECK(r.correspondences <= cfg.match.max_correspondences);
     CHECK(r.hypotheses <= cfg.hypotheses.max_hypotheses);
     // Each of at most 2K searches stays within its budget (+1 node for the root of each search).
-    CHECK(r.clique_nodes <= cfg.hypotheses.first_budget + 2 * cfg.hypotheses.max_hypotheses *
-                                                              (cfg.hypotheses.next_budget + 1));
+    CHECK(r.clique_nodes <=
+          cfg.hypotheses.first_budget + 2 * cfg.hypotheses.max_hypotheses * (cfg.hypotheses.next_budget + 1));
     CHECK(r.capacity_truncated);  // the caps were hit and reported
     CHECK(loc.workspace_bytes() <= need);
   }

@@ -49,8 +49,7 @@ void ClassTable::clear() {
   }
 }
 
-ClassTableError ClassTable::add(uint16_t raw_id, const char* name, int library_class, float stability,
-                                ClassRole role) {
+ClassTableError ClassTable::add(uint16_t raw_id, const char* name, int library_class, float stability, ClassRole role) {
   if (library_class != kIgnoredClass && !valid_class(library_class)) return ClassTableError::BadClass;
   if (!(stability >= 0.0f && stability <= 1.0f)) return ClassTableError::BadStability;  // NaN fails too
   if (static_cast<uint8_t>(role) > static_cast<uint8_t>(ClassRole::TrunkHost)) return ClassTableError::BadRole;
@@ -61,7 +60,8 @@ ClassTableError ClassTable::add(uint16_t raw_id, const char* name, int library_c
   uint32_t lo = 0, hi = count_;
   while (lo < hi) {
     const uint32_t mid = (lo + hi) / 2;
-    if (entries_[mid].raw_id < raw_id) lo = mid + 1; else hi = mid;
+    if (entries_[mid].raw_id < raw_id) lo = mid + 1;
+    else hi = mid;
   }
   if (lo < count_ && entries_[lo].raw_id == raw_id) return ClassTableError::DuplicateId;
   if (count_ >= kMaxClassTableEntries) return ClassTableError::TooManyEntries;
@@ -91,7 +91,8 @@ const ClassTableEntry* ClassTable::find(uint32_t raw_label) const {
   uint32_t lo = 0, hi = count_;
   while (lo < hi) {
     const uint32_t mid = (lo + hi) / 2;
-    if (entries_[mid].raw_id < id) lo = mid + 1; else hi = mid;
+    if (entries_[mid].raw_id < id) lo = mid + 1;
+    else hi = mid;
   }
   return lo < count_ && entries_[lo].raw_id == id ? &entries_[lo] : nullptr;
 }
@@ -149,27 +150,48 @@ int library_class_from_name(const char* name, uint32_t len) {
 
 namespace {
 
-struct BuiltinEntry { uint16_t raw; const char* name; int8_t cls; };
+struct BuiltinEntry {
+  uint16_t raw;
+  const char* name;
+  int8_t cls;
+};
 
 // SemanticKITTI's raw ids (semantic-kitti.yaml) with class_from_kitti()'s mapping.
 constexpr BuiltinEntry kKitti[] = {
-    {0, "unlabeled", kIgnoredClass},        {1, "outlier", kIgnoredClass},
-    {10, "car", kCar},                      {11, "bicycle", kBicycle},
-    {13, "bus", kOtherVehicle},             {15, "motorcycle", kMotorcycle},
-    {16, "on-rails", kOtherVehicle},        {18, "truck", kTruck},
-    {20, "other-vehicle", kOtherVehicle},   {30, "person", kPerson},
-    {31, "bicyclist", kBicyclist},          {32, "motorcyclist", kMotorcyclist},
-    {40, "road", kRoad},                    {44, "parking", kParking},
-    {48, "sidewalk", kSidewalk},            {49, "other-ground", kOtherGround},
-    {50, "building", kBuilding},            {51, "fence", kFence},
-    {52, "other-structure", kIgnoredClass}, {60, "lane-marking", kRoad},
-    {70, "vegetation", kVegetation},        {71, "trunk", kTrunk},
-    {72, "terrain", kTerrain},              {80, "pole", kPole},
-    {81, "traffic-sign", kTrafficSign},     {99, "other-object", kIgnoredClass},
-    {252, "moving-car", kCar},              {253, "moving-bicyclist", kBicyclist},
-    {254, "moving-person", kPerson},        {255, "moving-motorcyclist", kMotorcyclist},
-    {256, "moving-on-rails", kOtherVehicle}, {257, "moving-bus", kOtherVehicle},
-    {258, "moving-truck", kTruck},          {259, "moving-other-vehicle", kOtherVehicle},
+    {0, "unlabeled", kIgnoredClass},
+    {1, "outlier", kIgnoredClass},
+    {10, "car", kCar},
+    {11, "bicycle", kBicycle},
+    {13, "bus", kOtherVehicle},
+    {15, "motorcycle", kMotorcycle},
+    {16, "on-rails", kOtherVehicle},
+    {18, "truck", kTruck},
+    {20, "other-vehicle", kOtherVehicle},
+    {30, "person", kPerson},
+    {31, "bicyclist", kBicyclist},
+    {32, "motorcyclist", kMotorcyclist},
+    {40, "road", kRoad},
+    {44, "parking", kParking},
+    {48, "sidewalk", kSidewalk},
+    {49, "other-ground", kOtherGround},
+    {50, "building", kBuilding},
+    {51, "fence", kFence},
+    {52, "other-structure", kIgnoredClass},
+    {60, "lane-marking", kRoad},
+    {70, "vegetation", kVegetation},
+    {71, "trunk", kTrunk},
+    {72, "terrain", kTerrain},
+    {80, "pole", kPole},
+    {81, "traffic-sign", kTrafficSign},
+    {99, "other-object", kIgnoredClass},
+    {252, "moving-car", kCar},
+    {253, "moving-bicyclist", kBicyclist},
+    {254, "moving-person", kPerson},
+    {255, "moving-motorcyclist", kMotorcyclist},
+    {256, "moving-on-rails", kOtherVehicle},
+    {257, "moving-bus", kOtherVehicle},
+    {258, "moving-truck", kTruck},
+    {259, "moving-other-vehicle", kOtherVehicle},
 };
 
 // nuScenes-lidarseg's 32 classes with port/nuscenes.cpp's mapping (README of the samples).

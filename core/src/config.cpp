@@ -21,13 +21,13 @@ Status validate(const LocalizerConfig& c) {
       !(g.tau > 0) || !(g.observed_variance > 0) || !(g.covariance_weight >= 0) || !(g.normalize_mass >= 0))
     return Status::InvalidArgument;
   const HypothesisConfig& h = c.hypotheses;
-  if (h.max_hypotheses == 0 || h.max_hypotheses > PoseHypotheses::kMaxHypotheses || h.first_budget == 0 || h.next_budget == 0 ||
-      !(h.consistency_eps > 0) || !(h.tls_threshold > 0) || h.min_inliers < 3 || h.max_iterations == 0 ||
-      !(h.same_pose_m >= 0) || !(h.same_pose_deg >= 0) || h.max_peeled == 0 || !(h.shift_bin > 0) ||
-      !(h.max_tilt_deg >= 0 && h.max_tilt_deg <= 180))
+  if (h.max_hypotheses == 0 || h.max_hypotheses > PoseHypotheses::kMaxHypotheses || h.first_budget == 0 ||
+      h.next_budget == 0 || !(h.consistency_eps > 0) || !(h.tls_threshold > 0) || h.min_inliers < 3 ||
+      h.max_iterations == 0 || !(h.same_pose_m >= 0) || !(h.same_pose_deg >= 0) || h.max_peeled == 0 ||
+      !(h.shift_bin > 0) || !(h.max_tilt_deg >= 0 && h.max_tilt_deg <= 180))
     return Status::InvalidArgument;
-  if (c.verify.max_points == 0 || !(c.verify.margin_scale > 0) || !(c.verify.quality_high > c.verify.quality_low) || c.verify.refine_top > 64 ||
-      c.verify.coarse_divisor == 0 || c.verify.full_top == 0 ||
+  if (c.verify.max_points == 0 || !(c.verify.margin_scale > 0) || !(c.verify.quality_high > c.verify.quality_low) ||
+      c.verify.refine_top > 64 || c.verify.coarse_divisor == 0 || c.verify.full_top == 0 ||
       !(c.verify.refine_step_m >= 0) || !(c.verify.refine_step_deg >= 0) || c.verify.refine_rounds > 16 ||
       !(c.verify.rarity_exponent >= 0 && c.verify.rarity_exponent <= 2))
     return Status::InvalidArgument;
@@ -93,9 +93,10 @@ Status check_map_params(const LocalizerConfig& c, const MapParams& p) {
       p.field_input_dims != w.field_input_dims || p.inducing_stride != w.inducing_stride || p.grid_nx != w.grid_nx ||
       p.grid_ny != w.grid_ny || p.grid_layers != w.grid_layers || p.grid_spacing != w.grid_spacing ||
       p.layer_spacing != w.layer_spacing || p.grid_z0 != w.grid_z0 || p.length_scale != w.length_scale ||
-      p.signal_variance != w.signal_variance || p.noise_variance != w.noise_variance || p.field_radius != w.field_radius ||
-      p.voxel_size != w.voxel_size || p.side_bin != w.side_bin || p.triangle_neighbours != w.triangle_neighbours ||
-      p.min_side != w.min_side || p.max_side != w.max_side || p.class_table_id != w.class_table_id)
+      p.signal_variance != w.signal_variance || p.noise_variance != w.noise_variance ||
+      p.field_radius != w.field_radius || p.voxel_size != w.voxel_size || p.side_bin != w.side_bin ||
+      p.triangle_neighbours != w.triangle_neighbours || p.min_side != w.min_side || p.max_side != w.max_side ||
+      p.class_table_id != w.class_table_id)
     return Status::ConfigMismatch;
   return Status::Ok;
 }

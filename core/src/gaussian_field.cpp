@@ -216,8 +216,9 @@ Status FieldSolver::probe(const FieldView& field, const float* chol, const float
   return Status::Ok;
 }
 
-Status fit_instance_field(FieldSolver& solver, const VoxelLayer& layer, const float center[3], const FieldGather& gather,
-                          float* inputs, float* alpha, float* chol, uint32_t* m, uint32_t* gathered, uint32_t* total) {
+Status fit_instance_field(FieldSolver& solver, const VoxelLayer& layer, const float center[3],
+                          const FieldGather& gather, float* inputs, float* alpha, float* chol, uint32_t* m,
+                          uint32_t* gathered, uint32_t* total) {
   *m = 0;
   *total = 0;
   *gathered = collect_field_points(layer, solver.config(), center, gather.capacity, gather.ids, gather.xyz,
@@ -226,4 +227,3 @@ Status fit_instance_field(FieldSolver& solver, const VoxelLayer& layer, const fl
 }
 
 }  // namespace gsf
-

@@ -95,10 +95,9 @@ float GsfFilter::similarity(const QueryFields& qf, uint32_t qi, const MapView& m
       f.m = qf.m[qi];
       solver_->probe(f, qf.chol + size_t(qi) * M * M, grid_, G, mean, var, nullptr);
     }
-    const ObservedW2 r = w2_squared_diag_observed(mean, var, map.grid_mean + size_t(mi) * G * kNumClasses,
-                                                  map.grid_var + size_t(mi) * G, G, weights_,
-                                                  config_.observed_variance * field_.signal_variance,
-                                                  config_.normalize_mass, config_.covariance_weight);
+    const ObservedW2 r = w2_squared_diag_observed(
+        mean, var, map.grid_mean + size_t(mi) * G * kNumClasses, map.grid_var + size_t(mi) * G, G, weights_,
+        config_.observed_variance * field_.signal_variance, config_.normalize_mass, config_.covariance_weight);
     if (r.used >= 4) omega = static_cast<float>(std::exp(-(r.w2 / r.used) / config_.tau));
   }
   if (float* slot = similarity_.find_or_insert(skey)) *slot = omega;

@@ -97,7 +97,10 @@ Status InstanceClustering::build(const VoxelLayer& layer, ClusterStats* stats_ou
     in.label = label;
     in.stability = classes_ ? classes_->stability(label) : stability_weight(label);
     ++stats.components;
-    if (tail < config_.min_voxels[label]) { ++stats.rejected_small; continue; }
+    if (tail < config_.min_voxels[label]) {
+      ++stats.rejected_small;
+      continue;
+    }
     if (std::sqrt(in.extent[0] * in.extent[0] + in.extent[1] * in.extent[1]) > config_.max_extent[label]) {
       ++stats.rejected_extent;
       continue;

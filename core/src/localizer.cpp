@@ -24,8 +24,8 @@ namespace {
 
 struct CorrespondenceAcc {
   uint32_t query, map;
-  float weight;   // best GSF similarity seen for this pair (1 without GSF)
-  uint32_t votes; // surviving triangle matches that produced it
+  float weight;    // best GSF similarity seen for this pair (1 without GSF)
+  uint32_t votes;  // surviving triangle matches that produced it
 };
 
 constexpr double kRadToDeg = 57.29577951308232;
@@ -68,32 +68,32 @@ struct Localizer::Impl {
   SemanticGridView semantic;
 
   // Query instances and their fields.
-  float* centroids = nullptr;   // I x 3
-  uint8_t* labels = nullptr;    // I
-  float* q_inputs = nullptr;    // I x M x 3
-  float* q_alpha = nullptr;     // I x M x D
-  float* q_chol = nullptr;      // I x M x M
-  uint32_t* q_m = nullptr;      // I (0: no field)
+  float* centroids = nullptr;  // I x 3
+  uint8_t* labels = nullptr;   // I
+  float* q_inputs = nullptr;   // I x M x 3
+  float* q_alpha = nullptr;    // I x M x D
+  float* q_chol = nullptr;     // I x M x M
+  uint32_t* q_m = nullptr;     // I (0: no field)
   // Gather scratch for one field fit.
   uint32_t* gather_ids = nullptr;
   float* gather_xyz = nullptr;
   float* gather_targets = nullptr;
   uint8_t* gather_labels = nullptr;
   float weights[kNumClasses];
-  float verify_weights[kNumClasses];  // weights with this scan's rarity weighting (verification)
-  uint32_t* heading_votes = nullptr;  // yaw bins
-  uint8_t* heading_allowed = nullptr; // yaw bins
+  float verify_weights[kNumClasses];   // weights with this scan's rarity weighting (verification)
+  uint32_t* heading_votes = nullptr;   // yaw bins
+  uint8_t* heading_allowed = nullptr;  // yaw bins
   // Correspondences.
   CorrespondenceAcc* corr = nullptr;  // candidates (capacity corr_capacity)
   uint32_t corr_count = 0;
   uint32_t corr_capacity = 0;
-  uint32_t* order = nullptr;          // selection scratch (corr_capacity)
-  float* a = nullptr;                 // C x 3 query positions
-  float* b = nullptr;                 // C x 3 map positions
-  float* w = nullptr;                 // C weights
-  uint32_t selected = 0;              // correspondences given to the hypothesis stage in the last call
-  uint32_t chosen = 0;                // the answer's hypothesis in the last call (UINT32_MAX: none)
-  uint32_t instance_count = 0;        // query instances of the last call
+  uint32_t* order = nullptr;                  // selection scratch (corr_capacity)
+  float* a = nullptr;                         // C x 3 query positions
+  float* b = nullptr;                         // C x 3 map positions
+  float* w = nullptr;                         // C weights
+  uint32_t selected = 0;                      // correspondences given to the hypothesis stage in the last call
+  uint32_t chosen = 0;                        // the answer's hypothesis in the last call (UINT32_MAX: none)
+  uint32_t instance_count = 0;                // query instances of the last call
   Eigen::Isometry3d* refined_pose = nullptr;  // verify.refine_top: poses the pattern search chose
   uint32_t* refined_id = nullptr;             // verify.refine_top: their hypotheses
 
@@ -157,7 +157,8 @@ Status Localizer::bind_workspace(Arena& ar, const LocalizerConfig& config, Impl&
   im.heading_votes = ar.allocate<uint32_t>(config.gsf.yaw_bins);
   im.heading_allowed = ar.allocate<uint8_t>(config.gsf.yaw_bins);
   record(&b.match);
-  if (im.gsf.bind(ar, config.gsf, config.field, &im.solver) != Status::Ok && !ar.counting()) return Status::InvalidArgument;
+  if (im.gsf.bind(ar, config.gsf, config.field, &im.solver) != Status::Ok && !ar.counting())
+    return Status::InvalidArgument;
   record(&b.gsf_cache);
   im.corr_index.bind(ar, corr_cap);
   im.corr = ar.allocate<CorrespondenceAcc>(corr_cap);
@@ -190,7 +191,8 @@ Localizer::Budget Localizer::budget(const LocalizerConfig& c) {
   Impl scratch;
   if (bind_workspace(counting, c, scratch, &b) != Status::Ok) return Budget{};
   b.total = counting.used();
-  const size_t parts = b.voxel + b.cluster + b.poles + b.field + b.triangle + b.match + b.gsf_cache + b.correspondence + b.clique + b.refine;
+  const size_t parts = b.voxel + b.cluster + b.poles + b.field + b.triangle + b.match + b.gsf_cache + b.correspondence +
+                       b.clique + b.refine;
   b.other = b.total - parts;  // the Impl object and its alignment
   return b;
 }
@@ -211,7 +213,8 @@ Status Localizer::init(const LocalizerConfig& config, const MapView& map, void* 
   if (s != Status::Ok) return s;
   s = check_map_params(config, map.params);
   if (s != Status::Ok) return s;
-  if ((map.instances == nullptr && map.counts.instances > 0) || map.index_offsets == nullptr) return Status::InvalidArgument;
+  if ((map.instances == nullptr && map.counts.instances > 0) || map.index_offsets == nullptr)
+    return Status::InvalidArgument;
   if (buffer == nullptr || (reinterpret_cast<uintptr_t>(buffer) % 16) != 0) return Status::InvalidArgument;
   if (bytes < required_bytes(config)) return Status::BufferTooSmall;
   config_ = config;
@@ -320,8 +323,8 @@ void Localizer::Impl::fit_query_fields(const LocalizerConfig& cfg, LocalizeResul
     const FieldGather gather{cfg.match.max_field_points, gather_ids, gather_xyz, gather_targets, gather_labels};
     uint32_t m = 0, got = 0;
     if (fit_instance_field(solver, voxels, centroids + 3 * i, gather, q_inputs + size_t(i) * M * 3,
-                           q_alpha + size_t(i) * M * kNumClasses, q_chol + size_t(i) * M * M, &m, &got, &total) ==
-        Status::Ok)
+                           q_alpha + size_t(i) * M * kNumClasses, q_chol + size_t(i) * M * M, &m, &got,
+                           &total) == Status::Ok)
       q_m[i] = m;
     if (total > got) out.capacity_truncated = true;
   }
@@ -363,7 +366,8 @@ void Localizer::Impl::vote_headings(const LocalizerConfig& cfg, const MapView& m
     for (uint32_t qt_id = 0; qt_id < T; qt_id += stride) {
       const Triangle& qt = triangles[qt_id];
       matcher.match(qt, index, map.triangles, cfg.triangle, cfg.match.vertex_tie_tolerance);
-      for (uint32_t k = 0; k < matcher.size(); ++k) ++heading_votes[heading_bin(qt, matcher.match_at(k), map, cfg.gsf.yaw_bins, qv)];
+      for (uint32_t k = 0; k < matcher.size(); ++k)
+        ++heading_votes[heading_bin(qt, matcher.match_at(k), map, cfg.gsf.yaw_bins, qv)];
     }
     for (uint32_t pick = 0; pick < cfg.match.heading_bins && pick < B; ++pick) {
       uint32_t best = UINT32_MAX;
@@ -424,7 +428,10 @@ void Localizer::Impl::match_and_filter(const LocalizerConfig& cfg, const MapView
         // corr_index and corr share one capacity, so the index refuses a new key (nullptr) exactly when
         // the array is full; the second test is a guard that can only fire if that invariant breaks.
         uint32_t* id = corr_index.find_or_insert(key, &inserted);
-        if (!id || (inserted && corr_count >= corr_capacity)) { ++out.candidate_pairs_dropped; continue; }
+        if (!id || (inserted && corr_count >= corr_capacity)) {
+          ++out.candidate_pairs_dropped;
+          continue;
+        }
         if (inserted) {
           *id = corr_count;
           corr[corr_count++] = CorrespondenceAcc{qv[v], mt.v[v], 0.0f, 0};
@@ -442,7 +449,8 @@ void Localizer::Impl::match_and_filter(const LocalizerConfig& cfg, const MapView
   out.field_probes = gsf.probes();
   out.field_comparisons = gsf.comparisons();
   out.candidate_pairs = corr_count;
-  if (out.match_dropped > 0 || out.candidate_pairs_dropped > 0 || out.heading_dropped > 0) out.capacity_truncated = true;
+  if (out.match_dropped > 0 || out.candidate_pairs_dropped > 0 || out.heading_dropped > 0)
+    out.capacity_truncated = true;
 }
 
 // 7. Keep the best-supported correspondences (votes x weight) up to the clique capacity; equal
@@ -498,7 +506,8 @@ void Localizer::Impl::set_verify_weights(const LocalizerConfig& cfg) {
     double mass = 0.0, scaled = 0.0;
     for (int c = 0; c < kNumClasses; ++c) {
       if (counts[c] == 0) continue;
-      verify_weights[c] = weights[c] * static_cast<float>(std::pow(double(counts[c]) / total, -double(cfg.verify.rarity_exponent)));
+      verify_weights[c] =
+          weights[c] * static_cast<float>(std::pow(double(counts[c]) / total, -double(cfg.verify.rarity_exponent)));
       mass += double(weights[c]) * counts[c];
       scaled += double(verify_weights[c]) * counts[c];
     }
@@ -537,10 +546,9 @@ void Localizer::Impl::choose_answer(const LocalizerConfig& cfg, LocalizeResult& 
     refined_count = nt;
     for (uint32_t k = 0; k < nt; ++k) {
       refined_id[k] = top[k];
-      hypotheses[top[k]].verification =
-          verify_pose_refined(voxels, semantic, hypotheses[top[k]].map_T_scan, cfg.verify.max_points,
-                              verify_weights, cfg.verify.refine_rounds, cfg.verify.refine_step_m,
-                              cfg.verify.refine_step_deg, &refined_pose[k]);
+      hypotheses[top[k]].verification = verify_pose_refined(
+          voxels, semantic, hypotheses[top[k]].map_T_scan, cfg.verify.max_points, verify_weights,
+          cfg.verify.refine_rounds, cfg.verify.refine_step_m, cfg.verify.refine_step_deg, &refined_pose[k]);
     }
     // The answer, and as runner-up the best fully scored hypothesis at another place or heading: a
     // near-twin of the answer (within hypotheses.same_pose_m and same_pose_deg in the bird's-eye view
@@ -572,7 +580,8 @@ void Localizer::Impl::choose_answer(const LocalizerConfig& cfg, LocalizeResult& 
   uint32_t shown[kMaxReportedHypotheses];
   uint32_t reported = std::min(H, kMaxReportedHypotheses);
   if (verify) reported = top_by_score(hypotheses, H, nullptr, kMaxReportedHypotheses, shown);
-  else for (uint32_t k = 0; k < reported; ++k) shown[k] = k;
+  else
+    for (uint32_t k = 0; k < reported; ++k) shown[k] = k;
   for (uint32_t k = 0; k < reported; ++k) {
     const PoseHypothesis& p = hypotheses[shown[k]];
     HypothesisReport& r = out.hypothesis[k];

@@ -68,8 +68,8 @@ Status check_params(const MapParams& p) {
   if (p.inducing_stride == 0 || p.inducing_stride > kMaxInducingStride) return Status::CorruptData;
   const uint64_t g = uint64_t(p.grid_nx) * p.grid_ny * p.grid_layers;
   if (g == 0 || g > kMaxGridPointsInMap) return Status::CorruptData;
-  const float fs[] = {p.grid_spacing, p.layer_spacing, p.grid_z0, p.length_scale, p.signal_variance,
-                      p.noise_variance, p.field_radius, p.voxel_size, p.side_bin, p.min_side, p.max_side};
+  const float fs[] = {p.grid_spacing, p.layer_spacing, p.grid_z0,  p.length_scale, p.signal_variance, p.noise_variance,
+                      p.field_radius, p.voxel_size,    p.side_bin, p.min_side,     p.max_side};
   if (!all_finite(fs, sizeof(fs) / sizeof(fs[0]))) return Status::CorruptData;
   if (!(p.grid_spacing > 0 && p.length_scale > 0 && p.signal_variance > 0 && p.noise_variance > 0 &&
         p.field_radius > 0 && p.voxel_size > 0 && p.side_bin > 0 && p.min_side >= 0 && p.max_side > p.min_side))
@@ -199,7 +199,8 @@ Status load_map(const void* data, size_t bytes, MapView* out) {
   uint32_t crc = crc32_update(0, base, offsetof(MapHeader, header_crc));
   const uint32_t zero = 0;
   crc = crc32_update(crc, &zero, sizeof(zero));
-  crc = crc32_update(crc, base + offsetof(MapHeader, header_crc) + 4, table_end() - offsetof(MapHeader, header_crc) - 4);
+  crc =
+      crc32_update(crc, base + offsetof(MapHeader, header_crc) + 4, table_end() - offsetof(MapHeader, header_crc) - 4);
   if (crc != h.header_crc) return Status::CorruptData;
   const Status ps = check_params(h.params);
   if (ps != Status::Ok) return ps;

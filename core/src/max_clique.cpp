@@ -46,8 +46,10 @@ Status ConsistencyGraph::build(const float* a, const float* b, uint32_t n, float
   if (s != Status::Ok) return s;
   for (uint32_t i = 0; i < n; ++i)
     for (uint32_t j = i + 1; j < n; ++j) {
-      const float dax = a[3 * i] - a[3 * j], day = a[3 * i + 1] - a[3 * j + 1], daz = (a[3 * i + 2] - a[3 * j + 2]) * z_weight;
-      const float dbx = b[3 * i] - b[3 * j], dby = b[3 * i + 1] - b[3 * j + 1], dbz = (b[3 * i + 2] - b[3 * j + 2]) * z_weight;
+      const float dax = a[3 * i] - a[3 * j], day = a[3 * i + 1] - a[3 * j + 1],
+                  daz = (a[3 * i + 2] - a[3 * j + 2]) * z_weight;
+      const float dbx = b[3 * i] - b[3 * j], dby = b[3 * i + 1] - b[3 * j + 1],
+                  dbz = (b[3 * i + 2] - b[3 * j + 2]) * z_weight;
       const float da = std::sqrt(dax * dax + day * day + daz * daz);
       const float db = std::sqrt(dbx * dbx + dby * dby + dbz * dbz);
       if (std::fabs(da - db) <= eps) add_edge(i, j);
@@ -90,7 +92,8 @@ Status MaxCliqueSolver::bind(Arena& arena, uint32_t max_vertices) {
 
 // Greedy sequential colouring of the candidate set (BBMC): colour classes are independent sets, so a
 // vertex with colour k bounds the clique size reachable through it (and the vertices before it) by k.
-uint32_t MaxCliqueSolver::colour_sort(const ConsistencyGraph& g, const uint64_t* cand, uint32_t* order, uint32_t* colour) {
+uint32_t MaxCliqueSolver::colour_sort(const ConsistencyGraph& g, const uint64_t* cand, uint32_t* order,
+                                      uint32_t* colour) {
   const uint32_t w = g.words();
   for (uint32_t i = 0; i < w; ++i) u_[i] = cand[i];
   uint32_t count = 0, k = 0;
@@ -116,8 +119,8 @@ uint32_t MaxCliqueSolver::colour_sort(const ConsistencyGraph& g, const uint64_t*
   return count;
 }
 
-Status MaxCliqueSolver::solve(const ConsistencyGraph& g, uint64_t budget, FixedVector<uint32_t>& clique, CliqueStats* stats,
-                              const uint64_t* allowed) {
+Status MaxCliqueSolver::solve(const ConsistencyGraph& g, uint64_t budget, FixedVector<uint32_t>& clique,
+                              CliqueStats* stats, const uint64_t* allowed) {
   clique.clear();
   CliqueStats st;
   if (!bound_) return Status::NotInitialized;
@@ -142,7 +145,10 @@ Status MaxCliqueSolver::solve(const ConsistencyGraph& g, uint64_t budget, FixedV
         if (!((cand[v >> 6] >> (v & 63)) & 1u)) continue;
         int deg = 0;
         for (uint32_t x = 0; x < w; ++x) deg += __builtin_popcountll(cand[x] & g.row(v)[x]);
-        if (deg > best_deg) { best_deg = deg; best_v = static_cast<int>(v); }
+        if (deg > best_deg) {
+          best_deg = deg;
+          best_v = static_cast<int>(v);
+        }
       }
       if (best_v < 0 || best_size >= kMaxCliqueDepth) break;
       best_[best_size++] = static_cast<uint32_t>(best_v);
@@ -187,7 +193,10 @@ Status MaxCliqueSolver::solve(const ConsistencyGraph& g, uint64_t budget, FixedV
       }
       continue;
     }
-    if (st.nodes >= budget) { exhausted = true; break; }
+    if (st.nodes >= budget) {
+      exhausted = true;
+      break;
+    }
     ++st.nodes;
     next->count = colour_sort(g, next->cand, next->order, next->colour);
     next->pos = next->count;
@@ -195,7 +204,11 @@ Status MaxCliqueSolver::solve(const ConsistencyGraph& g, uint64_t budget, FixedV
   }
   // Ascending output.
   for (uint32_t i = 1; i < best_size; ++i)
-    for (uint32_t j = i; j > 0 && best_[j - 1] > best_[j]; --j) { const uint32_t t = best_[j]; best_[j] = best_[j - 1]; best_[j - 1] = t; }
+    for (uint32_t j = i; j > 0 && best_[j - 1] > best_[j]; --j) {
+      const uint32_t t = best_[j];
+      best_[j] = best_[j - 1];
+      best_[j - 1] = t;
+    }
   for (uint32_t i = 0; i < best_size; ++i)
     if (!clique.push_back(best_[i])) return Status::CapacityExceeded;
   if (stats) *stats = st;

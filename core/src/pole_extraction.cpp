@@ -93,7 +93,10 @@ Status PoleExtraction::build(const VoxelLayer& layer, PoleStats* stats_out) {
   for (uint32_t seed = 0; seed < n; ++seed) {
     if (voxel_seg_[seed] != kNone || !is_host(seed)) continue;
     int32_t sc[3];
-    if (!cell(seed, sc)) { voxel_seg_[seed] = kRejected; continue; }
+    if (!cell(seed, sc)) {
+      voxel_seg_[seed] = kRejected;
+      continue;
+    }
     const uint8_t kind = kind_of(seed);
     uint32_t head = 0, tail = 0;
     queue_[tail++] = seed;
@@ -167,7 +170,8 @@ Status PoleExtraction::build(const VoxelLayer& layer, PoleStats* stats_out) {
           if (ddx * ddx + ddy * ddy > link2) continue;
           const uint32_t a = find_root(sv), b = find_root(su);
           if (a == b) continue;
-          if (a < b) segments_[b].parent = a; else segments_[a].parent = b;
+          if (a < b) segments_[b].parent = a;
+          else segments_[a].parent = b;
         }
   }
 
@@ -207,8 +211,13 @@ Status PoleExtraction::build(const VoxelLayer& layer, PoleStats* stats_out) {
         lo[k] = q == 0 ? p[k] : std::min(lo[k], p[k]);
         hi[k] = q == 0 ? p[k] : std::max(hi[k], p[k]);
       }
-      sw += 1.0; sx += p[0]; sy += p[1]; sz += p[2];
-      spx += double(p[0]) * vox[v].count; spy += double(p[1]) * vox[v].count; spz += double(p[2]) * vox[v].count;
+      sw += 1.0;
+      sx += p[0];
+      sy += p[1];
+      sz += p[2];
+      spx += double(p[0]) * vox[v].count;
+      spy += double(p[1]) * vox[v].count;
+      spz += double(p[2]) * vox[v].count;
       points += vox[v].count;
       first = std::min(first, v);
     }
@@ -218,8 +227,14 @@ Status PoleExtraction::build(const VoxelLayer& layer, PoleStats* stats_out) {
       const uint32_t s = voxel_seg_[m[q]];
       bool seen = false;
       for (uint32_t t = q; t-- > 0 && segments_[voxel_seg_[m[t]]].level == segments_[s].level;)
-        if (voxel_seg_[m[t]] == s) { seen = true; break; }
-      if (!seen) { ++chain_segments; ring_sum += segments_[s].ring; }
+        if (voxel_seg_[m[t]] == s) {
+          seen = true;
+          break;
+        }
+      if (!seen) {
+        ++chain_segments;
+        ring_sum += segments_[s].ring;
+      }
     }
     const uint8_t kind = segments_[r].kind;
     const float height = hi[2] - lo[2] + vs;
@@ -233,21 +248,31 @@ Status PoleExtraction::build(const VoxelLayer& layer, PoleStats* stats_out) {
     for (uint32_t q = 0; q < count; ++q) {
       const float* p = vox[m[q]].centroid;
       const double dz = p[2] - mz;
-      szz += dz * dz; sxz += (p[0] - mx) * dz; syz += (p[1] - my) * dz;
+      szz += dz * dz;
+      sxz += (p[0] - mx) * dz;
+      syz += (p[1] - my) * dz;
     }
     const double bx = szz > 0 ? sxz / szz : 0.0, by = szz > 0 ? syz / szz : 0.0;
     const double tilt = std::atan(std::sqrt(bx * bx + by * by)) * (180.0 / 3.14159265358979323846);
-    if (!(tilt <= config_.max_tilt_deg)) { ++stats.rejected_tilt; continue; }
+    if (!(tilt <= config_.max_tilt_deg)) {
+      ++stats.rejected_tilt;
+      continue;
+    }
     double rlo[2] = {0, 0}, rhi[2] = {0, 0};
     for (uint32_t q = 0; q < count; ++q) {
       const float* p = vox[m[q]].centroid;
       const double dz = p[2] - mz;
       const double rx = p[0] - mx - bx * dz, ry = p[1] - my - by * dz;
-      rlo[0] = q == 0 ? rx : std::min(rlo[0], rx); rhi[0] = q == 0 ? rx : std::max(rhi[0], rx);
-      rlo[1] = q == 0 ? ry : std::min(rlo[1], ry); rhi[1] = q == 0 ? ry : std::max(rhi[1], ry);
+      rlo[0] = q == 0 ? rx : std::min(rlo[0], rx);
+      rhi[0] = q == 0 ? rx : std::max(rhi[0], rx);
+      rlo[1] = q == 0 ? ry : std::min(rlo[1], ry);
+      rhi[1] = q == 0 ? ry : std::max(rhi[1], ry);
     }
     const double thickness = std::sqrt((rhi[0] - rlo[0]) * (rhi[0] - rlo[0]) + (rhi[1] - rlo[1]) * (rhi[1] - rlo[1]));
-    if (thickness > config_.max_diameter[kind]) { ++stats.rejected_thick; continue; }
+    if (thickness > config_.max_diameter[kind]) {
+      ++stats.rejected_thick;
+      continue;
+    }
 
     Instance in{};
     in.centroid[0] = static_cast<float>(spx / points);

@@ -56,9 +56,14 @@ Status PoseHypotheses::generate(const float* a, const float* b, const float* w, 
   const double c2 = double(c.tls_threshold) * c.tls_threshold;
   const double same_rad = double(c.same_pose_deg) * 3.14159265358979323846 / 180.0;
   auto point = [](const float* p, uint32_t i) { return Eigen::Vector3d(p[3 * i], p[3 * i + 1], p[3 * i + 2]); };
-  auto residual2 = [&](const Eigen::Isometry3d& T, uint32_t i) { return (point(b, i) - T * point(a, i)).squaredNorm(); };
+  auto residual2 = [&](const Eigen::Isometry3d& T, uint32_t i) {
+    return (point(b, i) - T * point(a, i)).squaredNorm();
+  };
   auto copy_to_sub = [&](uint32_t slot, uint32_t i) {
-    for (int d = 0; d < 3; ++d) { sub_a_[3 * slot + d] = a[3 * i + d]; sub_b_[3 * slot + d] = b[3 * i + d]; }
+    for (int d = 0; d < 3; ++d) {
+      sub_a_[3 * slot + d] = a[3 * i + d];
+      sub_b_[3 * slot + d] = b[3 * i + d];
+    }
     sub_w_[slot] = w[i] > 1e-6f ? w[i] : 1e-6f;
   };
   auto is_allowed = [&](uint32_t i) { return ((allowed_[i >> 6] >> (i & 63)) & 1u) != 0; };
@@ -131,8 +136,9 @@ Status PoseHypotheses::generate(const float* a, const float* b, const float* w, 
     for (uint32_t i = 0; i < q; ++i) copy_to_sub(i, clique_[i]);
     TlsResult tls, wide;
     uint32_t m = q;
-    const bool fitted = solve_tls(sub_a_, sub_b_, sub_w_, q, c.tls_threshold, c.max_iterations, &tls, mask_, tls_w_) ==
-                            Status::Ok && tls.inliers >= c.min_inliers;
+    const bool fitted =
+        solve_tls(sub_a_, sub_b_, sub_w_, q, c.tls_threshold, c.max_iterations, &tls, mask_, tls_w_) == Status::Ok &&
+        tls.inliers >= c.min_inliers;
     if (fitted) {
       uint32_t wm = 0;
       if (refit(tls.b_T_a, &wide, &wm) && wm > q && wide.inliers >= tls.inliers) {
@@ -163,7 +169,8 @@ Status PoseHypotheses::generate(const float* a, const float* b, const float* w, 
   const uint32_t peeled = count_;
   auto new_heading = [&](uint32_t hp) {
     for (uint32_t e = 0; e < hp; ++e)
-      if (Eigen::AngleAxisd(hyps_[e].map_T_scan.linear().transpose() * hyps_[hp].map_T_scan.linear()).angle() < same_rad)
+      if (Eigen::AngleAxisd(hyps_[e].map_T_scan.linear().transpose() * hyps_[hp].map_T_scan.linear()).angle() <
+          same_rad)
         return false;
     return true;
   };
@@ -181,7 +188,8 @@ Status PoseHypotheses::generate(const float* a, const float* b, const float* w, 
     // (mid-height centroids constrain them poorly), and the bird's-eye verification cannot see tilt,
     // so a vote hypothesis must not inherit it.
     const Eigen::Matrix3d Rc = hyps_[hp].map_T_scan.linear();
-    const Eigen::Matrix3d R = Eigen::AngleAxisd(std::atan2(Rc(1, 0), Rc(0, 0)), Eigen::Vector3d::UnitZ()).toRotationMatrix();
+    const Eigen::Matrix3d R =
+        Eigen::AngleAxisd(std::atan2(Rc(1, 0), Rc(0, 0)), Eigen::Vector3d::UnitZ()).toRotationMatrix();
     for (uint32_t i = 0; i < n; ++i) {
       const Eigen::Vector3d t = point(b, i) - R * point(a, i);
       const int64_t kx = static_cast<int64_t>(std::floor(t.x() / c.shift_bin)) + (1 << 20);

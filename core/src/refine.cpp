@@ -118,7 +118,8 @@ Status Refiner::set_map(const float* pts, uint32_t n) {
     for (int dx = -1; dx <= 1; ++dx)
       for (int dy = -1; dy <= 1; ++dy)
         for (int dz = -1; dz <= 1; ++dz) {
-          const uint32_t c = find_cell(cell_key(p[0] + dx * config_.cell, p[1] + dy * config_.cell, p[2] + dz * config_.cell));
+          const uint32_t c =
+              find_cell(cell_key(p[0] + dx * config_.cell, p[1] + dy * config_.cell, p[2] + dz * config_.cell));
           if (c == UINT32_MAX) continue;
           for (uint32_t k = begin_[c]; k < begin_[c + 1]; ++k) {
             const float* q = points_ + 3 * k;
@@ -141,7 +142,8 @@ Status Refiner::set_map(const float* pts, uint32_t n) {
   return Status::Ok;
 }
 
-Status Refiner::refine(const VoxelLayer& layer, const Eigen::Isometry3d& initial, Eigen::Isometry3d* out, RefineStats* st_out) {
+Status Refiner::refine(const VoxelLayer& layer, const Eigen::Isometry3d& initial, Eigen::Isometry3d* out,
+                       RefineStats* st_out) {
   RefineStats st;
   *out = initial;
   if (!bound_) return Status::NotInitialized;
@@ -196,12 +198,15 @@ Status Refiner::refine(const VoxelLayer& layer, const Eigen::Isometry3d& initial
       for (int dx = -1; dx <= 1; ++dx)
         for (int dy = -1; dy <= 1; ++dy)
           for (int dz = -1; dz <= 1; ++dz) {
-            const uint64_t key = cell_key(pf[0] + dx * config_.cell, pf[1] + dy * config_.cell, pf[2] + dz * config_.cell);
+            const uint64_t key =
+                cell_key(pf[0] + dx * config_.cell, pf[1] + dy * config_.cell, pf[2] + dz * config_.cell);
             // A cell farther than the best distance so far cannot hold a point that beats it (the search
             // keeps the first strictly nearer point): skip its lookup. Only when the visited cell is the
             // neighbour the offsets name (float rounding could make it another one).
-            const float g = gap[0][dx + 1] * gap[0][dx + 1] + gap[1][dy + 1] * gap[1][dy + 1] + gap[2][dz + 1] * gap[2][dz + 1];
-            const bool named = key == own + (uint64_t(int64_t(dx)) << 42) + (uint64_t(int64_t(dy)) << 21) + uint64_t(int64_t(dz));
+            const float g =
+                gap[0][dx + 1] * gap[0][dx + 1] + gap[1][dy + 1] * gap[1][dy + 1] + gap[2][dz + 1] * gap[2][dz + 1];
+            const bool named =
+                key == own + (uint64_t(int64_t(dx)) << 42) + (uint64_t(int64_t(dy)) << 21) + uint64_t(int64_t(dz));
             if (named && g > best * (1.0f + 1e-4f) + 1e-6f) continue;
             uint32_t c;
             if (named) {  // the cell at this offset from `own`: found before or looked up once now
@@ -216,7 +221,10 @@ Status Refiner::refine(const VoxelLayer& layer, const Eigen::Isometry3d& initial
               const float ex = points_[3 * id] - float(p.x()), ey = points_[3 * id + 1] - float(p.y()),
                           ez = points_[3 * id + 2] - float(p.z());
               const float d2 = ex * ex + ey * ey + ez * ez;
-              if (d2 < best) { best = d2; nn = static_cast<int32_t>(id); }
+              if (d2 < best) {
+                best = d2;
+                nn = static_cast<int32_t>(id);
+              }
             }
           }
       if (nn < 0) continue;
@@ -225,8 +233,8 @@ Status Refiner::refine(const VoxelLayer& layer, const Eigen::Isometry3d& initial
       const Eigen::Vector3d m(points_[3 * nn], points_[3 * nn + 1], points_[3 * nn + 2]);
       const double r = nrm.dot(p - m);  // point-to-plane residual
       Eigen::Matrix<double, 6, 1> J;
-      J.head<3>() = p.cross(nrm);      // d r / d (small rotation)
-      J.tail<3>() = nrm;               // d r / d translation
+      J.head<3>() = p.cross(nrm);  // d r / d (small rotation)
+      J.tail<3>() = nrm;           // d r / d translation
       H += J * J.transpose();
       g += J * r;
       err += r * r;
@@ -244,8 +252,8 @@ Status Refiner::refine(const VoxelLayer& layer, const Eigen::Isometry3d& initial
     step.translation() = dx.tail<3>();
     t = step * t;
   }
-  st.accepted = st.inliers >= config_.min_inliers &&
-                (t.translation() - initial.translation()).norm() <= config_.max_correction;
+  st.accepted =
+      st.inliers >= config_.min_inliers && (t.translation() - initial.translation()).norm() <= config_.max_correction;
   if (st.accepted) *out = t;
   if (st_out) *st_out = st;
   return Status::Ok;

@@ -135,9 +135,13 @@ PoseVerification verify_pose(const VoxelLayer& voxels, const SemanticGridView& g
       for (int k = 0; k < 4 && verdict < 0; ++k)
         if (cell_at_cached(grid, nx[k], ny[k], cache) & bit) verdict = 1;
     }
-    if (verdict == 0) { ++v.unknown; continue; }
+    if (verdict == 0) {
+      ++v.unknown;
+      continue;
+    }
     ++v.scored;
-    if (verdict > 0) v.agree += w; else v.disagree += w;
+    if (verdict > 0) v.agree += w;
+    else v.disagree += w;
   }
   v.score = v.agree - v.disagree;
   return v;
@@ -161,10 +165,15 @@ PoseVerification verify_pose_refined(const VoxelLayer& voxels, const SemanticGri
           c.translation().y() += (k == 2 ? step : k == 3 ? -step : 0.0);
         } else {
           // Turn about the sensor: map_T_scan * Rz keeps the scan origin where it is.
-          c.linear() = c.linear() * Eigen::AngleAxisd(k == 4 ? turn : -turn, Eigen::Vector3d::UnitZ()).toRotationMatrix();
+          c.linear() =
+              c.linear() * Eigen::AngleAxisd(k == 4 ? turn : -turn, Eigen::Vector3d::UnitZ()).toRotationMatrix();
         }
         const float sc = verify_pose(voxels, grid, c, coarse, weights).score;
-        if (sc > best_score) { best_score = sc; best = c; moved = true; }
+        if (sc > best_score) {
+          best_score = sc;
+          best = c;
+          moved = true;
+        }
       }
     }
   }

@@ -26,7 +26,8 @@ uint64_t triangle_key(int32_t q0, int32_t q1, int32_t q2) {
 }
 
 uint64_t triangle_key(const Triangle& t, float bin) {
-  return triangle_key(static_cast<int32_t>(std::floor(t.side[0] / bin)), static_cast<int32_t>(std::floor(t.side[1] / bin)),
+  return triangle_key(static_cast<int32_t>(std::floor(t.side[0] / bin)),
+                      static_cast<int32_t>(std::floor(t.side[1] / bin)),
                       static_cast<int32_t>(std::floor(t.side[2] / bin)));
 }
 
@@ -35,7 +36,11 @@ Triangle make_triangle(uint32_t a, uint32_t b, uint32_t c, const float* pa, cons
   // Edges: e0 = (a,b), e1 = (b,c), e2 = (c,a); order them by (length, smaller id pair) for determinism.
   const uint32_t id[3] = {a, b, c};
   const float* p[3] = {pa, pb, pc};
-  struct Edge { float len; uint32_t i, j; uint64_t tie; };
+  struct Edge {
+    float len;
+    uint32_t i, j;
+    uint64_t tie;
+  };
   Edge e[3];
   for (int k = 0; k < 3; ++k) {
     const int i = k, j = (k + 1) % 3;
@@ -45,15 +50,25 @@ Triangle make_triangle(uint32_t a, uint32_t b, uint32_t c, const float* pa, cons
   auto less = [](const Edge& x, const Edge& y) { return x.len < y.len || (x.len == y.len && x.tie < y.tie); };
   for (int x = 0; x < 2; ++x)
     for (int y = 0; y < 2 - x; ++y)
-      if (less(e[y + 1], e[y])) { const Edge t = e[y]; e[y] = e[y + 1]; e[y + 1] = t; }
+      if (less(e[y + 1], e[y])) {
+        const Edge t = e[y];
+        e[y] = e[y + 1];
+        e[y + 1] = t;
+      }
   // v0 = vertex shared by the shortest (e[0]) and longest (e[2]) edges; v1 = other end of the shortest.
   const uint32_t v0 = (e[0].i == e[2].i || e[0].i == e[2].j) ? e[0].i : e[0].j;
   const uint32_t v1 = e[0].i == v0 ? e[0].j : e[0].i;
   const uint32_t v2 = 3u - v0 - v1;
   Triangle t{};
-  t.v[0] = id[v0]; t.v[1] = id[v1]; t.v[2] = id[v2];
-  t.side[0] = e[0].len; t.side[1] = e[1].len; t.side[2] = e[2].len;
-  t.label[0] = labels[id[v0]]; t.label[1] = labels[id[v1]]; t.label[2] = labels[id[v2]];
+  t.v[0] = id[v0];
+  t.v[1] = id[v1];
+  t.v[2] = id[v2];
+  t.side[0] = e[0].len;
+  t.side[1] = e[1].len;
+  t.side[2] = e[2].len;
+  t.label[0] = labels[id[v0]];
+  t.label[1] = labels[id[v1]];
+  t.label[2] = labels[id[v2]];
   t.pad = 0;
   return t;
 }
@@ -116,15 +131,29 @@ Status TriangleBuilder::build(const float* c, uint32_t stride, const uint8_t* la
     for (uint32_t x = 0; x < knn_count_[i]; ++x)
       for (uint32_t y = x + 1; y < knn_count_[i]; ++y) {
         const uint32_t a = i, b = nb[x], d = nb[y];
-        Triangle t = make_triangle(a, b, d, c + size_t(a) * stride, c + size_t(b) * stride, c + size_t(d) * stride, labels);
+        Triangle t =
+            make_triangle(a, b, d, c + size_t(a) * stride, c + size_t(b) * stride, c + size_t(d) * stride, labels);
         if (!(t.side[0] >= config_.min_side && t.side[2] <= config_.max_side)) continue;
         uint32_t s0 = a, s1 = b, s2 = d;  // sorted vertex set for dedup
-        if (s0 > s1) { const uint32_t tmp = s0; s0 = s1; s1 = tmp; }
-        if (s1 > s2) { const uint32_t tmp = s1; s1 = s2; s2 = tmp; }
-        if (s0 > s1) { const uint32_t tmp = s0; s0 = s1; s1 = tmp; }
+        if (s0 > s1) {
+          const uint32_t tmp = s0;
+          s0 = s1;
+          s1 = tmp;
+        }
+        if (s1 > s2) {
+          const uint32_t tmp = s1;
+          s1 = s2;
+          s2 = tmp;
+        }
+        if (s0 > s1) {
+          const uint32_t tmp = s0;
+          s0 = s1;
+          s1 = tmp;
+        }
         bool inserted = false;
         if (out.size() >= cap) return Status::CapacityExceeded;
-        if (!seen_.find_or_insert((uint64_t(s0) << 42) | (uint64_t(s1) << 21) | s2, &inserted)) return Status::CapacityExceeded;
+        if (!seen_.find_or_insert((uint64_t(s0) << 42) | (uint64_t(s1) << 21) | s2, &inserted))
+          return Status::CapacityExceeded;
         if (!inserted) continue;
         out.push_back(t);
       }

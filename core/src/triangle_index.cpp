@@ -43,9 +43,8 @@ Status build_triangle_index(const Triangle* t, uint32_t n, float bin, uint64_t* 
     scratch[i] = triangle_key(t[i], bin);
     entries[i] = i;
   }
-  std::sort(entries, entries + n, [&](uint32_t a, uint32_t b) {
-    return scratch[a] < scratch[b] || (scratch[a] == scratch[b] && a < b);
-  });
+  std::sort(entries, entries + n,
+            [&](uint32_t a, uint32_t b) { return scratch[a] < scratch[b] || (scratch[a] == scratch[b] && a < b); });
   uint32_t k = 0;
   for (uint32_t i = 0; i < n; ++i) {
     const uint64_t key = scratch[entries[i]];

@@ -19,7 +19,9 @@ void sift_down(RankedTriangleMatch* h, uint32_t n, uint32_t i) {
     if (l < n && worse(h[l], h[m])) m = l;
     if (r < n && worse(h[r], h[m])) m = r;
     if (m == i) return;
-    const RankedTriangleMatch t = h[i]; h[i] = h[m]; h[m] = t;
+    const RankedTriangleMatch t = h[i];
+    h[i] = h[m];
+    h[m] = t;
     i = m;
   }
 }
@@ -51,7 +53,9 @@ void TriangleMatcher::offer(const RankedTriangleMatch& m) {
     while (i > 0) {
       const uint32_t p = (i - 1) / 2;
       if (!worse(heap_[i], heap_[p])) break;
-      const RankedTriangleMatch t = heap_[i]; heap_[i] = heap_[p]; heap_[p] = t;
+      const RankedTriangleMatch t = heap_[i];
+      heap_[i] = heap_[p];
+      heap_[p] = t;
       i = p;
     }
   } else if (worse(heap_[0], m)) {  // replace the worst kept
@@ -115,7 +119,9 @@ TriangleMatchStats TriangleMatcher::match(const Triangle& q, const TriangleIndex
   }
   // Best first (heap sort: repeatedly move the worst to the end).
   for (uint32_t n = size_; n > 1; --n) {
-    const RankedTriangleMatch t = heap_[0]; heap_[0] = heap_[n - 1]; heap_[n - 1] = t;
+    const RankedTriangleMatch t = heap_[0];
+    heap_[0] = heap_[n - 1];
+    heap_[n - 1] = t;
     sift_down(heap_, n - 1, 0);
   }
   st.kept = size_;

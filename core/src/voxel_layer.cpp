@@ -65,8 +65,8 @@ bool VoxelLayer::cell_of(const float p[3], int32_t out[3]) const {
 }
 
 uint32_t VoxelLayer::find_cell(int32_t x, int32_t y, int32_t z) const {
-  if (x <= -kCoordLimit || x >= kCoordLimit - 1 || y <= -kCoordLimit || y >= kCoordLimit - 1 ||
-      z <= -kCoordLimit || z >= kCoordLimit - 1)
+  if (x <= -kCoordLimit || x >= kCoordLimit - 1 || y <= -kCoordLimit || y >= kCoordLimit - 1 || z <= -kCoordLimit ||
+      z >= kCoordLimit - 1)
     return UINT32_MAX;
   return index_find(pack3(x, y, z));
 }
@@ -98,7 +98,8 @@ Status VoxelLayer::build(const ScanView& scan, VoxelStats* stats_out) {
   // A scan of n points makes at most n voxels: the index only needs the slots for min(n, max_voxels).
   if (active_slots_ > 0) std::memset(slots_, 0, sizeof(uint32_t) * active_slots_);
   {
-    const uint32_t want = BoundedHashMap<uint32_t>::slots_for(scan.count < config_.max_voxels ? scan.count : config_.max_voxels);
+    const uint32_t want =
+        BoundedHashMap<uint32_t>::slots_for(scan.count < config_.max_voxels ? scan.count : config_.max_voxels);
     active_slots_ = want < slot_count_ ? want : slot_count_;
   }
   columns_.clear_for(0);
@@ -122,12 +123,24 @@ Status VoxelLayer::build(const ScanView& scan, VoxelStats* stats_out) {
   stats.points_in = scan.count;
   for (uint32_t i = 0; i < scan.count; ++i) {
     const float* p = scan.points + static_cast<size_t>(i) * scan.stride;
-    if (!std::isfinite(p[0]) || !std::isfinite(p[1]) || !std::isfinite(p[2])) { ++stats.non_finite; continue; }
+    if (!std::isfinite(p[0]) || !std::isfinite(p[1]) || !std::isfinite(p[2])) {
+      ++stats.non_finite;
+      continue;
+    }
     const float r2 = p[0] * p[0] + p[1] * p[1] + p[2] * p[2];
-    if (!(r2 >= min_r2 && r2 <= max_r2)) { ++stats.out_of_range; continue; }
+    if (!(r2 >= min_r2 && r2 <= max_r2)) {
+      ++stats.out_of_range;
+      continue;
+    }
     const int c = classes_ ? classes_->library_class(scan.labels[i]) : class_from_kitti(scan.labels[i]);
-    if (c == kUnknownClass) { ++stats.unknown_label; continue; }
-    if (c == kIgnoredClass) { ++stats.ignored; continue; }
+    if (c == kUnknownClass) {
+      ++stats.unknown_label;
+      continue;
+    }
+    if (c == kIgnoredClass) {
+      ++stats.ignored;
+      continue;
+    }
     if (use_logits) {
       const float* l = scan.logits + static_cast<size_t>(i) * kNumClasses;
       // Max and finiteness without branches (the max of finite values does not depend on the order).
@@ -139,7 +152,10 @@ Status VoxelLayer::build(const ScanView& scan, VoxelStats* stats_out) {
         non_finite |= static_cast<uint32_t>((bits & 0x7F800000u) == 0x7F800000u);
         mx = l[k] > mx ? l[k] : mx;
       }
-      if (non_finite) { ++stats.non_finite; continue; }
+      if (non_finite) {
+        ++stats.non_finite;
+        continue;
+      }
       for (int k = 0; k < kNumClasses; ++k) prob[k] = std::exp(l[k] - mx);
       float sum = 0.0f;
       for (int k = 0; k < kNumClasses; ++k) sum += prob[k];  // same order as before: bit-identical
@@ -171,9 +187,15 @@ Status VoxelLayer::build(const ScanView& scan, VoxelStats* stats_out) {
           v.pad[0] = v.pad[1] = v.pad[2] = 0;
           break;
         }
-        if (keys[sl - 1] == key) { id = sl - 1; break; }
+        if (keys[sl - 1] == key) {
+          id = sl - 1;
+          break;
+        }
       }
-      if (id == UINT32_MAX) { ++stats.dropped_points; continue; }
+      if (id == UINT32_MAX) {
+        ++stats.dropped_points;
+        continue;
+      }
       last_key = key;
       last_voxel = id;
     }
@@ -192,12 +214,17 @@ Status VoxelLayer::build(const ScanView& scan, VoxelStats* stats_out) {
   for (uint32_t i = 0; i < count; ++i) {
     Voxel& v = voxels[i];
     const float inv = 1.0f / static_cast<float>(v.count);
-    v.centroid[0] *= inv; v.centroid[1] *= inv; v.centroid[2] *= inv;
+    v.centroid[0] *= inv;
+    v.centroid[1] *= inv;
+    v.centroid[2] *= inv;
     for (int k = 0; k < kNumClasses; ++k) v.prob[k] *= inv;
     int best = 0;
     float best_prob = v.prob[0];
     for (int k = 1; k < kNumClasses; ++k)
-      if (v.prob[k] > best_prob) { best_prob = v.prob[k]; best = k; }
+      if (v.prob[k] > best_prob) {
+        best_prob = v.prob[k];
+        best = k;
+      }
     v.label = static_cast<uint8_t>(best);
   }
   stats.unindexed_voxels = build_columns();
@@ -251,8 +278,8 @@ uint32_t VoxelLayer::build_columns() {
 uint32_t VoxelLayer::gather_within(const float center[3], float radius, bool horizontal_only, uint32_t* out,
                                    uint32_t max_out, uint32_t* total) const {
   uint32_t written = 0, matched = 0;
-  if (bound_ && count_ > 0 && radius > 0.0f && std::isfinite(center[0]) &&
-      std::isfinite(center[1]) && std::isfinite(center[2]) && column_lo_[0] <= column_hi_[0]) {
+  if (bound_ && count_ > 0 && radius > 0.0f && std::isfinite(center[0]) && std::isfinite(center[1]) &&
+      std::isfinite(center[2]) && column_lo_[0] <= column_hi_[0]) {
     const float inv = 1.0f / config_.column_size;
     const float r2 = radius * radius;
     // The query square in column coordinates, clipped to the occupied columns' bounding box (in float,

@@ -45,7 +45,6 @@ bool jacobi_eigenvalues(double* a, uint32_t n) {
 
 }  // namespace
 
-
 void stability_weights(float* out) {
   for (int c = 0; c < kNumClasses; ++c) out[c] = stability_weight(c);
 }
@@ -88,7 +87,10 @@ ObservedW2 w2_squared_diag_observed(const float* mq, const float* vq, const floa
     double acc = 0.0;
     if (normalize_mass > 0.0f) {
       double sa = 0.0, sb = 0.0;
-      for (int d = 0; d < kNumClasses; ++d) { sa += a[d] > 0 ? a[d] : 0; sb += b[d] > 0 ? b[d] : 0; }
+      for (int d = 0; d < kNumClasses; ++d) {
+        sa += a[d] > 0 ? a[d] : 0;
+        sb += b[d] > 0 ? b[d] : 0;
+      }
       if (sa < normalize_mass || sb < normalize_mass) continue;
       for (int d = 0; d < kNumClasses; ++d) {
         const double x = (a[d] > 0 ? a[d] : 0) / sa, y = (b[d] > 0 ? b[d] : 0) / sb;
@@ -136,7 +138,10 @@ Status W2Exact::w2_squared(const float* m1, const float* s1, const float* m2, co
   if (g == 0 || g > max_grid_) return Status::InvalidArgument;
   // L1: Cholesky of S1 + jitter (S1 is PSD; the jitter keeps a rank-deficient posterior factorable).
   double tr1 = 0.0, tr2 = 0.0;
-  for (uint32_t s = 0; s < g; ++s) { tr1 += s1[s * g + s]; tr2 += s2[s * g + s]; }
+  for (uint32_t s = 0; s < g; ++s) {
+    tr1 += s1[s * g + s];
+    tr2 += s2[s * g + s];
+  }
   const double jitter = 1e-9 * (tr1 / g + 1e-12);
   for (uint32_t j = 0; j < g; ++j) {
     double d = double(s1[j * g + j]) + jitter;

@@ -9,10 +9,17 @@
 namespace gsf::port {
 namespace {
 
-struct Token { const char* p; uint32_t n; };
+struct Token {
+  const char* p;
+  uint32_t n;
+};
 
 bool fail(ClassTableParseError* e, uint32_t line, uint32_t field, const char* msg) {
-  if (e) { e->line = line; e->field = field; e->message = msg; }
+  if (e) {
+    e->line = line;
+    e->field = field;
+    e->message = msg;
+  }
   return false;
 }
 
@@ -56,11 +63,19 @@ bool parse_decimal(Token t, float* out) {
 }
 
 bool parse_role(Token t, ClassRole* out) {
-  struct R { const char* s; ClassRole r; };
-  static const R kRoles[] = {{"instance", ClassRole::Instance}, {"stuff", ClassRole::Stuff},
-                             {"host:pole", ClassRole::PoleHost}, {"host:trunk", ClassRole::TrunkHost}};
+  struct R {
+    const char* s;
+    ClassRole r;
+  };
+  static const R kRoles[] = {{"instance", ClassRole::Instance},
+                             {"stuff", ClassRole::Stuff},
+                             {"host:pole", ClassRole::PoleHost},
+                             {"host:trunk", ClassRole::TrunkHost}};
   for (const R& r : kRoles)
-    if (std::strlen(r.s) == t.n && std::memcmp(r.s, t.p, t.n) == 0) { *out = r.r; return true; }
+    if (std::strlen(r.s) == t.n && std::memcmp(r.s, t.p, t.n) == 0) {
+      *out = r.r;
+      return true;
+    }
   return false;
 }
 
@@ -69,7 +84,8 @@ const char* core_message(ClassTableError e) {
     case ClassTableError::DuplicateId: return "duplicate raw id";
     case ClassTableError::BadStability: return "stability outside [0, 1]";
     case ClassTableError::BadRole: return "an ignored class can only be stuff";
-    case ClassTableError::ConflictingStability: return "stability differs from an earlier line of the same library class";
+    case ClassTableError::ConflictingStability:
+      return "stability differs from an earlier line of the same library class";
     case ClassTableError::ConflictingRole: return "role differs from an earlier line of the same library class";
     case ClassTableError::NameTooLong: return "name longer than 39 characters";
     case ClassTableError::TooManyEntries: return "more than 256 entries";
@@ -78,12 +94,14 @@ const char* core_message(ClassTableError e) {
 }
 
 // One line (without its newline), already checked for length. false + error on failure.
-bool parse_line(const char* p, uint32_t n, uint32_t line, ClassTable* out, ClassTableParseError* err,
-                Status* status) {
+bool parse_line(const char* p, uint32_t n, uint32_t line, ClassTable* out, ClassTableParseError* err, Status* status) {
   *status = Status::CorruptData;
   // Cut the comment and a trailing CR; reject control and non-ASCII bytes in what remains.
   for (uint32_t i = 0; i < n; ++i)
-    if (p[i] == '#') { n = i; break; }
+    if (p[i] == '#') {
+      n = i;
+      break;
+    }
   if (n > 0 && p[n - 1] == '\r') --n;
   for (uint32_t i = 0; i < n; ++i) {
     const unsigned char c = static_cast<unsigned char>(p[i]);
@@ -99,7 +117,10 @@ bool parse_line(const char* p, uint32_t n, uint32_t line, ClassTable* out, Class
     if (nf == 5) return fail(err, line, 6, "too many fields (expected: id name library_class stability [role])");
     f[nf++] = Token{p + start, i - start};
   }
-  if (nf == 0) { *status = Status::Ok; return true; }  // blank or comment-only
+  if (nf == 0) {
+    *status = Status::Ok;
+    return true;
+  }  // blank or comment-only
   if (nf < 4) return fail(err, line, nf + 1, "missing field (expected: id name library_class stability [role])");
   uint16_t id;
   if (!parse_id(f[0], &id)) return fail(err, line, 1, "id is not a decimal integer in 0..65535");
@@ -117,10 +138,11 @@ bool parse_line(const char* p, uint32_t n, uint32_t line, ClassTable* out, Class
   const ClassTableError e = out->add(id, name, cls, stability, role);
   if (e != ClassTableError::None) {
     if (e == ClassTableError::TooManyEntries) *status = Status::CapacityExceeded;
-    const uint32_t field = e == ClassTableError::DuplicateId ? 1
+    const uint32_t field = e == ClassTableError::DuplicateId                                                  ? 1
                            : e == ClassTableError::BadStability || e == ClassTableError::ConflictingStability ? 4
-                           : e == ClassTableError::BadRole || e == ClassTableError::ConflictingRole ? 5
-                           : e == ClassTableError::NameTooLong ? 2 : 0;
+                           : e == ClassTableError::BadRole || e == ClassTableError::ConflictingRole           ? 5
+                           : e == ClassTableError::NameTooLong                                                ? 2
+                                                                                                              : 0;
     return fail(err, line, field, core_message(e));
   }
   *status = Status::Ok;

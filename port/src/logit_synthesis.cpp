@@ -9,7 +9,11 @@
 namespace gsf::port {
 namespace {
 
-struct Confusion { float p; int n; int partners[3]; };
+struct Confusion {
+  float p;
+  int n;
+  int partners[3];
+};
 
 Confusion confusion_of(int c) {
   switch (c) {
@@ -58,7 +62,8 @@ void synthesize_logits(const LogitModel& m, uint64_t scan_id, const uint32_t* la
     if (c >= 0) {
       const Confusion conf = confusion_of(c);
       const float u = rng.uniform01();
-      if (conf.n > 0 && u < conf.p * m.confusion_scale) predicted = conf.partners[rng.uniform(static_cast<uint32_t>(conf.n))];
+      if (conf.n > 0 && u < conf.p * m.confusion_scale)
+        predicted = conf.partners[rng.uniform(static_cast<uint32_t>(conf.n))];
       l[predicted] += m.margin;
       if (predicted != c) l[c] += 0.5f * m.margin;
     }

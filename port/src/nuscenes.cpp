@@ -13,11 +13,19 @@ uint16_t nuscenes_to_kitti(uint8_t c) {
   if (c >= 2 && c <= 8) return 30;
   switch (c) {
     case 9: return 51;
-    case 10: case 11: case 12: case 13: case 29: return 99;
+    case 10:
+    case 11:
+    case 12:
+    case 13:
+    case 29: return 99;
     case 14: return 11;
-    case 15: case 16: return 13;
+    case 15:
+    case 16: return 13;
     case 17: return 10;
-    case 18: case 19: case 20: case 22: return 20;
+    case 18:
+    case 19:
+    case 20:
+    case 22: return 20;
     case 21: return 15;
     case 23: return 18;
     case 24: return 40;
@@ -32,18 +40,36 @@ uint16_t nuscenes_to_kitti(uint8_t c) {
 
 uint8_t kitti_to_nuscenes(uint32_t label) {
   switch (label & 0xFFFFu) {
-    case 10: case 252: return 17;
+    case 10:
+    case 252: return 17;
     case 11: return 14;
     case 13: return 16;
     case 15: return 21;
-    case 16: case 20: case 256: case 257: case 259: return 18;
-    case 18: case 258: return 23;
-    case 30: case 31: case 32: case 253: case 254: case 255: return 2;
-    case 40: case 60: return 24;
-    case 44: case 49: return 25;
+    case 16:
+    case 20:
+    case 256:
+    case 257:
+    case 259: return 18;
+    case 18:
+    case 258: return 23;
+    case 30:
+    case 31:
+    case 32:
+    case 253:
+    case 254:
+    case 255: return 2;
+    case 40:
+    case 60: return 24;
+    case 44:
+    case 49: return 25;
     case 48: return 26;
-    case 50: case 51: case 52: case 80: case 81: return 28;
-    case 70: case 71: return 30;
+    case 50:
+    case 51:
+    case 52:
+    case 80:
+    case 81: return 28;
+    case 70:
+    case 71: return 30;
     case 72: return 27;
     case 99: return 29;
     default: return 0;
@@ -61,9 +87,11 @@ Status NuScenesLidarsegWriter::write_scan(uint32_t frame, const float* xyzi, con
   for (uint32_t i = 0; i < count; ++i)
     if (lidarseg[i] > 31) return Status::InvalidInput;
   char path[detail::kMaxPathBytes];
-  if (!detail::frame_path(path, dir_, "velodyne", frame, ".bin") || !detail::write_file(path, {{xyzi, size_t(count) * 16}}))
+  if (!detail::frame_path(path, dir_, "velodyne", frame, ".bin") ||
+      !detail::write_file(path, {{xyzi, size_t(count) * 16}}))
     return Status::IoError;
-  if (!detail::frame_path(path, dir_, "lidarseg", frame, ".label") || !detail::write_file(path, {{lidarseg, size_t(count)}}))
+  if (!detail::frame_path(path, dir_, "lidarseg", frame, ".label") ||
+      !detail::write_file(path, {{lidarseg, size_t(count)}}))
     return Status::IoError;
   return Status::Ok;
 }
@@ -112,7 +140,8 @@ Status NuScenesLidarsegSource::read(uint32_t index, ScanBuffer& out) {
   const uint32_t frame = frames_[index];
   char path[detail::kMaxPathBytes];
   detail::InputFile bin, labels;
-  if (!detail::frame_path(path, dir_, "velodyne", frame, ".bin") || bin.open(path) != Status::Ok) return Status::IoError;
+  if (!detail::frame_path(path, dir_, "velodyne", frame, ".bin") || bin.open(path) != Status::Ok)
+    return Status::IoError;
   if (!detail::frame_path(path, dir_, "lidarseg", frame, ".label")) return Status::IoError;
   const Status ls = labels.open(path);
   if (ls == Status::IoError || (ls == Status::NotFound && options_.require_labels)) return Status::IoError;

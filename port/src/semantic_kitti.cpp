@@ -55,7 +55,8 @@ Status check_layout(uint64_t bin_bytes, bool have_labels, uint64_t label_bytes, 
   layout->count = static_cast<uint32_t>(n);
   layout->logits = false;
   if (logits_header != nullptr && out.logits != nullptr) {
-    if (logit_bytes < kLogitsHeaderBytes || std::memcmp(logits_header, kLogitsMagic, 4) != 0) return Status::CorruptData;
+    if (logit_bytes < kLogitsHeaderBytes || std::memcmp(logits_header, kLogitsMagic, 4) != 0)
+      return Status::CorruptData;
     uint16_t version, d;
     uint32_t count;
     std::memcpy(&version, logits_header + 4, 2);
@@ -189,7 +190,8 @@ Status SemanticKittiSource::read(uint32_t index, ScanBuffer& out) {
   const uint32_t frame = frames_[index];
   char path[detail::kMaxPathBytes];
   detail::InputFile bin, labels, logits;
-  if (!detail::frame_path(path, dir_, "velodyne", frame, ".bin") || bin.open(path) != Status::Ok) return Status::IoError;
+  if (!detail::frame_path(path, dir_, "velodyne", frame, ".bin") || bin.open(path) != Status::Ok)
+    return Status::IoError;
   if (!detail::frame_path(path, dir_, "labels", frame, ".label")) return Status::IoError;
   const Status ls = labels.open(path);
   if (ls == Status::IoError) return ls;
@@ -216,16 +218,17 @@ Status SemanticKittiWriter::open(const std::string& root, const std::string& seq
   return detail::make_sequence_dirs(root, seq, "labels", &dir_);
 }
 
-
 Status SemanticKittiWriter::write_scan(uint32_t frame, const float* xyzi, const uint32_t* labels, const float* logits,
                                        uint32_t count) {
   if (dir_.empty()) return Status::NotInitialized;
   if (frame > 999999) return Status::InvalidInput;  // file names have six digits
   if (count > 0 && (xyzi == nullptr || labels == nullptr)) return Status::InvalidInput;
   char path[detail::kMaxPathBytes];
-  if (!detail::frame_path(path, dir_, "velodyne", frame, ".bin") || !detail::write_file(path, {{xyzi, size_t(count) * 16}}))
+  if (!detail::frame_path(path, dir_, "velodyne", frame, ".bin") ||
+      !detail::write_file(path, {{xyzi, size_t(count) * 16}}))
     return Status::IoError;
-  if (!detail::frame_path(path, dir_, "labels", frame, ".label") || !detail::write_file(path, {{labels, size_t(count) * 4}}))
+  if (!detail::frame_path(path, dir_, "labels", frame, ".label") ||
+      !detail::write_file(path, {{labels, size_t(count) * 4}}))
     return Status::IoError;
   if (logits) {
     std::error_code ec;

@@ -41,13 +41,22 @@ inline double reconstruction_miou(const gsf::FieldConfig& base, const float* xyz
       for (int d = 1; d < kNumClasses; ++d)
         if (mean[s * kNumClasses + d] > mean[s * kNumClasses + best]) best = d;
       const int truth = labels[s0 + s];
-      if (best == truth) { inter[truth]++; uni[truth]++; } else { uni[truth]++; uni[best]++; }
+      if (best == truth) {
+        inter[truth]++;
+        uni[truth]++;
+      } else {
+        uni[truth]++;
+        uni[best]++;
+      }
     }
   }
   double sum = 0;
   int classes = 0;
   for (int d = 0; d < kNumClasses; ++d)
-    if (uni[d]) { sum += double(inter[d]) / uni[d]; ++classes; }
+    if (uni[d]) {
+      sum += double(inter[d]) / uni[d];
+      ++classes;
+    }
   return classes ? sum / classes : 0.0;
 }
 

@@ -6,9 +6,9 @@
 #include <cstring>
 #include <vector>
 
+#include "gsf/detail/triangle.h"
 #include "gsf/map_format.h"
 #include "gsf/semantic_classes.h"
-#include "gsf/detail/triangle.h"
 
 namespace gsf_test {
 
@@ -21,30 +21,73 @@ inline std::vector<uint64_t> fuzz_seed_map(size_t* bytes) {
   set_frame_name(&v.georef, "utm-32N");
   std::memset(&v.params, 0, sizeof v.params);
   MapParams& p = v.params;
-  p.num_classes = kNumClasses; p.field_input_dims = 2; p.inducing_stride = 2; p.grid_nx = 2; p.grid_ny = 2;
-  p.grid_layers = 1; p.grid_spacing = 1; p.layer_spacing = 1; p.length_scale = 2; p.signal_variance = 1;
-  p.noise_variance = 0.1f; p.field_radius = 8; p.voxel_size = 0.4f; p.side_bin = 1; p.max_side = 50;
+  p.num_classes = kNumClasses;
+  p.field_input_dims = 2;
+  p.inducing_stride = 2;
+  p.grid_nx = 2;
+  p.grid_ny = 2;
+  p.grid_layers = 1;
+  p.grid_spacing = 1;
+  p.layer_spacing = 1;
+  p.length_scale = 2;
+  p.signal_variance = 1;
+  p.noise_variance = 0.1f;
+  p.field_radius = 8;
+  p.voxel_size = 0.4f;
+  p.side_bin = 1;
+  p.max_side = 50;
   p.class_table_id = 0xF1D8DAB4u;  // SemanticKITTI's (gsf inspect shows it); the loader takes any value
   static MapInstance in[4];
-  for (int i = 0; i < 4; ++i) { in[i].centroid[0] = i * 2.f; in[i].centroid[1] = float(i * i); in[i].stability = 1; in[i].label = kPole; in[i].inducing_count = 2; }
-  static std::vector<float> inputs(4 * 2 * 3, 0.5f), alpha(4 * 2 * kNumClasses, 0.1f), mean(4 * 4 * kNumClasses, 0.2f), var(16, 0.3f), refine(8, 1.0f);
+  for (int i = 0; i < 4; ++i) {
+    in[i].centroid[0] = i * 2.f;
+    in[i].centroid[1] = float(i * i);
+    in[i].stability = 1;
+    in[i].label = kPole;
+    in[i].inducing_count = 2;
+  }
+  static std::vector<float> inputs(4 * 2 * 3, 0.5f), alpha(4 * 2 * kNumClasses, 0.1f), mean(4 * 4 * kNumClasses, 0.2f),
+      var(16, 0.3f), refine(8, 1.0f);
   static Triangle t[2] = {};
   for (int k = 0; k < 2; ++k) {
-    t[k].v[0] = 0; t[k].v[1] = 1; t[k].v[2] = 2 + k; t[k].side[0] = 2.2f; t[k].side[1] = 3.6f; t[k].side[2] = 5.6f + k;
+    t[k].v[0] = 0;
+    t[k].v[1] = 1;
+    t[k].v[2] = 2 + k;
+    t[k].side[0] = 2.2f;
+    t[k].side[1] = 3.6f;
+    t[k].side[2] = 5.6f + k;
     for (int j = 0; j < 3; ++j) t[k].label[j] = kPole;
   }
   static uint64_t keys[2] = {7, 9};
   static uint32_t off[3] = {0, 1, 2}, ent[2] = {1, 0};
-  v.counts.instances = 4; v.counts.triangles = 2; v.counts.index_keys = 2; v.counts.refine_points = 2;
-  v.instances = in; v.field_inputs = inputs.data(); v.field_alpha = alpha.data(); v.grid_mean = mean.data();
-  v.grid_var = var.data(); v.triangles = t; v.index_keys = keys; v.index_offsets = off; v.index_entries = ent;
+  v.counts.instances = 4;
+  v.counts.triangles = 2;
+  v.counts.index_keys = 2;
+  v.counts.refine_points = 2;
+  v.instances = in;
+  v.field_inputs = inputs.data();
+  v.field_alpha = alpha.data();
+  v.grid_mean = mean.data();
+  v.grid_var = var.data();
+  v.triangles = t;
+  v.index_keys = keys;
+  v.index_offsets = off;
+  v.index_entries = ent;
   v.refine_points = refine.data();
   // A two-tile semantic layer (2 x 2 cells per tile) so its checks are fuzzed too.
-  p.semantic_cell = 1.0f; p.semantic_tile_cells = 2;
+  p.semantic_cell = 1.0f;
+  p.semantic_tile_cells = 2;
   static uint32_t tile_keys[2] = {(32768u << 16) | 32768u, (32768u << 16) | 32769u};
-  static uint32_t cells[8] = {gsf::kCellObserved | gsf::class_bit(gsf::kRoad), 0, gsf::kCellObserved | gsf::class_bit(gsf::kPole),
-                              gsf::kCellObserved, 0, gsf::kCellObserved | gsf::class_bit(gsf::kTerrain), 0, 0};
-  v.counts.semantic_tiles = 2; v.semantic_tile_keys = tile_keys; v.semantic_cells = cells;
+  static uint32_t cells[8] = {gsf::kCellObserved | gsf::class_bit(gsf::kRoad),
+                              0,
+                              gsf::kCellObserved | gsf::class_bit(gsf::kPole),
+                              gsf::kCellObserved,
+                              0,
+                              gsf::kCellObserved | gsf::class_bit(gsf::kTerrain),
+                              0,
+                              0};
+  v.counts.semantic_tiles = 2;
+  v.semantic_tile_keys = tile_keys;
+  v.semantic_cells = cells;
   *bytes = map_serialized_size(v);
   std::vector<uint64_t> buf(*bytes / 8 + 2);
   write_map(v, buf.data(), *bytes, nullptr);

@@ -56,7 +56,10 @@ float scan_context_distance(const ScanContextConfig& cfg, const ScanContext& q, 
       ++used;
     }
     const float d = used ? sum / used : 2.0f;
-    if (d < best) { best = d; arg = shift; }
+    if (d < best) {
+      best = d;
+      arg = shift;
+    }
   }
   if (best_shift) *best_shift = arg;
   return best;
@@ -81,16 +84,19 @@ ScanContextDatabase::Match ScanContextDatabase::query(const ScanContext& sc) con
   }
   const size_t k = std::min<size_t>(static_cast<size_t>(cfg_.candidates), keyd.size());
   std::partial_sort(keyd.begin(), keyd.begin() + k, keyd.end());
-  struct Cand { float dist; int index; int shift; };
+  struct Cand {
+    float dist;
+    int index;
+    int shift;
+  };
   std::vector<Cand> cands;
   for (size_t c = 0; c < k; ++c) {
     int shift = 0;
     const float d = scan_context_distance(cfg_, sc, entries_[keyd[c].second].sc, &shift);
     cands.push_back({d, keyd[c].second, shift});
   }
-  std::sort(cands.begin(), cands.end(), [](const Cand& a, const Cand& b) {
-    return a.dist < b.dist || (a.dist == b.dist && a.index < b.index);
-  });
+  std::sort(cands.begin(), cands.end(),
+            [](const Cand& a, const Cand& b) { return a.dist < b.dist || (a.dist == b.dist && a.index < b.index); });
   const Cand& best = cands.front();
   out.found = true;
   out.index = best.index;

@@ -17,9 +17,9 @@ struct ScanContextConfig {
   int rings = 20;
   int sectors = 60;
   float max_range = 80.0f;
-  float height_offset = 2.0f;   // sensor height, so ground cells are > 0
-  int candidates = 10;          // ring-key neighbours re-ranked by the full descriptor
-  float min_range = 2.5f;       // drop ego-vehicle returns
+  float height_offset = 2.0f;  // sensor height, so ground cells are > 0
+  int candidates = 10;         // ring-key neighbours re-ranked by the full descriptor
+  float min_range = 2.5f;      // drop ego-vehicle returns
 };
 
 struct ScanContext {
@@ -48,7 +48,10 @@ class ScanContextDatabase {
   size_t size() const { return entries_.size(); }
 
  private:
-  struct Entry { ScanContext sc; Eigen::Isometry3d pose; };
+  struct Entry {
+    ScanContext sc;
+    Eigen::Isometry3d pose;
+  };
   ScanContextConfig cfg_;
   std::vector<Entry> entries_;
 };

@@ -19,7 +19,10 @@ bool Args::parse(int argc, char** argv, int first, const std::vector<OptionSpec>
     std::string name = a.substr(2), value;
     const auto eq = name.find('=');
     bool has_inline = eq != std::string::npos;
-    if (has_inline) { value = name.substr(eq + 1); name = name.substr(0, eq); }
+    if (has_inline) {
+      value = name.substr(eq + 1);
+      name = name.substr(0, eq);
+    }
     const OptionSpec* spec = nullptr;
     for (const auto& s : specs)
       if (s.name == name) spec = &s;
@@ -28,12 +31,18 @@ bool Args::parse(int argc, char** argv, int first, const std::vector<OptionSpec>
       return false;
     }
     if (spec->is_flag) {
-      if (has_inline) { *error = "option '--" + name + "' takes no value"; return false; }
+      if (has_inline) {
+        *error = "option '--" + name + "' takes no value";
+        return false;
+      }
       values_[name] = "1";
       continue;
     }
     if (!has_inline) {
-      if (i + 1 >= argc) { *error = "option '--" + name + "' needs a value"; return false; }
+      if (i + 1 >= argc) {
+        *error = "option '--" + name + "' needs a value";
+        return false;
+      }
       value = argv[++i];
     }
     values_[name] = value;

@@ -7,7 +7,7 @@
 namespace gsf::cli {
 
 struct OptionSpec {
-  std::string name;     // without leading dashes
+  std::string name;  // without leading dashes
   std::string help;
   std::string default_value;  // empty and !is_flag -> required when `required` is set
   bool is_flag = false;

@@ -1,4 +1,5 @@
-// gsf build-map --dataset DIR --sequence 00 --out MAP [--logits synthetic|none] [--classes SET] [--origin X,Y[,Z]] [--frame NAME]
+// gsf build-map --dataset DIR --sequence 00 --out MAP [--logits synthetic|none] [--classes SET] [--origin X,Y[,Z]]
+// [--frame NAME]
 #include <cstdio>
 
 #include "args.h"
@@ -15,10 +16,14 @@ int cmd_build_map(int argc, char** argv) {
       {"sequence", "mapping sequence", "00"},
       {"out", "map file to write", "", false, true},
       {"logits", "synthetic: confusion-model logits and predicted labels; none: ground-truth labels", "synthetic"},
-      {"classes", "label set of the dataset's labels: auto, semantic-kitti, nuscenes or a class-table file (docs/data-formats.md)", "auto"},
+      {"classes",
+       "label set of the dataset's labels: auto, semantic-kitti, nuscenes or a class-table file (docs/data-formats.md)",
+       "auto"},
       {"set", "config overrides name=value[,...] (must match at evaluate/localize time)", ""},
-      {"origin", "map origin X,Y[,Z] in the poses' frame (m); everything in the map is stored relative to it "
-                 "(default: the first pose's translation rounded half up to a whole metre)", ""},
+      {"origin",
+       "map origin X,Y[,Z] in the poses' frame (m); everything in the map is stored relative to it "
+       "(default: the first pose's translation rounded half up to a whole metre)",
+       ""},
       {"frame", "name of the poses' frame recorded in the map, 1..31 printable ASCII (e.g. utm-32N)", "local"},
       {"quiet", "no progress on stderr", "", true},
   };
@@ -30,7 +35,8 @@ int cmd_build_map(int argc, char** argv) {
   std::string err;
   if (!args.parse(argc, argv, 2, specs, &err)) return usage_error("build-map", err);
   LogitMode logits;
-  if (!parse_logit_mode(args.get("logits"), &logits)) return usage_error("build-map", "--logits must be synthetic or none");
+  if (!parse_logit_mode(args.get("logits"), &logits))
+    return usage_error("build-map", "--logits must be synthetic or none");
   LocalizerConfig cfg = default_config();
   if (!apply_overrides(&cfg, args.get("set"), &err)) return usage_error("build-map", err);
   LabelSet labels;
@@ -56,7 +62,8 @@ int cmd_build_map(int argc, char** argv) {
     return 1;
   }
   const Meta meta = read_meta(args.get("dataset"));
-  const float road = meta.present && meta.road_length_m > 0 ? meta.road_length_m : static_cast<float>(path_length(*src));
+  const float road =
+      meta.present && meta.road_length_m > 0 ? meta.road_length_m : static_cast<float>(path_length(*src));
   std::vector<uint64_t> blob;
   size_t bytes = 0;
   mapping::MapBuildStats st;
@@ -66,28 +73,32 @@ int cmd_build_map(int argc, char** argv) {
   s = build_map(*src, options, logits, &blob, &bytes, &st, !args.flag("quiet"), &failed_scan);
   if (s != Status::Ok) {
     if (failed_scan != UINT32_MAX && s == Status::InvalidInput)
-      std::fprintf(stderr, "gsf build-map: failed: %s at scan %u (file %u): its pose is more than %.0f m from the map "
+      std::fprintf(stderr,
+                   "gsf build-map: failed: %s at scan %u (file %u): its pose is more than %.0f m from the map "
                    "origin (give an --origin near the drive) or not finite, or its points are unusable\n",
                    to_string(s), failed_scan, src->frame_id(failed_scan), mapping::kMaxMapLocalCoordinate);
-    else
-      std::fprintf(stderr, "gsf build-map: failed: %s\n", to_string(s));
+    else std::fprintf(stderr, "gsf build-map: failed: %s\n", to_string(s));
     return 1;
   }
   if (!write_file(args.get("out"), blob.data(), bytes, &err)) {
     std::fprintf(stderr, "gsf build-map: %s\n", err.c_str());
     return 1;
   }
-  std::printf("map %s (%s labels): %u scans, %u voxels, %u instances (%u geometric poles), %u triangles (%u keys), %u refine points, %zu bytes "
-              "(%.2f MB/km over %.0f m); %.1f s accumulate, %.1f s cluster, %.1f s fields, %.1f s triangles; "
-              "peak RSS %.0f MB\n",
-              args.get("out").c_str(), labels.name.c_str(), st.scans, st.map_voxels, st.instances, st.pole_instances, st.triangles, st.index_keys,
-              st.refine_points, bytes, road > 0 ? bytes / 1e6 / (road / 1000.0) : 0.0, road, st.seconds_accumulate,
-              st.seconds_cluster, st.seconds_fields, st.seconds_triangles, peak_rss_bytes() / 1e6);
+  std::printf(
+      "map %s (%s labels): %u scans, %u voxels, %u instances (%u geometric poles), %u triangles (%u keys), %u refine "
+      "points, %zu bytes "
+      "(%.2f MB/km over %.0f m); %.1f s accumulate, %.1f s cluster, %.1f s fields, %.1f s triangles; "
+      "peak RSS %.0f MB\n",
+      args.get("out").c_str(), labels.name.c_str(), st.scans, st.map_voxels, st.instances, st.pole_instances,
+      st.triangles, st.index_keys, st.refine_points, bytes, road > 0 ? bytes / 1e6 / (road / 1000.0) : 0.0, road,
+      st.seconds_accumulate, st.seconds_cluster, st.seconds_fields, st.seconds_triangles, peak_rss_bytes() / 1e6);
   std::printf("  origin %.3f, %.3f, %.3f m in frame '%s' (map coordinates are relative to it)\n", st.georef.origin[0],
               st.georef.origin[1], st.georef.origin[2], st.georef.frame);
   if (st.instances_dropped > 0 || st.field_points_dropped > 0)
-    std::printf("  capacity: %u instances and %llu field points beyond the builder's capacities were left out "
-                "(MapBuildConfig)\n", st.instances_dropped, static_cast<unsigned long long>(st.field_points_dropped));
+    std::printf(
+        "  capacity: %u instances and %llu field points beyond the builder's capacities were left out "
+        "(MapBuildConfig)\n",
+        st.instances_dropped, static_cast<unsigned long long>(st.field_points_dropped));
   return 0;
 }
 

@@ -18,8 +18,11 @@ int cmd_demo(int argc, char** argv) {
       {"quiet", "no progress on stderr", "", true},
   };
   if (wants_help(argc, argv)) {
-    std::printf("%s", usage_text("demo", "The end-to-end demo on a built-in simulated world with a repetitive zone "
-                                         "and a time gap: simulate, build the map, evaluate all modes.", specs).c_str());
+    std::printf("%s", usage_text("demo",
+                                 "The end-to-end demo on a built-in simulated world with a repetitive zone "
+                                 "and a time gap: simulate, build the map, evaluate all modes.",
+                                 specs)
+                          .c_str());
     return 0;
   }
   Args args;
@@ -48,8 +51,8 @@ int cmd_demo(int argc, char** argv) {
     std::fprintf(stderr, "gsf demo: simulation failed: %s\n", to_string(s));
     return 1;
   }
-  std::printf("      %.0f m of road, %u map scans, %u queries (%u in the repetitive zone)  [%.0f s]\n", sum.road_length_m,
-              sum.map_scans, sum.queries, sum.zone_queries, elapsed());
+  std::printf("      %.0f m of road, %u map scans, %u queries (%u in the repetitive zone)  [%.0f s]\n",
+              sum.road_length_m, sum.map_scans, sum.queries, sum.zone_queries, elapsed());
 
   std::printf("[2/3] building the map from sequence 00\n");
   auto src = open_source(dataset, "00", &s);
@@ -73,7 +76,8 @@ int cmd_demo(int argc, char** argv) {
   std::printf("      %u instances, %u triangles, %zu bytes (%.2f MB/km)  [%.0f s]\n", st.instances, st.triangles, bytes,
               bytes / 1e6 / (sum.road_length_m / 1000.0), elapsed());
 
-  std::printf("[3/3] evaluating sequence 01: instance-only (GSF off, Outram), GSF on, GSF + refinement, Scan Context peer\n");
+  std::printf(
+      "[3/3] evaluating sequence 01: instance-only (GSF off, Outram), GSF on, GSF + refinement, Scan Context peer\n");
   EvalOptions o;
   o.map_path = map_path;
   o.dataset = dataset;

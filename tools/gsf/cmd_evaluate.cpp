@@ -36,13 +36,18 @@ int cmd_evaluate(int argc, char** argv) {
       {"logits", "synthetic or none (see build-map)", "synthetic"},
       {"threshold", "ambiguity threshold for answering (precision vs answered)", "0.5"},
       {"limit", "evaluate only the first N queries", "0"},
-      {"classes", "label set of the dataset's labels: auto, semantic-kitti, nuscenes or a class-table file (docs/data-formats.md)", "auto"},
+      {"classes",
+       "label set of the dataset's labels: auto, semantic-kitti, nuscenes or a class-table file (docs/data-formats.md)",
+       "auto"},
       {"set", "config overrides name=value[,name=value] (see pipeline.cpp), e.g. gsf.tau=0.1", ""},
       {"quiet", "no progress on stderr", "", true},
   };
   if (wants_help(argc, argv)) {
-    std::printf("%s", usage_text("evaluate", "Localize a query sequence with ground truth; report success rate "
-                                             "(t < 5 m, r < 10 deg), ATE/ARE, time per stage, memory.", specs).c_str());
+    std::printf("%s", usage_text("evaluate",
+                                 "Localize a query sequence with ground truth; report success rate "
+                                 "(t < 5 m, r < 10 deg), ATE/ARE, time per stage, memory.",
+                                 specs)
+                          .c_str());
     return 0;
   }
   Args args;
@@ -59,7 +64,8 @@ int cmd_evaluate(int argc, char** argv) {
   o.overrides = args.get("set");
   o.classes = args.get("classes");
   if (!parse_modes(args.get("mode"), &o.modes)) return usage_error("evaluate", "bad --mode '" + args.get("mode") + "'");
-  if (!parse_logit_mode(args.get("logits"), &o.logits)) return usage_error("evaluate", "--logits must be synthetic or none");
+  if (!parse_logit_mode(args.get("logits"), &o.logits))
+    return usage_error("evaluate", "--logits must be synthetic or none");
   long long lim;
   if (!args.get_double("threshold", &o.threshold, &err) || !args.get_int("limit", &lim, &err) || lim < 0)
     return usage_error("evaluate", err.empty() ? "--limit must be >= 0" : err);

@@ -6,9 +6,9 @@
 #include "commands.h"
 #include "gsf/localizer.h"
 #include "gsf/map_format.h"
-#include "pipeline.h"
 #include "gsf/semantic_classes.h"
 #include "json_writer.h"
+#include "pipeline.h"
 
 namespace gsf::cli {
 
@@ -86,14 +86,16 @@ int cmd_inspect(int argc, char** argv) {
     if (per_class[c]) std::printf("    %-14s %u\n", class_name(c), per_class[c]);
   std::printf("  triangles       %u in %u hash keys\n", map.counts.triangles, map.counts.index_keys);
   std::printf("  refine points   %u\n", map.counts.refine_points);
-  const uint64_t sem_cells = uint64_t(map.counts.semantic_tiles) * map.params.semantic_tile_cells * map.params.semantic_tile_cells;
+  const uint64_t sem_cells =
+      uint64_t(map.counts.semantic_tiles) * map.params.semantic_tile_cells * map.params.semantic_tile_cells;
   std::printf("  semantic layer  %u tiles of %ux%u cells @ %.2f m (%.2f MB)\n", map.counts.semantic_tiles,
               map.params.semantic_tile_cells, map.params.semantic_tile_cells, map.params.semantic_cell,
               (sem_cells * 4 + uint64_t(map.counts.semantic_tiles) * 4) / 1e6);
-  std::printf("  field           %uD inputs, M <= %u inducing, grid %ux%ux%u @ %.2f m, kappa %.2f, noise %.3f, r %.1f m\n",
-              map.params.field_input_dims, map.params.inducing_stride, map.params.grid_nx, map.params.grid_ny,
-              map.params.grid_layers, map.params.grid_spacing, map.params.length_scale, map.params.noise_variance,
-              map.params.field_radius);
+  std::printf(
+      "  field           %uD inputs, M <= %u inducing, grid %ux%ux%u @ %.2f m, kappa %.2f, noise %.3f, r %.1f m\n",
+      map.params.field_input_dims, map.params.inducing_stride, map.params.grid_nx, map.params.grid_ny,
+      map.params.grid_layers, map.params.grid_spacing, map.params.length_scale, map.params.noise_variance,
+      map.params.field_radius);
   std::printf("  triangles       K=%u, sides [%.1f, %.1f] m, bin %.2f m\n", map.params.triangle_neighbours,
               map.params.min_side, map.params.max_side, map.params.side_bin);
   // Workspace budget of a localizer with the default config (refinement on and off).
@@ -101,13 +103,25 @@ int cmd_inspect(int argc, char** argv) {
   cfg.refine.enabled = true;
   const Localizer::Budget b = Localizer::budget(cfg);
   const Status fits = check_map_params(cfg, map.params);
-  std::printf("localizer workspace with the default config (%s for this map):\n", fits == Status::Ok ? "matches" : "DOES NOT match");
-  const struct { const char* name; size_t bytes; } rows[] = {
-      {"voxel layer", b.voxel}, {"instances", b.cluster}, {"geometric poles", b.poles}, {"query fields", b.field}, {"triangles", b.triangle},
-      {"ranked matches", b.match}, {"GSF probe cache", b.gsf_cache}, {"correspondences", b.correspondence},
-      {"hypotheses", b.clique}, {"refinement", b.refine}, {"other", b.other}};
+  std::printf("localizer workspace with the default config (%s for this map):\n",
+              fits == Status::Ok ? "matches" : "DOES NOT match");
+  const struct {
+    const char* name;
+    size_t bytes;
+  } rows[] = {{"voxel layer", b.voxel},
+              {"instances", b.cluster},
+              {"geometric poles", b.poles},
+              {"query fields", b.field},
+              {"triangles", b.triangle},
+              {"ranked matches", b.match},
+              {"GSF probe cache", b.gsf_cache},
+              {"correspondences", b.correspondence},
+              {"hypotheses", b.clique},
+              {"refinement", b.refine},
+              {"other", b.other}};
   for (const auto& r : rows) std::printf("    %-18s %10.2f MB\n", r.name, r.bytes / 1e6);
-  std::printf("    %-18s %10.2f MB  (%.2f MB without refinement)\n", "total", b.total / 1e6, (b.total - b.refine) / 1e6);
+  std::printf("    %-18s %10.2f MB  (%.2f MB without refinement)\n", "total", b.total / 1e6,
+              (b.total - b.refine) / 1e6);
   if (map.counts.refine_points > cfg.refine.max_map_points)
     std::printf("    note: the map's %u refine points exceed refine.max_map_points %u\n", map.counts.refine_points,
                 cfg.refine.max_map_points);

@@ -8,8 +8,8 @@
 #include "gsf/map_format.h"
 #include "gsf/port/clock.h"
 #include "json_writer.h"
-#include "result_json.h"
 #include "pipeline.h"
+#include "result_json.h"
 
 namespace gsf::cli {
 
@@ -21,18 +21,23 @@ int cmd_localize(int argc, char** argv) {
       {"frame", "localize only the scan with this file number (default: all)", ""},
       {"mode", "gsf or instance (GSF filter off)", "gsf"},
       {"logits", "synthetic or none", "synthetic"},
-      {"classes", "label set of the dataset's labels: auto, semantic-kitti, nuscenes or a class-table file (docs/data-formats.md)", "auto"},
+      {"classes",
+       "label set of the dataset's labels: auto, semantic-kitti, nuscenes or a class-table file (docs/data-formats.md)",
+       "auto"},
   };
   if (wants_help(argc, argv)) {
-    std::printf("%s", usage_text("localize", "Localize scans against a map; prints one JSON object per scan.", specs).c_str());
+    std::printf(
+        "%s", usage_text("localize", "Localize scans against a map; prints one JSON object per scan.", specs).c_str());
     return 0;
   }
   Args args;
   std::string err;
   if (!args.parse(argc, argv, 2, specs, &err)) return usage_error("localize", err);
-  if (args.get("mode") != "gsf" && args.get("mode") != "instance") return usage_error("localize", "--mode must be gsf or instance");
+  if (args.get("mode") != "gsf" && args.get("mode") != "instance")
+    return usage_error("localize", "--mode must be gsf or instance");
   LogitMode logits;
-  if (!parse_logit_mode(args.get("logits"), &logits)) return usage_error("localize", "--logits must be synthetic or none");
+  if (!parse_logit_mode(args.get("logits"), &logits))
+    return usage_error("localize", "--logits must be synthetic or none");
   long long frame = -1;
   if (args.has("frame") && !args.get_int("frame", &frame, &err)) return usage_error("localize", err);
   MapFile file;

@@ -1,5 +1,6 @@
 // gsf simulate --out DIR [--preset demo|tiny|suite|tiny-lattice] [--zone row|lattice|hall|avenue|auto]
-//              [--cue-density X] [--seed N] [--beams N] [--label-noise P] [--no-instance-ids] [--label-set semantic-kitti|nuscenes] [--offset X,Y[,Z]]
+//              [--cue-density X] [--seed N] [--beams N] [--label-noise P] [--no-instance-ids] [--label-set
+//              semantic-kitti|nuscenes] [--offset X,Y[,Z]]
 #include <cstdio>
 
 #include "args.h"
@@ -11,26 +12,41 @@ namespace gsf::cli {
 int cmd_simulate(int argc, char** argv) {
   const std::vector<OptionSpec> specs = {
       {"out", "dataset root to write (SemanticKITTI layout + meta.json)", "", false, true},
-      {"preset", "world size: demo (a few km), tiny (tests), suite (bench/suite.sh: 2 x 2 blocks + zone) or "
-                 "tiny-lattice (ctest: one block + a small lattice)", "demo"},
-      {"zone", "repetitive zone: row, lattice, hall, avenue, or auto (by seed: seed % 4 in that order); "
-               "default: the preset's (row; lattice for tiny-lattice)", ""},
-      {"cue-density", "share 0..1 of the zone's repeated instances with a distinctive cue within 6 m "
-                      "(default: legacy stuff for demo/tiny row, 0.5 otherwise)", ""},
+      {"preset",
+       "world size: demo (a few km), tiny (tests), suite (bench/suite.sh: 2 x 2 blocks + zone) or "
+       "tiny-lattice (ctest: one block + a small lattice)",
+       "demo"},
+      {"zone",
+       "repetitive zone: row, lattice, hall, avenue, or auto (by seed: seed % 4 in that order); "
+       "default: the preset's (row; lattice for tiny-lattice)",
+       ""},
+      {"cue-density",
+       "share 0..1 of the zone's repeated instances with a distinctive cue within 6 m "
+       "(default: legacy stuff for demo/tiny row, 0.5 otherwise)",
+       ""},
       {"seed", "world seed (overrides the preset's)", ""},
-      {"label-noise", "share 0..1 of points written with a confused label (pole<->trunk, terrain<->vegetation, ...)", "0"},
+      {"label-noise", "share 0..1 of points written with a confused label (pole<->trunk, terrain<->vegetation, ...)",
+       "0"},
       {"no-instance-ids", "write labels with the instance id bits zeroed", "", true},
-      {"label-set", "labels written: semantic-kitti (labels/, uint32) or nuscenes (lidarseg/, uint8: poles, signs and trunks only as static.manmade / static.vegetation)", "semantic-kitti"},
+      {"label-set",
+       "labels written: semantic-kitti (labels/, uint32) or nuscenes (lidarseg/, uint8: poles, signs and trunks only "
+       "as static.manmade / static.vegetation)",
+       "semantic-kitti"},
       {"beams", "LiDAR beams (e.g. 32 or 64)", ""},
       {"blocks-x", "city blocks along x (overrides the preset)", ""},
       {"blocks-y", "city blocks along y (overrides the preset)", ""},
-      {"offset", "X,Y[,Z] m added to every written pose (scans unchanged): the same drive posed in another frame, "
-                 "e.g. 512345,5412345 for UTM-size coordinates", ""},
+      {"offset",
+       "X,Y[,Z] m added to every written pose (scans unchanged): the same drive posed in another frame, "
+       "e.g. 512345,5412345 for UTM-size coordinates",
+       ""},
       {"quiet", "no progress on stderr", "", true},
   };
   if (wants_help(argc, argv)) {
-    std::printf("%s", usage_text("simulate", "Generate a semantic LiDAR world: sequence 00 = mapping drive, 01 = "
-                                             "localization drive after a time gap.", specs).c_str());
+    std::printf("%s", usage_text("simulate",
+                                 "Generate a semantic LiDAR world: sequence 00 = mapping drive, 01 = "
+                                 "localization drive after a time gap.",
+                                 specs)
+                          .c_str());
     return 0;
   }
   Args args;
@@ -46,7 +62,8 @@ int cmd_simulate(int argc, char** argv) {
   else return usage_error("simulate", "unknown preset '" + preset + "' (demo, tiny, suite or tiny-lattice)");
   uint64_t seed = cfg.world.seed;
   if (args.has("seed")) {
-    if (!args.get_int("seed", &v, &err) || v < 0) return usage_error("simulate", err.empty() ? "--seed must be >= 0" : err);
+    if (!args.get_int("seed", &v, &err) || v < 0)
+      return usage_error("simulate", err.empty() ? "--seed must be >= 0" : err);
     seed = static_cast<uint64_t>(v);
   }
   sim::ZoneType zone = cfg.world.zone;
@@ -78,11 +95,13 @@ int cmd_simulate(int argc, char** argv) {
     cfg.lidar.beams = static_cast<int>(v);
   }
   if (args.has("blocks-x")) {
-    if (!args.get_int("blocks-x", &v, &err) || v < 1 || v > 64) return usage_error("simulate", "--blocks-x must be 1..64");
+    if (!args.get_int("blocks-x", &v, &err) || v < 1 || v > 64)
+      return usage_error("simulate", "--blocks-x must be 1..64");
     cfg.world.blocks_x = static_cast<int>(v);
   }
   if (args.has("blocks-y")) {
-    if (!args.get_int("blocks-y", &v, &err) || v < 1 || v > 64) return usage_error("simulate", "--blocks-y must be 1..64");
+    if (!args.get_int("blocks-y", &v, &err) || v < 1 || v > 64)
+      return usage_error("simulate", "--blocks-y must be 1..64");
     cfg.world.blocks_y = static_cast<int>(v);
   }
   if (args.has("offset")) {
@@ -90,20 +109,22 @@ int cmd_simulate(int argc, char** argv) {
   }
   const bool quiet = args.flag("quiet");
   sim::SimSummary sum;
-  const Status s = sim::run_simulation(cfg, args.get("out"), &sum, [&](const char* stage, uint32_t done, uint32_t total) {
-    if (!quiet && (done % 10 == 0 || done == total)) {
-      std::fprintf(stderr, "\r  simulate: %s %u / %u", stage, done, total);
-      if (done == total) std::fprintf(stderr, "\n");
-    }
-  });
+  const Status s =
+      sim::run_simulation(cfg, args.get("out"), &sum, [&](const char* stage, uint32_t done, uint32_t total) {
+        if (!quiet && (done % 10 == 0 || done == total)) {
+          std::fprintf(stderr, "\r  simulate: %s %u / %u", stage, done, total);
+          if (done == total) std::fprintf(stderr, "\n");
+        }
+      });
   if (s != Status::Ok) {
     std::fprintf(stderr, "gsf simulate: failed: %s\n", to_string(s));
     return 1;
   }
-  std::printf("simulated %.0f m of road, zone %s (%u repeated instances, %u with a cue): %u map scans, %u queries "
-              "(%u in the repetitive zone, %u near it), %llu points -> %s\n",
-              sum.road_length_m, sim::zone_name(cfg.world.zone), sum.zone_instances, sum.cued_instances, sum.map_scans,
-              sum.queries, sum.zone_queries, sum.near_zone_queries, (unsigned long long)sum.points, args.get("out").c_str());
+  std::printf(
+      "simulated %.0f m of road, zone %s (%u repeated instances, %u with a cue): %u map scans, %u queries "
+      "(%u in the repetitive zone, %u near it), %llu points -> %s\n",
+      sum.road_length_m, sim::zone_name(cfg.world.zone), sum.zone_instances, sum.cued_instances, sum.map_scans,
+      sum.queries, sum.zone_queries, sum.near_zone_queries, (unsigned long long)sum.points, args.get("out").c_str());
   return 0;
 }
 

@@ -34,7 +34,7 @@ ModeSummary summarize(const std::string& mode, const std::vector<QueryRecord>& r
   for (const auto& r : records) {
     times.push_back(r.time_ms);
     const double v[9] = {r.stages.voxel, r.stages.cluster, r.stages.field, r.stages.triangle, r.stages.match,
-                         r.stages.gsf, r.stages.clique, r.stages.pose, r.stages.refine};
+                         r.stages.gsf,   r.stages.clique,  r.stages.pose,  r.stages.refine};
     for (int k = 0; k < 9; ++k) st[k].push_back(v[k]);
     if (r.answered) ++s.answered;
     if (r.in_zone) ++s.zone_queries;
@@ -53,14 +53,17 @@ ModeSummary summarize(const std::string& mode, const std::vector<QueryRecord>& r
   if (s.zone_queries) s.zone_success_rate = double(s.zone_successes) / s.zone_queries;
   if (s.near_zone_queries) s.near_zone_success_rate = double(s.near_zone_successes) / s.near_zone_queries;
   if (s.elsewhere_queries) s.elsewhere_success_rate = double(s.elsewhere_successes) / s.elsewhere_queries;
-  if (s.successes) { s.ate_m = t_sum / s.successes; s.are_deg = r_sum / s.successes; }
+  if (s.successes) {
+    s.ate_m = t_sum / s.successes;
+    s.are_deg = r_sum / s.successes;
+  }
   s.median_ms = percentile(times, 0.5);
   s.p95_ms = percentile(times, 0.95);
   for (double t : times) s.mean_ms += t;
   if (!times.empty()) s.mean_ms /= static_cast<double>(times.size());
-  double* ms[9] = {&s.median_stage.voxel, &s.median_stage.cluster, &s.median_stage.field, &s.median_stage.triangle,
-                   &s.median_stage.match, &s.median_stage.gsf, &s.median_stage.clique, &s.median_stage.pose,
-                   &s.median_stage.refine};
+  double* ms[9] = {&s.median_stage.voxel,    &s.median_stage.cluster, &s.median_stage.field,
+                   &s.median_stage.triangle, &s.median_stage.match,   &s.median_stage.gsf,
+                   &s.median_stage.clique,   &s.median_stage.pose,    &s.median_stage.refine};
   for (int k = 0; k < 9; ++k) *ms[k] = percentile(st[k], 0.5);
 
   // Declining curve: sweep the ambiguity threshold over the answered queries' values.

@@ -30,17 +30,17 @@ struct StageMs {  // per-stage wall time of one query, milliseconds
 };
 
 struct QueryRecord {
-  uint32_t index = 0;        // position in the query sequence
-  uint32_t frame = 0;        // file number
-  std::string status;        // gsf::to_string of the localize status ("Ok" = answered)
+  uint32_t index = 0;  // position in the query sequence
+  uint32_t frame = 0;  // file number
+  std::string status;  // gsf::to_string of the localize status ("Ok" = answered)
   bool answered = false;
   bool success = false;
-  bool in_zone = false;      // in the simulator's repetitive zone
-  bool near_zone = false;    // within 60 m of it (not inside)
+  bool in_zone = false;    // in the simulator's repetitive zone
+  bool near_zone = false;  // within 60 m of it (not inside)
   PoseError error;
   double time_ms = 0;
   StageMs stages;
-  double ambiguity = 1.0;    // lower = more confident
+  double ambiguity = 1.0;  // lower = more confident
   uint32_t inliers = 0;
   // Poses in the dataset's frame (= the map's frame, georeference.h): errors are measured there.
   Eigen::Isometry3d estimate = Eigen::Isometry3d::Identity();
@@ -48,34 +48,34 @@ struct QueryRecord {
   // The truth in the map-local frame (relative to the map origin), where the map's own coordinates are:
   // for the diagnostics that compare with map instances, hypotheses and the pictures.
   Eigen::Isometry3d truth_local = Eigen::Isometry3d::Identity();
-  LocalizeResult result;     // the library's own counts for this query (diagnostics)
+  LocalizeResult result;              // the library's own counts for this query (diagnostics)
   uint32_t repeatable_instances = 0;  // query instances with a same-label map instance < 2 m under the truth
   uint32_t true_correspondences = 0;  // selected correspondences the ground truth agrees with (< 2 m)
   double truth_verified_score = 0;    // the ground-truth pose's whole-scan verification score
 };
 
 struct CurvePoint {
-  double threshold;   // answer only if ambiguity <= threshold
-  double answered;    // share of all queries answered
-  double precision;   // successes among answered
+  double threshold;  // answer only if ambiguity <= threshold
+  double answered;   // share of all queries answered
+  double precision;  // successes among answered
 };
 
 struct ModeSummary {
   std::string mode;
   uint32_t queries = 0, answered = 0, successes = 0;
-  double success_rate = 0;           // successes / queries
+  double success_rate = 0;  // successes / queries
   uint32_t zone_queries = 0, zone_successes = 0;
   double zone_success_rate = 0;
   uint32_t near_zone_queries = 0, near_zone_successes = 0;  // near the zone, not inside
   double near_zone_success_rate = 0;
   uint32_t elsewhere_queries = 0, elsewhere_successes = 0;  // neither in nor near the zone
   double elsewhere_success_rate = 0;
-  double ate_m = 0, are_deg = 0;     // mean over successes
+  double ate_m = 0, are_deg = 0;  // mean over successes
   double median_ms = 0, p95_ms = 0, mean_ms = 0;
   StageMs median_stage;
   double time_ratio_to_gsf_off = 0;  // filled by the caller when an instance-only row exists
   uint64_t workspace_bytes = 0;
-  double default_threshold = 0;      // ambiguity threshold used for "answered at default"
+  double default_threshold = 0;  // ambiguity threshold used for "answered at default"
   double precision_at_default = 0, answered_at_default = 0;
   double wrong_answers_at_default = 0;  // share of all queries answered wrongly at the default threshold
   std::vector<CurvePoint> curve;

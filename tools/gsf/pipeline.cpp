@@ -19,12 +19,22 @@ LocalizerConfig default_config() {
 
 bool apply_override(LocalizerConfig* c, const std::string& a, std::string* error) {
   const auto eq = a.find('=');
-  if (eq == std::string::npos) { *error = "override '" + a + "' is not name=value"; return false; }
+  if (eq == std::string::npos) {
+    *error = "override '" + a + "' is not name=value";
+    return false;
+  }
   const std::string k = a.substr(0, eq), v = a.substr(eq + 1);
   char* end = nullptr;
   const double x = std::strtod(v.c_str(), &end);
-  if (v.empty() || *end != '\0') { *error = "override '" + a + "': value is not a number"; return false; }
-  struct F { const char* name; float* f; uint32_t* u; };
+  if (v.empty() || *end != '\0') {
+    *error = "override '" + a + "': value is not a number";
+    return false;
+  }
+  struct F {
+    const char* name;
+    float* f;
+    uint32_t* u;
+  };
   uint32_t verify_enabled = c->verify.enabled ? 1 : 0;
   const F fields[] = {
       {"gsf.tau", &c->gsf.tau, nullptr},
@@ -74,8 +84,10 @@ bool apply_override(LocalizerConfig* c, const std::string& a, std::string* error
   for (const F& f : fields)
     if (k == f.name) {
       if (f.f) *f.f = static_cast<float>(x);
-      else if (x < 0 || x != static_cast<double>(static_cast<uint32_t>(x))) { *error = "override '" + a + "' needs a whole number"; return false; }
-      else *f.u = static_cast<uint32_t>(x);
+      else if (x < 0 || x != static_cast<double>(static_cast<uint32_t>(x))) {
+        *error = "override '" + a + "' needs a whole number";
+        return false;
+      } else *f.u = static_cast<uint32_t>(x);
       c->verify.enabled = verify_enabled != 0;
       return true;
     }
@@ -92,8 +104,14 @@ bool apply_overrides(LocalizerConfig* c, const std::string& list, std::string* e
 }
 
 bool parse_logit_mode(const std::string& s, LogitMode* out) {
-  if (s == "none") { *out = LogitMode::None; return true; }
-  if (s == "synthetic") { *out = LogitMode::Synthetic; return true; }
+  if (s == "none") {
+    *out = LogitMode::None;
+    return true;
+  }
+  if (s == "synthetic") {
+    *out = LogitMode::Synthetic;
+    return true;
+  }
   return false;
 }
 
@@ -117,8 +135,8 @@ bool resolve_label_set(const std::string& spec, const std::string& root, const s
     port::ClassTableParseError pe;
     const Status s = port::load_class_table(out->name, &out->table, &pe);
     if (s != Status::Ok) {
-      *error = "class table '" + out->name + "': " + to_string(s) + " at line " + std::to_string(pe.line) +
-               ", field " + std::to_string(pe.field) + (pe.message ? std::string(": ") + pe.message : "");
+      *error = "class table '" + out->name + "': " + to_string(s) + " at line " + std::to_string(pe.line) + ", field " +
+               std::to_string(pe.field) + (pe.message ? std::string(": ") + pe.message : "");
       return false;
     }
   }
@@ -200,8 +218,8 @@ double path_length(port::ScanSource& src) {
 }
 
 Status build_map(port::ScanSource& src, const mapping::MapBuildConfig& config, LogitMode logits,
-                 std::vector<uint64_t>* blob, size_t* bytes,
-                 mapping::MapBuildStats* stats, bool progress, uint32_t* failed_scan) {
+                 std::vector<uint64_t>* blob, size_t* bytes, mapping::MapBuildStats* stats, bool progress,
+                 uint32_t* failed_scan) {
   if (failed_scan) *failed_scan = UINT32_MAX;
   mapping::MapBuilder builder(config);
   port::OwnedScanBuffer buf(kMaxScanPoints, true);

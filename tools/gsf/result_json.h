@@ -15,11 +15,11 @@ namespace gsf::cli {
 
 struct QueryTruth {
   Eigen::Isometry3d truth = Eigen::Isometry3d::Identity();  // map-local (to_map_local of the dataset pose)
-  uint32_t true_correspondences = 0;  // selected correspondences the truth agrees with
+  uint32_t true_correspondences = 0;                        // selected correspondences the truth agrees with
   // Query instances that have a map instance of the same label within 2 m under the true pose (what
   // any matcher could find at best), of query_instances.
   uint32_t repeatable_instances = 0;
-  double truth_verified_score = 0;    // the truth's own whole-scan verification score
+  double truth_verified_score = 0;  // the truth's own whole-scan verification score
 };
 
 // A result's stage times in milliseconds.

@@ -8,6 +8,7 @@
 #include <fstream>
 #include <memory>
 
+#include "baselines/scan_context.h"
 #include "commands.h"
 #include "evaluation.h"
 #include "gsf/localizer.h"
@@ -15,7 +16,6 @@
 #include "gsf/port/clock.h"
 #include "json_writer.h"
 #include "result_json.h"
-#include "baselines/scan_context.h"
 #include "svg.h"
 
 namespace gsf::cli {
@@ -54,7 +54,8 @@ void write_json(const std::string& path, const EvalOptions& o, const MapView& ma
   for (double o : map.georef.origin) j.exact(o);
   j.end_array();
   j.field("road_length_m", map.counts.road_length_m);
-  j.field("map_bytes_per_km", map.counts.road_length_m > 0 ? map.total_bytes / (map.counts.road_length_m / 1000.0) : 0.0);
+  j.field("map_bytes_per_km",
+          map.counts.road_length_m > 0 ? map.total_bytes / (map.counts.road_length_m / 1000.0) : 0.0);
   j.field("map_instances", map.counts.instances);
   j.field("map_triangles", map.counts.triangles);
   j.field("success_translation_m", kSuccessTranslation);
@@ -146,18 +147,24 @@ void write_svgs(const EvalOptions& o, const MapView& map, const std::vector<Mode
   const float* hi = map.counts.bounds_max;
   SvgCanvas c(lo[0] - 20, lo[1] - 20, hi[0] + 20, hi[1] + 20, 1400);
   for (uint32_t i = 0; i < map.counts.instances; ++i)
-    c.circle(map.instances[i].centroid[0], map.instances[i].centroid[1], 1.6, class_colour(map.instances[i].label), 0.8);
+    c.circle(map.instances[i].centroid[0], map.instances[i].centroid[1], 1.6, class_colour(map.instances[i].label),
+             0.8);
   for (const auto& r : shown->records) {
     const auto t = r.truth_local.translation();  // map-local, like the map's instances
     c.circle(t.x(), t.y(), 5, r.success ? "#1a9850" : (r.answered ? "#d73027" : "#999999"), 0.9);
   }
-  c.text_px(20, 16, "map instances by class; queries (" + shown->mode + "): green = success, red = wrong pose, grey = no answer", 13);
+  c.text_px(
+      20, 16,
+      "map instances by class; queries (" + shown->mode + "): green = success, red = wrong pose, grey = no answer", 13);
   c.save(o.svg_dir + "/map_trajectory.svg");
   // 2. Correspondences before/after the GSF filter for one repetitive-zone query (paper Fig. 3).
   if (!gsf || !inst) return;
   int pick = -1;
   for (size_t q = 0; q < gsf->records.size(); ++q)
-    if (gsf->records[q].in_zone && gsf->records[q].success && !inst->records[q].success) { pick = int(q); break; }
+    if (gsf->records[q].in_zone && gsf->records[q].success && !inst->records[q].success) {
+      pick = int(q);
+      break;
+    }
   for (size_t q = 0; q < gsf->records.size() && pick < 0; ++q)
     if (gsf->records[q].in_zone) pick = int(q);
   if (pick < 0) return;
@@ -168,19 +175,22 @@ void write_svgs(const EvalOptions& o, const MapView& map, const std::vector<Mode
     SvgCanvas f(p.x() - 60, p.y() - 45, p.x() + 60, p.y() + 45, 900);
     for (uint32_t i = 0; i < map.counts.instances; ++i) {
       const float* m = map.instances[i].centroid;
-      if (std::fabs(m[0] - p.x()) < 60 && std::fabs(m[1] - p.y()) < 45) f.circle(m[0], m[1], 3, class_colour(map.instances[i].label), 0.5);
+      if (std::fabs(m[0] - p.x()) < 60 && std::fabs(m[1] - p.y()) < 45)
+        f.circle(m[0], m[1], 3, class_colour(map.instances[i].label), 0.5);
     }
     for (const auto& k : run->corr[pick]) {
       const Eigen::Vector3d q = T * Eigen::Vector3d(k.query_xyz[0], k.query_xyz[1], k.query_xyz[2]);
       const float* m = map.instances[k.map_instance].centroid;
       const bool right = (q - Eigen::Vector3d(m[0], m[1], m[2])).norm() < 2.0;
-      f.line(q.x(), q.y(), m[0], m[1], right ? "#1a9850" : "#d73027", k.in_clique ? 2.0 : 0.7, k.in_clique ? 0.95 : 0.45);
+      f.line(q.x(), q.y(), m[0], m[1], right ? "#1a9850" : "#d73027", k.in_clique ? 2.0 : 0.7,
+             k.in_clique ? 0.95 : 0.45);
       f.circle(q.x(), q.y(), 2, "#000000", 0.8);
     }
     f.circle(p.x(), p.y(), 5, "#000000", 1.0);
     char title[200];
-    std::snprintf(title, sizeof(title), "query %u, %s: %zu correspondences (green = true, red = false; thick = clique), %s",
-                  r.frame, run->mode.c_str(), run->corr[pick].size(), r.success ? "localized" : "failed");
+    std::snprintf(title, sizeof(title),
+                  "query %u, %s: %zu correspondences (green = true, red = false; thick = clique), %s", r.frame,
+                  run->mode.c_str(), run->corr[pick].size(), r.success ? "localized" : "failed");
     f.text_px(10, 14, title, 12);
     f.save(o.svg_dir + "/correspondences_" + run->mode + ".svg");
   }
@@ -293,7 +303,8 @@ int run_evaluation(const EvalOptions& o) {
       }
       const uint32_t nc = lm.loc->last_correspondences(corr.data(), static_cast<uint32_t>(corr.size()));
       for (uint32_t k = 0; k < nc && k < corr.size(); ++k) {
-        const Eigen::Vector3d qw = truth_local * Eigen::Vector3d(corr[k].query_xyz[0], corr[k].query_xyz[1], corr[k].query_xyz[2]);
+        const Eigen::Vector3d qw =
+            truth_local * Eigen::Vector3d(corr[k].query_xyz[0], corr[k].query_xyz[1], corr[k].query_xyz[2]);
         const float* m = map.instances[corr[k].map_instance].centroid;
         if ((qw - Eigen::Vector3d(m[0], m[1], m[2])).norm() < 2.0) ++r.true_correspondences;
       }
@@ -324,7 +335,8 @@ int run_evaluation(const EvalOptions& o) {
     {
       auto map_src = open_source(o.dataset, o.map_sequence, &s, &labels);
       if (s != Status::Ok) {
-        std::fprintf(stderr, "gsf evaluate: scan-context needs the map sequence '%s': %s\n", o.map_sequence.c_str(), to_string(s));
+        std::fprintf(stderr, "gsf evaluate: scan-context needs the map sequence '%s': %s\n", o.map_sequence.c_str(),
+                     to_string(s));
         return 1;
       }
       bench::ScanContextConfig sc;
@@ -334,7 +346,8 @@ int run_evaluation(const EvalOptions& o) {
         if (map_src->pose(i, &pose) != Status::Ok || map_src->read(i, buf.buffer()) != Status::Ok) continue;
         db.add(bench::make_scan_context(sc, buf.buffer().points, 4, buf.buffer().count), pose);
       }
-      run.workspace_bytes = db.size() * (sizeof(float) * (sc.rings * sc.sectors + sc.rings) + sizeof(Eigen::Isometry3d));
+      run.workspace_bytes =
+          db.size() * (sizeof(float) * (sc.rings * sc.sectors + sc.rings) + sizeof(Eigen::Isometry3d));
       for (uint32_t q = 0; q < nq; ++q) {
         QueryRecord r;
         r.index = q;
@@ -373,30 +386,33 @@ int run_evaluation(const EvalOptions& o) {
     if (s2.mode == "instance") base = s2.median_ms;
   for (auto& s2 : sums) s2.time_ratio_to_gsf_off = base > 0 ? s2.median_ms / base : 0;
   const double km = map.counts.road_length_m / 1000.0;
-  std::printf("\nmap: %zu bytes, %u instances, %u triangles, %.0f m of road -> %.2f MB/km; origin %.3f, %.3f, %.3f in '%s'\n",
-              map.total_bytes, map.counts.instances, map.counts.triangles, map.counts.road_length_m,
-              km > 0 ? map.total_bytes / 1e6 / km : 0.0, map.georef.origin[0], map.georef.origin[1], map.georef.origin[2],
-              map.georef.frame);
-  std::printf("queries: %u (%u in the repetitive zone%s%s, %u near it, %u elsewhere); success = t < %.0f m and r < %.0f deg\n\n",
-              nq, sums.empty() ? 0 : sums[0].zone_queries, meta.zone_type.empty() ? "" : ": ", meta.zone_type.c_str(),
-              sums.empty() ? 0 : sums[0].near_zone_queries, sums.empty() ? 0 : sums[0].elsewhere_queries,
-              kSuccessTranslation, kSuccessRotationDeg);
+  std::printf(
+      "\nmap: %zu bytes, %u instances, %u triangles, %.0f m of road -> %.2f MB/km; origin %.3f, %.3f, %.3f in '%s'\n",
+      map.total_bytes, map.counts.instances, map.counts.triangles, map.counts.road_length_m,
+      km > 0 ? map.total_bytes / 1e6 / km : 0.0, map.georef.origin[0], map.georef.origin[1], map.georef.origin[2],
+      map.georef.frame);
+  std::printf(
+      "queries: %u (%u in the repetitive zone%s%s, %u near it, %u elsewhere); success = t < %.0f m and r < %.0f "
+      "deg\n\n",
+      nq, sums.empty() ? 0 : sums[0].zone_queries, meta.zone_type.empty() ? "" : ": ", meta.zone_type.c_str(),
+      sums.empty() ? 0 : sums[0].near_zone_queries, sums.empty() ? 0 : sums[0].elsewhere_queries, kSuccessTranslation,
+      kSuccessRotationDeg);
   std::printf("%-13s %8s %8s %8s %8s %7s %7s %9s %9s %7s %10s %9s %9s\n", "mode", "success", "repet.", "near", "else",
               "ATE m", "ARE deg", "median ms", "p95 ms", "x off", "workspace", "prec@thr", "answered");
   for (size_t m = 0; m < sums.size(); ++m) {
     const ModeSummary& x = sums[m];
     std::printf("%-13s %7.1f%% %7.1f%% %7.1f%% %7.1f%% %7.2f %7.2f %9.1f %9.1f %7.2f %8.1fMB %8.1f%% %8.1f%%\n",
                 x.mode.c_str(), 100 * x.success_rate, 100 * x.zone_success_rate, 100 * x.near_zone_success_rate,
-                100 * x.elsewhere_success_rate, x.ate_m, x.are_deg, x.median_ms, x.p95_ms,
-                x.time_ratio_to_gsf_off, runs[m].workspace_bytes / 1e6, 100 * x.precision_at_default,
-                100 * x.answered_at_default);
+                100 * x.elsewhere_success_rate, x.ate_m, x.are_deg, x.median_ms, x.p95_ms, x.time_ratio_to_gsf_off,
+                runs[m].workspace_bytes / 1e6, 100 * x.precision_at_default, 100 * x.answered_at_default);
   }
   for (const auto& x : sums)
     if (x.mode != "scan-context")
-      std::printf("  %s median stage ms: voxel %.1f  cluster %.1f  field %.1f  triangle %.1f  match %.1f  gsf %.1f  "
-                  "clique %.1f  pose %.1f  refine %.1f\n", x.mode.c_str(), x.median_stage.voxel, x.median_stage.cluster,
-                  x.median_stage.field, x.median_stage.triangle, x.median_stage.match, x.median_stage.gsf,
-                  x.median_stage.clique, x.median_stage.pose, x.median_stage.refine);
+      std::printf(
+          "  %s median stage ms: voxel %.1f  cluster %.1f  field %.1f  triangle %.1f  match %.1f  gsf %.1f  "
+          "clique %.1f  pose %.1f  refine %.1f\n",
+          x.mode.c_str(), x.median_stage.voxel, x.median_stage.cluster, x.median_stage.field, x.median_stage.triangle,
+          x.median_stage.match, x.median_stage.gsf, x.median_stage.clique, x.median_stage.pose, x.median_stage.refine);
   std::printf("  (prec@thr / answered: precision and share answered when declining queries with ambiguity > %.2f)\n",
               o.threshold);
   if (!o.json_out.empty()) write_json(o.json_out, o, map, runs, sums, meta);

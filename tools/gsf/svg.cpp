@@ -46,8 +46,8 @@ void SvgCanvas::rect_px(double x, double y, double w, double h, const std::strin
 }
 std::string SvgCanvas::finish() const {
   return "<svg xmlns=\"http://www.w3.org/2000/svg\" width=\"" + fmt(width_) + "\" height=\"" + fmt(height_) +
-         "\" viewBox=\"0 0 " + fmt(width_) + " " + fmt(height_) + "\">\n<rect width=\"100%\" height=\"100%\" fill=\"white\"/>\n" +
-         body_ + "</svg>\n";
+         "\" viewBox=\"0 0 " + fmt(width_) + " " + fmt(height_) +
+         "\">\n<rect width=\"100%\" height=\"100%\" fill=\"white\"/>\n" + body_ + "</svg>\n";
 }
 bool SvgCanvas::save(const std::string& path) const {
   std::ofstream f(path);
@@ -58,9 +58,13 @@ bool SvgCanvas::save(const std::string& path) const {
 std::string class_colour(int c) {
   switch (c) {
     case kCar: return "#6495ed";
-    case kTruck: case kOtherVehicle: return "#5050ff";
-    case kPerson: case kBicyclist: case kMotorcyclist: return "#ff1e1e";
-    case kBicycle: case kMotorcycle: return "#ff6464";
+    case kTruck:
+    case kOtherVehicle: return "#5050ff";
+    case kPerson:
+    case kBicyclist:
+    case kMotorcyclist: return "#ff1e1e";
+    case kBicycle:
+    case kMotorcycle: return "#ff6464";
     case kRoad: return "#ff00ff";
     case kParking: return "#ff96ff";
     case kSidewalk: return "#4b004b";

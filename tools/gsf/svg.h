@@ -10,7 +10,8 @@ class SvgCanvas {
  public:
   SvgCanvas(double min_x, double min_y, double max_x, double max_y, double width_px);
   void circle(double x, double y, double r_px, const std::string& fill, double opacity = 1.0);
-  void line(double x0, double y0, double x1, double y1, const std::string& stroke, double width_px, double opacity = 1.0);
+  void line(double x0, double y0, double x1, double y1, const std::string& stroke, double width_px,
+            double opacity = 1.0);
   void text(double x, double y, const std::string& s, double size_px, const std::string& fill = "#222");
   // Text at pixel coordinates (legends, titles).
   void text_px(double px, double py, const std::string& s, double size_px, const std::string& fill = "#222");

@@ -6,16 +6,16 @@
 #include <cstring>
 #include <memory>
 
-#include "gsf/detail/arena.h"
 #include "gsf/class_table.h"
+#include "gsf/detail/arena.h"
 #include "gsf/detail/fixed_vector.h"
 #include "gsf/detail/gaussian_field.h"
 #include "gsf/detail/instance_clustering.h"
 #include "gsf/detail/pole_extraction.h"
-#include "gsf/map_format.h"
 #include "gsf/detail/triangle.h"
 #include "gsf/detail/triangle_index.h"
 #include "gsf/detail/voxel_layer.h"
+#include "gsf/map_format.h"
 
 namespace gsf::mapping {
 namespace {
@@ -200,12 +200,14 @@ Status MapBuilder::build(std::vector<uint64_t>* blob, size_t* bytes_out, MapBuil
     uint32_t m = 0, got = 0, total = 0;
     float* in_i = inputs.data() + size_t(i) * M * 3;
     float* al_i = alpha.data() + size_t(i) * M * D;
-    const Status fit = fit_instance_field(solver, layer, in.centroid, gather, in_i, al_i, chol.data(), &m, &got, &total);
+    const Status fit =
+        fit_instance_field(solver, layer, in.centroid, gather, in_i, al_i, chol.data(), &m, &got, &total);
     st.field_points_dropped += total - got;
     if (fit == Status::Ok) {
       mi.inducing_count = m;
       FieldView f{in_i, al_i, m};
-      solver.probe(f, chol.data(), grid.data(), G, mean.data() + size_t(i) * G * D, var.data() + size_t(i) * G, nullptr);
+      solver.probe(f, chol.data(), grid.data(), G, mean.data() + size_t(i) * G * D, var.data() + size_t(i) * G,
+                   nullptr);
     } else {
       st.fields_failed++;
     }
@@ -221,14 +223,16 @@ Status MapBuilder::build(std::vector<uint64_t>* blob, size_t* bytes_out, MapBuil
   Workspace tws(TriangleBuilder::required_bytes(tc, ni + 1) + size_t(tri_cap) * sizeof(Triangle) + 4096);
   TriangleBuilder tb;
   FixedVector<Triangle> tris;
-  if (tb.bind(tws.arena, tc, ni + 1) != Status::Ok || !tris.bind(tws.arena, tc.max_triangles)) return Status::InvalidArgument;
+  if (tb.bind(tws.arena, tc, ni + 1) != Status::Ok || !tris.bind(tws.arena, tc.max_triangles))
+    return Status::InvalidArgument;
   s = tb.build(centroids.data(), 3, inst_labels.data(), ni, tris);
   if (s != Status::Ok) return s;
   const uint32_t nt = tris.size();
   std::vector<uint64_t> ikeys(nt + 1), scratch(nt + 1);
   std::vector<uint32_t> offsets(nt + 2), entries(nt + 1);
   uint32_t key_count = 0;
-  build_triangle_index(tris.data(), nt, tc.side_bin, ikeys.data(), offsets.data(), entries.data(), &key_count, scratch.data());
+  build_triangle_index(tris.data(), nt, tc.side_bin, ikeys.data(), offsets.data(), entries.data(), &key_count,
+                       scratch.data());
   st.triangles = nt;
   st.index_keys = key_count;
   st.seconds_triangles = seconds_since(t_tri);
@@ -278,7 +282,10 @@ Status MapBuilder::build(std::vector<uint64_t>* blob, size_t* bytes_out, MapBuil
   }
   view.semantic_tile_keys = sem_keys.empty() ? nullptr : sem_keys.data();
   view.semantic_cells = sem_cells.empty() ? nullptr : sem_cells.data();
-  for (int k = 0; k < 3; ++k) { view.counts.bounds_min[k] = 1e30f; view.counts.bounds_max[k] = -1e30f; }
+  for (int k = 0; k < 3; ++k) {
+    view.counts.bounds_min[k] = 1e30f;
+    view.counts.bounds_max[k] = -1e30f;
+  }
   for (uint32_t i = 0; i < ni; ++i)
     for (int k = 0; k < 3; ++k) {
       view.counts.bounds_min[k] = std::min(view.counts.bounds_min[k], instances[i].centroid[k]);

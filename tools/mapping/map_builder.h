@@ -2,8 +2,8 @@
 // with the same VoxelLayer the localizer uses, and their voxels accumulate into one map-local voxel map
 // (class probabilities averaged, weighted by point counts). Poses come in the map's frame (e.g. UTM
 // metres); the builder moves them to the map-local frame by subtracting the map origin in double before
-// anything becomes float (georeference.h), so maps of GNSS-posed drives keep millimetres. build() then runs the localizer's own
-// stages over the whole map: instance clustering (an object seen from many scans is one instance), one
+// anything becomes float (georeference.h), so maps of GNSS-posed drives keep millimetres. build() then runs the
+// localizer's own stages over the whole map: instance clustering (an object seen from many scans is one instance), one
 // Gaussian semantic field per instance probed on its canonical grid, triangles and the hash index,
 // plus a downsampled point layer for refinement, and serialises the map blob (map_format.h).
 #pragma once
@@ -29,7 +29,7 @@ struct MapBuildStats {
   uint64_t points = 0;
   uint32_t map_voxels = 0;
   uint32_t instances = 0;
-  uint32_t pole_instances = 0;  // of which geometric poles / trunks (pole_extraction.h)
+  uint32_t pole_instances = 0;        // of which geometric poles / trunks (pole_extraction.h)
   uint32_t instances_dropped = 0;     // clustered instances and poles beyond the config's capacities
   uint64_t field_points_dropped = 0;  // semantic points beyond max_field_points, over all instances
   uint32_t instances_by_class[kNumClasses] = {};

@@ -10,10 +10,18 @@ namespace {
 
 void prim_xy_bounds(const Primitive& p, float* lo, float* hi) {
   switch (p.shape) {
-    case Shape::Box: lo[0] = p.a[0]; lo[1] = p.a[1]; hi[0] = p.b[0]; hi[1] = p.b[1]; break;
+    case Shape::Box:
+      lo[0] = p.a[0];
+      lo[1] = p.a[1];
+      hi[0] = p.b[0];
+      hi[1] = p.b[1];
+      break;
     case Shape::Cylinder:
     case Shape::Sphere:
-      lo[0] = p.a[0] - p.b[0]; lo[1] = p.a[1] - p.b[0]; hi[0] = p.a[0] + p.b[0]; hi[1] = p.a[1] + p.b[0];
+      lo[0] = p.a[0] - p.b[0];
+      lo[1] = p.a[1] - p.b[0];
+      hi[0] = p.a[0] + p.b[0];
+      hi[1] = p.a[1] + p.b[0];
       break;
   }
 }
@@ -85,7 +93,8 @@ Raycaster::Raycaster(const World& world, float cell) : world_(world), cell_(cell
   for (size_t c = 0; c < counts.size(); ++c) cell_start_[c + 1] = cell_start_[c] + counts[c];
   cell_prims_.assign(cell_start_.back(), 0);
   std::vector<uint32_t> fill(cell_start_.begin(), cell_start_.end() - 1);
-  for (uint32_t i = 0; i < world.prims.size(); ++i) for_cells(world.prims[i], [&](size_t c) { cell_prims_[fill[c]++] = i; });
+  for (uint32_t i = 0; i < world.prims.size(); ++i)
+    for_cells(world.prims[i], [&](size_t c) { cell_prims_[fill[c]++] = i; });
 }
 
 float Raycaster::cast(const Eigen::Vector3f& o, const Eigen::Vector3f& d, float max_t, uint32_t* label) const {
@@ -94,7 +103,10 @@ float Raycaster::cast(const Eigen::Vector3f& o, const Eigen::Vector3f& d, float 
   bool ground = false;
   if (d.z() < -1e-6f) {
     const float tg = -o.z() / d.z();
-    if (tg > 0 && tg < best) { best = tg; ground = true; }
+    if (tg > 0 && tg < best) {
+      best = tg;
+      ground = true;
+    }
   }
   // 2-D DDA over cells, stopping once the next cell starts beyond the best hit.
   const float dxy = std::sqrt(d.x() * d.x() + d.y() * d.y());
@@ -112,11 +124,23 @@ float Raycaster::cast(const Eigen::Vector3f& o, const Eigen::Vector3f& d, float 
       const size_t c = size_t(cy) * nx_ + cx;
       for (uint32_t k = cell_start_[c]; k < cell_start_[c + 1]; ++k) {
         const float t = intersect(world_.prims[cell_prims_[k]], o, d);
-        if (t > 0 && t < best) { best = t; best_prim = static_cast<int>(cell_prims_[k]); ground = false; }
+        if (t > 0 && t < best) {
+          best = t;
+          best_prim = static_cast<int>(cell_prims_[k]);
+          ground = false;
+        }
       }
     }
     if (dxy < 1e-9f) break;
-    if (tmx < tmy) { t_enter = tmx; tmx += tdx; cx += sx; } else { t_enter = tmy; tmy += tdy; cy += sy; }
+    if (tmx < tmy) {
+      t_enter = tmx;
+      tmx += tdx;
+      cx += sx;
+    } else {
+      t_enter = tmy;
+      tmy += tdy;
+      cy += sy;
+    }
   }
   if (best_prim >= 0) {
     const Primitive& p = world_.prims[best_prim];
@@ -142,7 +166,8 @@ void Raycaster::scan(const Eigen::Isometry3d& pose, const LidarParams& L, uint64
   for (int c = 0; c < cols; ++c) {
     const float az = c * L.azimuth_step_deg * deg;
     for (int b = 0; b < L.beams; ++b) {
-      const float el = (L.elevation_min_deg + (L.elevation_max_deg - L.elevation_min_deg) * b / std::max(1, L.beams - 1)) * deg;
+      const float el =
+          (L.elevation_min_deg + (L.elevation_max_deg - L.elevation_min_deg) * b / std::max(1, L.beams - 1)) * deg;
       const Eigen::Vector3f ds(std::cos(el) * std::cos(az), std::cos(el) * std::sin(az), std::sin(el));
       uint32_t label = 0;
       float t = cast(o, R * ds, L.max_range, &label);

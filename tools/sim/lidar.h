@@ -17,8 +17,8 @@ struct LidarParams {
   float azimuth_step_deg = 0.4f;
   float max_range = 80.0f;
   float min_range = 1.0f;
-  float range_noise = 0.02f;   // m, Gaussian sigma
-  float dropout = 0.02f;       // probability a return is lost
+  float range_noise = 0.02f;  // m, Gaussian sigma
+  float dropout = 0.02f;      // probability a return is lost
 };
 
 struct SimScan {

@@ -7,9 +7,9 @@
 #include <fstream>
 
 #include "gsf/detail/bounded_hash_map.h"
+#include "gsf/detail/rng.h"
 #include "gsf/port/nuscenes.h"
 #include "gsf/port/semantic_kitti.h"
-#include "gsf/detail/rng.h"
 
 namespace gsf::sim {
 namespace {
@@ -76,8 +76,8 @@ SimConfig SimConfig::suite(ZoneType zone, uint64_t seed) {
       c.zone_query_spacing = w.zone_length / kZoneQueries;
       break;
     case ZoneType::Lattice: {
-      w.lattice_nx = 6 + static_cast<int>(r.uniform(9));  // 6..14
-      w.lattice_ny = 4 + static_cast<int>(r.uniform(7));  // 4..10
+      w.lattice_nx = 6 + static_cast<int>(r.uniform(9));                   // 6..14
+      w.lattice_ny = 4 + static_cast<int>(r.uniform(7));                   // 4..10
       w.lattice_spacing = 7.0f + 0.5f * static_cast<float>(r.uniform(5));  // 7..9 m
       const float s = w.lattice_spacing;  // query aisles: odd x-aisles (zone width), odd y-aisles (height)
       const float len = static_cast<float>((w.lattice_ny + 1) / 2) * (w.lattice_nx + 1) * s +
@@ -86,8 +86,8 @@ SimConfig SimConfig::suite(ZoneType zone, uint64_t seed) {
       break;
     }
     case ZoneType::Hall: {
-      w.hall_nx = 8 + static_cast<int>(r.uniform(7));  // 8..14
-      w.hall_ny = 3 + static_cast<int>(r.uniform(4));  // 3..6
+      w.hall_nx = 8 + static_cast<int>(r.uniform(7));              // 8..14
+      w.hall_ny = 3 + static_cast<int>(r.uniform(4));              // 3..6
       w.hall_dx = 9.0f + 0.5f * static_cast<float>(r.uniform(5));  // 9..11 m
       w.hall_dy = 7.0f + 0.5f * static_cast<float>(r.uniform(3));  // 7..8 m
       const float len = static_cast<float>((w.hall_ny + 1) / 2) * (w.hall_nx * w.hall_dx + 5.0f) +
@@ -225,8 +225,8 @@ Drive query_drive(const World& w, const SimConfig& c) {
     // Alternate: opposite direction in the other lane, or the same direction in the other lane. Zone
     // roads and aisles: always against the segment's (the mapping drive's) direction.
     const bool reverse = (segment++ % 2) == 0 || r.in_zone;
-    const float spacing = r.in_zone ? zone_spacing
-                                    : (r.approach && c.near_query_spacing > 0 ? c.near_query_spacing : c.query_spacing);
+    const float spacing =
+        r.in_zone ? zone_spacing : (r.approach && c.near_query_spacing > 0 ? c.near_query_spacing : c.query_spacing);
     for (float s = spacing * 0.37f; s <= len; s += spacing) {
       // Reverse: the left lane of the mapping direction. Same direction: the road centre line, half a
       // lane from the mapping lane.
@@ -234,7 +234,8 @@ Drive query_drive(const World& w, const SimConfig& c) {
       float x = r.x0 + s * dx - side * dy, y = r.y0 + s * dy + side * dx;
       x += c.pose_noise_xy * (2 * rng.uniform01() - 1) * std::fabs(dy);
       y += c.pose_noise_xy * (2 * rng.uniform01() - 1) * std::fabs(dx);
-      const double yaw = std::atan2(reverse ? -dy : dy, reverse ? -dx : dx) + c.pose_noise_yaw_deg * deg * (2 * rng.uniform01() - 1);
+      const double yaw =
+          std::atan2(reverse ? -dy : dy, reverse ? -dx : dx) + c.pose_noise_yaw_deg * deg * (2 * rng.uniform01() - 1);
       const double roll = c.pose_noise_tilt_deg * deg * (2 * rng.uniform01() - 1);
       const double pitch = c.pose_noise_tilt_deg * deg * (2 * rng.uniform01() - 1);
       d.poses.push_back(make_pose(x, y, c.sensor_height, yaw, roll, pitch));
@@ -260,7 +261,8 @@ Status run_simulation(const SimConfig& c, const std::string& root, SimSummary* s
     gsf::port::SemanticKittiWriter writer;
     gsf::port::NuScenesLidarsegWriter nus_writer;
     std::vector<uint8_t> lidarseg;
-    Status s = c.nuscenes_labels ? nus_writer.open(root, seq == 0 ? "00" : "01") : writer.open(root, seq == 0 ? "00" : "01");
+    Status s =
+        c.nuscenes_labels ? nus_writer.open(root, seq == 0 ? "00" : "01") : writer.open(root, seq == 0 ? "00" : "01");
     if (s != Status::Ok) return s;
     const Drive& d = *drives[seq];
     for (uint32_t f = 0; f < d.poses.size(); ++f) {
@@ -281,7 +283,8 @@ Status run_simulation(const SimConfig& c, const std::string& root, SimSummary* s
       if (progress) progress(seq == 0 ? "mapping drive" : "query drive", f + 1, static_cast<uint32_t>(d.poses.size()));
     }
     std::vector<Eigen::Isometry3d> posed = d.poses;  // the scans stay in the sensor frame; only poses move
-    for (Eigen::Isometry3d& p : posed) p.translation() += Eigen::Vector3d(c.pose_offset[0], c.pose_offset[1], c.pose_offset[2]);
+    for (Eigen::Isometry3d& p : posed)
+      p.translation() += Eigen::Vector3d(c.pose_offset[0], c.pose_offset[1], c.pose_offset[2]);
     s = c.nuscenes_labels ? nus_writer.write_poses(posed) : writer.write_poses(posed);
     if (s != Status::Ok) return s;
   }
@@ -296,43 +299,48 @@ Status run_simulation(const SimConfig& c, const std::string& root, SimSummary* s
   meta << "{\n  \"generator\": \"gsf simulate\",\n  \"seed\": " << c.world.seed << ",\n";
   meta << "  \"world\": {\"blocks_x\": " << c.world.blocks_x << ", \"blocks_y\": " << c.world.blocks_y
        << ", \"block_size\": " << c.world.block_size << ", \"road_width\": " << c.world.road_width
-       << ", \"repetitive_zone\": " << (c.world.repetitive_zone ? "true" : "false") << ", \"zone_length\": "
-       << c.world.zone_length << ", \"zone_period\": " << c.world.zone_period << "},\n";
+       << ", \"repetitive_zone\": " << (c.world.repetitive_zone ? "true" : "false")
+       << ", \"zone_length\": " << c.world.zone_length << ", \"zone_period\": " << c.world.zone_period << "},\n";
   meta << "  \"lidar\": {\"beams\": " << c.lidar.beams << ", \"elevation_min_deg\": " << c.lidar.elevation_min_deg
-       << ", \"elevation_max_deg\": " << c.lidar.elevation_max_deg << ", \"azimuth_step_deg\": " << c.lidar.azimuth_step_deg
-       << ", \"max_range\": " << c.lidar.max_range << ", \"range_noise\": " << c.lidar.range_noise
-       << ", \"dropout\": " << c.lidar.dropout << "},\n";
+       << ", \"elevation_max_deg\": " << c.lidar.elevation_max_deg
+       << ", \"azimuth_step_deg\": " << c.lidar.azimuth_step_deg << ", \"max_range\": " << c.lidar.max_range
+       << ", \"range_noise\": " << c.lidar.range_noise << ", \"dropout\": " << c.lidar.dropout << "},\n";
   meta << "  \"time_gap\": {\"seed\": " << c.time_gap.seed << ", \"cars_removed\": " << c.time_gap.cars_removed
        << ", \"cars_moved\": " << c.time_gap.cars_moved << ", \"vegetation_change\": " << c.time_gap.vegetation_change
        << ", \"bushes_cut\": " << c.time_gap.bushes_cut << "},\n";
   char offset[96];  // every digit (the stream's default 6 would print 5.41234e+06)
   std::snprintf(offset, sizeof(offset), "[%.17g, %.17g, %.17g]", c.pose_offset[0], c.pose_offset[1], c.pose_offset[2]);
   meta << "  \"pose_offset\": " << offset << ",\n";
-  meta << "  \"road_length_m\": " << sum.road_length_m << ",\n  \"map_sequence\": \"00\",\n  \"query_sequence\": \"01\",\n";
+  meta << "  \"road_length_m\": " << sum.road_length_m
+       << ",\n  \"map_sequence\": \"00\",\n  \"query_sequence\": \"01\",\n";
   meta << "  \"map_scans\": " << sum.map_scans << ",\n  \"queries\": " << sum.queries << ",\n";
   meta << "  \"query_in_repetitive_zone\": [";
   for (size_t i = 0; i < queries.in_zone.size(); ++i) meta << (i ? "," : "") << (queries.in_zone[i] ? 1 : 0);
   // Zone description and sensing options (keys added after the original ones).
   const WorldParams& wp = c.world;
   meta << "],\n  \"zone\": {\"type\": \"" << zone_name(wp.zone) << "\", \"cues\": \""
-       << (wp.legacy_row_cues() ? "legacy" : "density") << "\", \"cue_density\": "
-       << (wp.legacy_row_cues() ? -1.0f : wp.effective_cue_density()) << ", \"rect\": [" << world.zone_rect[0] << ", "
-       << world.zone_rect[1] << ", " << world.zone_rect[2] << ", " << world.zone_rect[3] << "]";
+       << (wp.legacy_row_cues() ? "legacy" : "density")
+       << "\", \"cue_density\": " << (wp.legacy_row_cues() ? -1.0f : wp.effective_cue_density()) << ", \"rect\": ["
+       << world.zone_rect[0] << ", " << world.zone_rect[1] << ", " << world.zone_rect[2] << ", " << world.zone_rect[3]
+       << "]";
   if (wp.zone == ZoneType::Lattice)
     meta << ", \"nx\": " << wp.lattice_nx << ", \"ny\": " << wp.lattice_ny << ", \"dx\": " << wp.lattice_spacing
          << ", \"dy\": " << wp.lattice_spacing;
   else if (wp.zone == ZoneType::Hall)
-    meta << ", \"nx\": " << wp.hall_nx << ", \"ny\": " << wp.hall_ny << ", \"dx\": " << wp.hall_dx << ", \"dy\": " << wp.hall_dy;
+    meta << ", \"nx\": " << wp.hall_nx << ", \"ny\": " << wp.hall_ny << ", \"dx\": " << wp.hall_dx
+         << ", \"dy\": " << wp.hall_dy;
   else if (wp.zone == ZoneType::Avenue)
     meta << ", \"length\": " << wp.avenue_length << ", \"period\": " << wp.avenue_period << ", \"kind\": \""
-         << (!world.zone_repeated_prims.empty() && world.prims[world.zone_repeated_prims[0]].semantic == 71 ? "trees" : "lamps") << "\"";
-  else
-    meta << ", \"length\": " << wp.zone_length << ", \"period\": " << wp.zone_period;
+         << (!world.zone_repeated_prims.empty() && world.prims[world.zone_repeated_prims[0]].semantic == 71 ? "trees"
+                                                                                                            : "lamps")
+         << "\"";
+  else meta << ", \"length\": " << wp.zone_length << ", \"period\": " << wp.zone_period;
   meta << ", \"margin\": " << wp.zone_margin << ", \"repeated_instances\": " << sum.zone_instances
        << ", \"cued_instances\": " << sum.cued_instances << ", \"zone_queries\": " << sum.zone_queries
        << ", \"near_zone_queries\": " << sum.near_zone_queries << ", \"near_zone_m\": " << kNearZone << "},\n";
-  meta << "  \"sensing\": {\"label_noise\": " << c.label_noise << ", \"instance_ids\": " << (c.instance_ids ? "true" : "false")
-       << ", \"label_set\": \"" << (c.nuscenes_labels ? "nuscenes" : "semantic-kitti") << "\""
+  meta << "  \"sensing\": {\"label_noise\": " << c.label_noise
+       << ", \"instance_ids\": " << (c.instance_ids ? "true" : "false") << ", \"label_set\": \""
+       << (c.nuscenes_labels ? "nuscenes" : "semantic-kitti") << "\""
        << "},\n";
   meta << "  \"query_near_zone\": [";
   for (size_t i = 0; i < queries.near_zone.size(); ++i) meta << (i ? "," : "") << (queries.near_zone[i] ? 1 : 0);

@@ -23,10 +23,10 @@ struct SimConfig {
   WorldParams world;
   LidarParams lidar;
   TimeGapParams time_gap;
-  float map_spacing = 10.0f;     // m between mapping scans
-  float query_spacing = 25.0f;   // m between query scans (half of it inside the repetitive zone)
+  float map_spacing = 10.0f;    // m between mapping scans
+  float query_spacing = 25.0f;  // m between query scans (half of it inside the repetitive zone)
   float sensor_height = 1.73f;
-  float pose_noise_xy = 0.5f;    // m, lateral jitter of query poses
+  float pose_noise_xy = 0.5f;  // m, lateral jitter of query poses
   float pose_noise_yaw_deg = 3.0f;
   float pose_noise_tilt_deg = 0.5f;
   // Query spacing inside the zone; 0 = the zone's default (row: query_spacing / 2, lattice 6 m, hall 7 m,
@@ -60,7 +60,7 @@ float zone_query_spacing(const World& world, const SimConfig& config);
 struct Drive {
   std::vector<Eigen::Isometry3d> poses;  // world_T_lidar
   std::vector<bool> in_zone;
-  std::vector<bool> near_zone;           // within kNearZone m of the zone, not inside
+  std::vector<bool> near_zone;  // within kNearZone m of the zone, not inside
 };
 
 Drive mapping_drive(const World& world, const SimConfig& config);

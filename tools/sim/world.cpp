@@ -20,8 +20,8 @@ struct Gen {
   bool chance(float p) { return rng.uniform01() < p; }
 
   void box(uint16_t sem, uint32_t inst, float x0, float y0, float z0, float x1, float y1, float z1) {
-    w.prims.push_back(Primitive{Shape::Box, sem, inst, {std::min(x0, x1), std::min(y0, y1), z0},
-                                {std::max(x0, x1), std::max(y0, y1), z1}});
+    w.prims.push_back(Primitive{
+        Shape::Box, sem, inst, {std::min(x0, x1), std::min(y0, y1), z0}, {std::max(x0, x1), std::max(y0, y1), z1}});
   }
   void cylinder(uint16_t sem, uint32_t inst, float x, float y, float z0, float r, float h) {
     w.prims.push_back(Primitive{Shape::Cylinder, sem, inst, {x, y, z0}, {r, h, 0}});
@@ -129,11 +129,14 @@ uint16_t World::ground_class(float x, float y) const {
   // The zone's road: row and avenue run a road through the zone; lattice and hall have an approach road
   // up to the zone rectangle and a plain floor inside it.
   const bool road_zone = params.zone == ZoneType::Row || params.zone == ZoneType::Avenue;
-  if (params.repetitive_zone && road_zone && x >= gx && x <= zone_x1 + params.zone_margin) dmin = std::min(dmin, std::fabs(y - zone_y));
-  if (params.repetitive_zone && !road_zone && x >= gx && x <= zone_rect[0]) dmin = std::min(dmin, std::fabs(y - zone_y));
+  if (params.repetitive_zone && road_zone && x >= gx && x <= zone_x1 + params.zone_margin)
+    dmin = std::min(dmin, std::fabs(y - zone_y));
+  if (params.repetitive_zone && !road_zone && x >= gx && x <= zone_rect[0])
+    dmin = std::min(dmin, std::fabs(y - zone_y));
   if (dmin <= hw) return kRoad;
   if (dmin <= hw + sw) return kSidewalk;
-  if (params.repetitive_zone && !road_zone && x >= zone_rect[0] && x <= zone_rect[2] && y >= zone_rect[1] && y <= zone_rect[3])
+  if (params.repetitive_zone && !road_zone && x >= zone_rect[0] && x <= zone_rect[2] && y >= zone_rect[1] &&
+      y <= zone_rect[3])
     return params.zone == ZoneType::Lattice ? kParking : kOtherGround;
   if (params.repetitive_zone && road_zone && !params.legacy_row_cues() && x > gx + hw + sw &&
       x <= zone_x1 + params.zone_margin && std::fabs(y - zone_y) < 40.0f)
@@ -155,8 +158,8 @@ uint16_t World::ground_class(float x, float y) const {
   // Parking strips on some blocks along their lower edge.
   const int bi = static_cast<int>(std::floor(x / B)), bj = static_cast<int>(std::floor(y / B));
   const float ly = y - bj * B;
-  if (bi >= 0 && bj >= 0 && bi < params.blocks_x && bj < params.blocks_y && (bi + 2 * bj) % 3 == 0 &&
-      ly > hw + sw && ly < hw + sw + 6.0f)
+  if (bi >= 0 && bj >= 0 && bi < params.blocks_x && bj < params.blocks_y && (bi + 2 * bj) % 3 == 0 && ly > hw + sw &&
+      ly < hw + sw + 6.0f)
     return kParking;
   return kTerrain;
 }
@@ -169,7 +172,9 @@ void add_zone_instance(World& w, size_t first, float x, float y, float radius) {
   w.zone_instances.push_back(ZoneInstance{w.prims[first].instance, x, y, radius, false});
 }
 
-struct Rect { float x0, y0, x1, y1; };
+struct Rect {
+  float x0, y0, x1, y1;
+};
 
 // The paper's Fig. 1 car park: the road extends past the city by zone_margin without any instance, then
 // zone_length of road lined by four rows of identical columns every zone_period. Legacy stuff (demo,
@@ -179,7 +184,10 @@ void row_zone(Gen& g, std::vector<Rect>* keep_out) {
   World& w = g.w;
   const WorldParams& p = w.params;
   const float hw = p.road_width / 2, sw = p.sidewalk_width;
-  w.zone_rect[0] = w.zone_x0; w.zone_rect[1] = w.zone_y - 40; w.zone_rect[2] = w.zone_x1; w.zone_rect[3] = w.zone_y + 40;
+  w.zone_rect[0] = w.zone_x0;
+  w.zone_rect[1] = w.zone_y - 40;
+  w.zone_rect[2] = w.zone_x1;
+  w.zone_rect[3] = w.zone_y + 40;
   const float rows[4] = {-(hw + sw + 1.5f), -(hw + sw + 7.5f), hw + sw + 1.5f, hw + sw + 7.5f};
   for (float x = w.zone_x0; x <= w.zone_x1 + 1e-3f; x += p.zone_period)
     for (float ry : rows) {
@@ -214,7 +222,8 @@ float approach_y(const WorldParams& p) { return p.block_size * static_cast<float
 // Aisles of a 2-D zone: x-aisles (along x) k = 0..ny at y0a + k * sy, from xa to xb; mapping drives the
 // even ones (+x), queries the odd ones (-x, i.e. the other direction); y-aisles k = 0..nx at x0a + k * sx
 // from ya to yb, queries only on odd k, in alternating directions (perpendicular crossings).
-void add_aisles(World& w, std::vector<Rect>* keep_out, int nx, int ny, float x0a, float sx, float y0a, float sy, float xa, float xb, float ya, float yb) {
+void add_aisles(World& w, std::vector<Rect>* keep_out, int nx, int ny, float x0a, float sx, float y0a, float sy,
+                float xa, float xb, float ya, float yb) {
   constexpr float kAisleWidth = 3.0f;  // lanes 0.75 m off the aisle centre line
   constexpr float kClear = 2.25f;      // cues keep this far from a used aisle's centre line
   for (int k = 0; k <= ny; ++k) {
@@ -240,7 +249,7 @@ void approach_road(World& w, std::vector<Rect>* keep_out) {
   a.approach = true;
   w.roads.push_back(a);
   keep_out->push_back(Rect{a.x0, w.zone_y - w.params.road_width / 2 - w.params.sidewalk_width - 0.2f, a.x1 + 2.0f,
-                            w.zone_y + w.params.road_width / 2 + w.params.sidewalk_width + 0.2f});
+                           w.zone_y + w.params.road_width / 2 + w.params.sidewalk_width + 0.2f});
 }
 
 // A 2-D square lattice car park: lattice_nx x lattice_ny identical columns (pole, r 0.3 m, 4.5 m) at
@@ -253,8 +262,12 @@ void lattice_zone(Gen& g, std::vector<Rect>* keep_out) {
   const float x0 = w.city_x1 + p.zone_margin;
   const float y0 = w.zone_y + s / 2 - static_cast<float>(p.lattice_ny / 2) * s;  // aisle ny/2 is the approach's
   const float x1 = x0 + (p.lattice_nx - 1) * s, y1 = y0 + (p.lattice_ny - 1) * s;
-  w.zone_rect[0] = x0 - s; w.zone_rect[1] = y0 - s; w.zone_rect[2] = x1 + s; w.zone_rect[3] = y1 + s;
-  w.zone_x0 = w.zone_rect[0]; w.zone_x1 = w.zone_rect[2];
+  w.zone_rect[0] = x0 - s;
+  w.zone_rect[1] = y0 - s;
+  w.zone_rect[2] = x1 + s;
+  w.zone_rect[3] = y1 + s;
+  w.zone_x0 = w.zone_rect[0];
+  w.zone_x1 = w.zone_rect[2];
   for (int j = 0; j < p.lattice_ny; ++j)
     for (int i = 0; i < p.lattice_nx; ++i) {
       const float x = x0 + i * s, y = y0 + j * s;
@@ -262,8 +275,8 @@ void lattice_zone(Gen& g, std::vector<Rect>* keep_out) {
       g.cylinder(kPole, g.id(), x, y, 0.0f, 0.3f, 4.5f);
       add_zone_instance(w, first, x, y, 0.3f);
     }
-  add_aisles(w, keep_out, p.lattice_nx, p.lattice_ny, x0 - s / 2, s, y0 - s / 2, s, w.zone_rect[0], w.zone_rect[2], w.zone_rect[1],
-             w.zone_rect[3]);
+  add_aisles(w, keep_out, p.lattice_nx, p.lattice_ny, x0 - s / 2, s, y0 - s / 2, s, w.zone_rect[0], w.zone_rect[2],
+             w.zone_rect[1], w.zone_rect[3]);
   approach_road(w, keep_out);
 }
 
@@ -279,8 +292,12 @@ void hall_zone(Gen& g, std::vector<Rect>* keep_out) {
   const float y0 = w.zone_y + dy / 2 - static_cast<float>(p.hall_ny / 2) * dy;
   const float x1 = x0 + (p.hall_nx - 1) * dx, y1 = y0 + (p.hall_ny - 1) * dy;
   const float wx0 = x0 - dx / 2 - 4.0f, wx1 = x1 + dx / 2 + 4.0f, wy0 = y0 - dy / 2 - 3.5f, wy1 = y1 + dy / 2 + 3.5f;
-  w.zone_rect[0] = wx0; w.zone_rect[1] = wy0; w.zone_rect[2] = wx1; w.zone_rect[3] = wy1;
-  w.zone_x0 = wx0; w.zone_x1 = wx1;
+  w.zone_rect[0] = wx0;
+  w.zone_rect[1] = wy0;
+  w.zone_rect[2] = wx1;
+  w.zone_rect[3] = wy1;
+  w.zone_x0 = wx0;
+  w.zone_x1 = wx1;
   const bool square = g.chance(0.5f);
   const float half = square ? 0.35f : 0.45f;
   for (int j = 0; j < p.hall_ny; ++j)
@@ -315,7 +332,8 @@ void hall_zone(Gen& g, std::vector<Rect>* keep_out) {
   wall_x(wx1, east_gap);
   wall_y(wy0, south_gap);
   wall_y(wy1, north_gap);
-  add_aisles(w, keep_out, p.hall_nx, p.hall_ny, x0 - dx / 2, dx, y0 - dy / 2, dy, wx0 + 1.5f, wx1 - 1.5f, wy0 + 1.5f, wy1 - 1.5f);
+  add_aisles(w, keep_out, p.hall_nx, p.hall_ny, x0 - dx / 2, dx, y0 - dy / 2, dy, wx0 + 1.5f, wx1 - 1.5f, wy0 + 1.5f,
+             wy1 - 1.5f);
   approach_road(w, keep_out);
 }
 
@@ -330,7 +348,10 @@ void avenue_zone(Gen& g, std::vector<Rect>* keep_out) {
   w.zone_x0 = w.city_x1 + p.zone_margin;
   const int n = static_cast<int>(std::floor(p.avenue_length / p.avenue_period)) + 1;
   w.zone_x1 = w.zone_x0 + (n - 1) * p.avenue_period;
-  w.zone_rect[0] = w.zone_x0; w.zone_rect[1] = w.zone_y - 40; w.zone_rect[2] = w.zone_x1; w.zone_rect[3] = w.zone_y + 40;
+  w.zone_rect[0] = w.zone_x0;
+  w.zone_rect[1] = w.zone_y - 40;
+  w.zone_rect[2] = w.zone_x1;
+  w.zone_rect[3] = w.zone_y + 40;
   w.roads.push_back(RoadSegment{gx, w.zone_y, w.zone_x1 + p.zone_margin, w.zone_y, true});
   const bool trees = g.chance(0.5f);
   const float off = hw + sw - 0.8f;
@@ -385,17 +406,46 @@ void place_cues(Gen& g, const std::vector<Rect>& keep_out) {
         float len = 0, wid = 0, h = 0;
         uint16_t sem = kVegetation;
         switch (kind) {
-          case 1: sem = kVegetation; len = g.uni(1.2f, 2.6f); wid = g.uni(0.4f, 0.7f); h = g.uni(0.7f, 1.3f); break;  // hedge
-          case 2: sem = kTerrain; len = g.uni(1.0f, 2.4f); wid = g.uni(0.8f, 1.8f); h = 0.15f; break;               // island
-          case 3: sem = kFence; len = g.uni(1.0f, 2.6f); wid = 0.06f; h = g.uni(1.0f, 1.7f); break;                 // fence
-          default: sem = kBuilding; len = g.uni(1.0f, 2.6f); wid = 0.25f; h = g.uni(0.6f, 1.4f); break;            // low wall
+          case 1:
+            sem = kVegetation;
+            len = g.uni(1.2f, 2.6f);
+            wid = g.uni(0.4f, 0.7f);
+            h = g.uni(0.7f, 1.3f);
+            break;  // hedge
+          case 2:
+            sem = kTerrain;
+            len = g.uni(1.0f, 2.4f);
+            wid = g.uni(0.8f, 1.8f);
+            h = 0.15f;
+            break;  // island
+          case 3:
+            sem = kFence;
+            len = g.uni(1.0f, 2.6f);
+            wid = 0.06f;
+            h = g.uni(1.0f, 1.7f);
+            break;  // fence
+          default:
+            sem = kBuilding;
+            len = g.uni(1.0f, 2.6f);
+            wid = 0.25f;
+            h = g.uni(0.6f, 1.4f);
+            break;  // low wall
         }
         const float hx = (along_x ? len : wid) / 2, hy = (along_x ? wid : len) / 2;
         q = Primitive{Shape::Box, sem, 0, {cx - hx, cy - hy, 0.0f}, {cx + hx, cy + hy, h}};
       }
       float lo[2], hi[2];
-      if (q.shape == Shape::Box) { lo[0] = q.a[0]; lo[1] = q.a[1]; hi[0] = q.b[0]; hi[1] = q.b[1]; }
-      else { lo[0] = q.a[0] - q.b[0]; lo[1] = q.a[1] - q.b[0]; hi[0] = q.a[0] + q.b[0]; hi[1] = q.a[1] + q.b[0]; }
+      if (q.shape == Shape::Box) {
+        lo[0] = q.a[0];
+        lo[1] = q.a[1];
+        hi[0] = q.b[0];
+        hi[1] = q.b[1];
+      } else {
+        lo[0] = q.a[0] - q.b[0];
+        lo[1] = q.a[1] - q.b[0];
+        hi[0] = q.a[0] + q.b[0];
+        hi[1] = q.a[1] + q.b[0];
+      }
       bool ok = xy_distance(q, zi.x, zi.y) <= kCueRadius - 0.5f;
       for (const Rect& r : keep_out) ok = ok && !overlaps(r, lo, hi);
       for (size_t j = 0; j < n && ok; ++j) {
@@ -458,7 +508,8 @@ World generate_world(const WorldParams& p) {
   // Blocks: buildings around the perimeter, fences, bushes, standalone signs, parking lots.
   for (int bi = 0; bi < p.blocks_x; ++bi)
     for (int bj = 0; bj < p.blocks_y; ++bj) {
-      const float x0 = bi * B + hw + sw, y0 = bj * B + hw + sw, x1 = (bi + 1) * B - hw - sw, y1 = (bj + 1) * B - hw - sw;
+      const float x0 = bi * B + hw + sw, y0 = bj * B + hw + sw, x1 = (bi + 1) * B - hw - sw,
+                  y1 = (bj + 1) * B - hw - sw;
       const bool parking = (bi + 2 * bj) % 3 == 0;
       // bottom / top rows of buildings
       for (int row = 0; row < 2; ++row) {
@@ -487,7 +538,8 @@ World generate_world(const WorldParams& p) {
         const float fx = x0 + g.uni(5, 30), fl = g.uni(10, 30);
         g.box(kFence, 0, fx, y1 - 0.6f, 0, std::min(fx + fl, x1 - 2), y1 - 0.5f, g.uni(1.0f, 1.8f));
       }
-      for (int k = 0; k < 6; ++k) g.bush(g.uni(x0 + 1, x1 - 1), g.chance(0.5f) ? y0 + g.uni(0.5f, 2.0f) : y1 - g.uni(0.5f, 2.0f));
+      for (int k = 0; k < 6; ++k)
+        g.bush(g.uni(x0 + 1, x1 - 1), g.chance(0.5f) ? y0 + g.uni(0.5f, 2.0f) : y1 - g.uni(0.5f, 2.0f));
       if (g.chance(0.6f)) {  // a standalone sign near the kerb
         const float sx = g.uni(x0 + 10, x1 - 10);
         g.cylinder(kPole, g.id(), sx, y0 + 0.5f, 0.0f, 0.06f, 2.4f);
@@ -514,7 +566,8 @@ World generate_world(const WorldParams& p) {
     }
   }
   // World bounds.
-  w.min_xy[0] = -40; w.min_xy[1] = -40;
+  w.min_xy[0] = -40;
+  w.min_xy[1] = -40;
   w.max_xy[0] = (p.repetitive_zone ? w.zone_x1 + p.zone_margin : gx) + 40;
   w.max_xy[1] = gy + 40;
   if (p.repetitive_zone && p.zone != ZoneType::Row) {
@@ -547,7 +600,12 @@ World apply_time_gap(const World& in, const TimeGapParams& tp) {
         dy = along_x ? 0.0f : shift;
       }
       if (car_action == 1) continue;
-      if (car_action == 2) { q.a[0] += dx; q.b[0] += dx; q.a[1] += dy; q.b[1] += dy; }
+      if (car_action == 2) {
+        q.a[0] += dx;
+        q.b[0] += dx;
+        q.a[1] += dy;
+        q.b[1] += dy;
+      }
     } else if (p.semantic == kVegetation && p.shape == Shape::Sphere) {
       const bool bush = p.a[2] < 1.0f;
       if (bush && rng.uniform01() < tp.bushes_cut) continue;

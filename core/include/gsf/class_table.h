@@ -53,15 +53,15 @@ struct ClassTableEntry {
 
 enum class ClassTableError : uint8_t {
   None = 0,
-  TooManyEntries,      // more than kMaxClassTableEntries
-  DuplicateId,         // raw id already in the table
-  BadClass,            // library class neither 0..kNumClasses-1 nor kIgnoredClass
-  BadStability,        // not finite or outside [0, 1]
-  BadRole,             // role value out of range, or a role other than Stuff on an ignored entry
+  TooManyEntries,        // more than kMaxClassTableEntries
+  DuplicateId,           // raw id already in the table
+  BadClass,              // library class neither 0..kNumClasses-1 nor kIgnoredClass
+  BadStability,          // not finite or outside [0, 1]
+  BadRole,               // role value out of range, or a role other than Stuff on an ignored entry
   ConflictingStability,  // another raw id of the same library class has another stability
   ConflictingRole,       // another raw id of the same library class has another role
-  NameTooLong,         // name of kClassTableNameBytes characters or more
-  Empty,               // finish() on a table without entries
+  NameTooLong,           // name of kClassTableNameBytes characters or more
+  Empty,                 // finish() on a table without entries
 };
 const char* to_string(ClassTableError e);
 

@@ -8,39 +8,39 @@
 #include "gsf/detail/gaussian_field.h"
 #include "gsf/detail/gsf_filter.h"
 #include "gsf/detail/instance_clustering.h"
-#include "gsf/map_format.h"
 #include "gsf/detail/pole_extraction.h"
 #include "gsf/detail/pose_hypotheses.h"
 #include "gsf/detail/refine.h"
-#include "gsf/status.h"
 #include "gsf/detail/triangle.h"
 #include "gsf/detail/voxel_layer.h"
+#include "gsf/map_format.h"
+#include "gsf/status.h"
 
 namespace gsf {
 
 // Coarse matching and correspondence selection. Every cap ranks before it cuts (never storage order)
 // and the localizer reports how many candidates each cap dropped.
 struct MatchConfig {
-  bool use_gsf = true;                     // false: instance-only Outram behaviour (ablation)
-  uint32_t max_matches_per_triangle = 256; // best map triangles kept per query triangle (by side residual)
-  float vertex_tie_tolerance = 0.06f;      // relative; query sides closer than this are tried in both orders
+  bool use_gsf = true;                      // false: instance-only Outram behaviour (ablation)
+  uint32_t max_matches_per_triangle = 256;  // best map triangles kept per query triangle (by side residual)
+  float vertex_tie_tolerance = 0.06f;       // relative; query sides closer than this are tried in both orders
   // Heading votes (localizer.cpp, step 5a): the best `heading_bins` yaw bins (gsf.yaw_bins of them,
   // each with its two neighbours) by the votes of an even sample of `heading_sample_triangles` query
   // triangles' matches; matches at other headings are dropped and counted. 0 = off.
   uint32_t heading_bins = 6;
   uint32_t heading_sample_triangles = 256;
-  float min_similarity = 0.3f;             // with GSF: a triangle match survives if all three omegas reach this
-  uint32_t max_candidates = 24000;         // distinct (query, map) instance pairs accumulated (capacity)
-  uint32_t max_correspondences = 512;      // vertices of the consistency graph (best by votes x weight)
-  uint32_t max_field_points = 4096;        // semantic points gathered per query instance field
+  float min_similarity = 0.3f;         // with GSF: a triangle match survives if all three omegas reach this
+  uint32_t max_candidates = 24000;     // distinct (query, map) instance pairs accumulated (capacity)
+  uint32_t max_correspondences = 512;  // vertices of the consistency graph (best by votes x weight)
+  uint32_t max_field_points = 4096;    // semantic points gathered per query instance field
 };
 
 // Whole-scan verification of the pose hypotheses against the map's semantic layer (semantic_grid.h).
 struct VerifyConfig {
-  bool enabled = true;         // off, or a map without the layer: the maximum clique's pose is the answer
-  uint32_t max_points = 4096;  // query voxels scored per hypothesis (uniform stride over the scan)
-  uint32_t coarse_divisor = 8; // every hypothesis is first scored on max_points / coarse_divisor voxels,
-  uint32_t full_top = 16;      // and the best full_top of them on max_points
+  bool enabled = true;          // off, or a map without the layer: the maximum clique's pose is the answer
+  uint32_t max_points = 4096;   // query voxels scored per hypothesis (uniform stride over the scan)
+  uint32_t coarse_divisor = 8;  // every hypothesis is first scored on max_points / coarse_divisor voxels,
+  uint32_t full_top = 16;       // and the best full_top of them on max_points
   // Ambiguity from verification: exp(-(best - rival) / (margin_scale * scored voxels)), the rival being
   // the best fully scored hypothesis at another place or heading (hypotheses.same_pose_m / _deg). The
   // margin is a share of the scored voxels so the same setting serves sparse and dense scans. And from

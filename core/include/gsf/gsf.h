@@ -75,8 +75,8 @@ typedef struct gsf_config {
   uint32_t hypotheses_min_inliers;
   uint32_t hypotheses_max_hypotheses;  // pose hypotheses peeled per query
   uint32_t verify_enabled;             // whole-scan verification (needs the map's semantic layer)
-  uint32_t triangle_max_triangles;  // per scan (capacity)
-  uint32_t refine_enabled;          // uses the map's refinement layer (if any); grows the workspace
+  uint32_t triangle_max_triangles;     // per scan (capacity)
+  uint32_t refine_enabled;             // uses the map's refinement layer (if any); grows the workspace
   // Map side: must equal the values the map was built with (else GSF_STATUS_CONFIG_MISMATCH at init).
   float voxel_size;  // m
   float field_length_scale, field_radius, field_grid_spacing, field_noise_variance;
@@ -135,13 +135,13 @@ int gsf_localizer_init(void* storage, size_t storage_bytes, const gsf_config* co
                        void* workspace, size_t workspace_bytes, gsf_localizer** out) GSF_NOEXCEPT;
 
 typedef struct gsf_result {
-  int status;             // also the return value of gsf_localize
-  uint32_t inliers;       // correspondences agreeing with the pose
+  int status;        // also the return value of gsf_localize
+  uint32_t inliers;  // correspondences agreeing with the pose
   // The pose, row-major 3x4 [R | t] (p = R p_scan + t), in two frames with the same R:
   double map_T_scan[12];        // map-local frame: t relative to the map origin (gsf_map_info.origin)
   double map_frame_T_scan[12];  // the map's frame (gsf_map_info.frame): t = map-local t + origin, in double
-  double ambiguity;       // 0 = unambiguous ... 1 = decline (see gsf::LocalizeResult)
-  double score;           // sum of inlier weights
+  double ambiguity;             // 0 = unambiguous ... 1 = decline (see gsf::LocalizeResult)
+  double score;                 // sum of inlier weights
   uint64_t clique_nodes;
   uint32_t clique_size, query_instances, query_triangles, triangle_matches, gsf_survivors, correspondences;
   uint32_t field_probes, field_comparisons;

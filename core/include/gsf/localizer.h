@@ -9,8 +9,8 @@
 
 #include <Eigen/Geometry>
 
-#include "gsf/detail/arena.h"
 #include "gsf/config.h"
+#include "gsf/detail/arena.h"
 #include "gsf/map_format.h"
 #include "gsf/platform.h"
 #include "gsf/scan.h"
@@ -19,21 +19,22 @@
 namespace gsf {
 
 struct StageTimes {  // nanoseconds from the Clock given at init (all zero without one)
-  // match: index lookups and ranking (with the heading votes); gsf: the GSF filter and correspondence accumulation; clique: the
-  // hypotheses (cliques + TLS poses); pose: verification and ambiguity.
-  uint64_t voxel = 0, cluster = 0, field = 0, triangle = 0, match = 0, gsf = 0, clique = 0, pose = 0, refine = 0, total = 0;
+  // match: index lookups and ranking (with the heading votes); gsf: the GSF filter and correspondence accumulation;
+  // clique: the hypotheses (cliques + TLS poses); pose: verification and ambiguity.
+  uint64_t voxel = 0, cluster = 0, field = 0, triangle = 0, match = 0, gsf = 0, clique = 0, pose = 0, refine = 0,
+           total = 0;
 };
 
 // One pose hypothesis as the localizer saw it (diagnostics).
 struct HypothesisReport {
-  float x = 0, y = 0, yaw_deg = 0;   // map_T_scan translation (map-local) and heading
+  float x = 0, y = 0, yaw_deg = 0;  // map_T_scan translation (map-local) and heading
   uint32_t clique_size = 0, inliers = 0;
-  float support = 0;                 // sum of inlier weights
-  float verified_score = 0;          // agree - disagree (semantic_grid.h); 0 without verification
-  uint32_t verified_voxels = 0;      // voxels that landed on known cells
+  float support = 0;                                // sum of inlier weights
+  float verified_score = 0;                         // agree - disagree (semantic_grid.h); 0 without verification
+  uint32_t verified_voxels = 0;                     // voxels that landed on known cells
   float verified_agree = 0, verified_disagree = 0;  // the score's two stability-weighted parts
-  uint32_t verified_unknown = 0;     // sampled voxels that landed outside the map's semantic layer
-  bool fully_verified = false;       // scored on verify.max_points (else only the coarse sample)
+  uint32_t verified_unknown = 0;                    // sampled voxels that landed outside the map's semantic layer
+  bool fully_verified = false;                      // scored on verify.max_points (else only the coarse sample)
 };
 constexpr uint32_t kMaxReportedHypotheses = 16;  // the best by verified score (all of them when fewer)
 
@@ -47,9 +48,9 @@ struct LocalizeResult {
   // identity and map_frame_T_scan the origin (the identity before init).
   Eigen::Isometry3d map_T_scan = Eigen::Isometry3d::Identity();
   Eigen::Isometry3d map_frame_T_scan = Eigen::Isometry3d::Identity();
-  uint32_t inliers = 0;          // correspondences agreeing with the pose (after TLS)
+  uint32_t inliers = 0;  // correspondences agreeing with the pose (after TLS)
   uint32_t clique_size = 0;
-  double score = 0.0;            // sum of inlier weights
+  double score = 0.0;  // sum of inlier weights
   // Best / second-best hypothesis: score of the largest clique that disagrees with the answer, divided by
   // the answer's score, and at least min_inliers / inliers (weak support). 0 = unambiguous, 1 = a
   // different pose is as well supported, or the answer rests on the bare minimum (decline to answer).
@@ -58,25 +59,25 @@ struct LocalizeResult {
   uint32_t pole_instances_dropped = 0;  // ... not kept because cluster.max_instances was full
   uint32_t query_instances = 0, query_triangles = 0, triangle_matches = 0, gsf_survivors = 0, correspondences = 0;
   // What each cap dropped (all ranked before cutting), so a failure can be traced to a cap.
-  uint32_t match_candidates = 0;        // map triangles accepted by labels and sides, before the per-triangle cap
-  uint32_t match_dropped = 0;           // ... dropped by match.max_matches_per_triangle
-  uint32_t tie_ordered_triangles = 0;   // query triangles also tried in a tied vertex order
-  uint32_t headings_kept = 0;           // yaw bins the heading votes let through (match.heading_bins)
-  uint32_t heading_dropped = 0;         // kept matches whose heading was not among them
-  uint32_t candidate_pairs = 0;         // distinct (query, map) instance pairs from surviving matches
-  uint32_t candidate_pairs_dropped = 0; // pairs refused because match.max_candidates was full
-  uint32_t correspondences_dropped = 0; // pairs ranked out by match.max_correspondences
+  uint32_t match_candidates = 0;         // map triangles accepted by labels and sides, before the per-triangle cap
+  uint32_t match_dropped = 0;            // ... dropped by match.max_matches_per_triangle
+  uint32_t tie_ordered_triangles = 0;    // query triangles also tried in a tied vertex order
+  uint32_t headings_kept = 0;            // yaw bins the heading votes let through (match.heading_bins)
+  uint32_t heading_dropped = 0;          // kept matches whose heading was not among them
+  uint32_t candidate_pairs = 0;          // distinct (query, map) instance pairs from surviving matches
+  uint32_t candidate_pairs_dropped = 0;  // pairs refused because match.max_candidates was full
+  uint32_t correspondences_dropped = 0;  // pairs ranked out by match.max_correspondences
   uint32_t clique_searches = 0;
-  uint32_t hypotheses = 0;              // distinct pose hypotheses (<= hypotheses.max_hypotheses)
-  uint32_t chosen_hypothesis = 0;       // index of the answer among them (0 = the maximum clique)
-  bool verified = false;                // the answer was chosen by whole-scan verification
+  uint32_t hypotheses = 0;         // distinct pose hypotheses (<= hypotheses.max_hypotheses)
+  uint32_t chosen_hypothesis = 0;  // index of the answer among them (0 = the maximum clique)
+  bool verified = false;           // the answer was chosen by whole-scan verification
   HypothesisReport hypothesis[kMaxReportedHypotheses];
   uint64_t clique_nodes = 0;
-  uint32_t field_probes = 0;       // query-field probes computed by the GSF filter (cost driver)
-  uint32_t field_comparisons = 0;  // (query instance, map instance, yaw bin) similarities computed
-  bool refined = false;            // refinement ran and its result was accepted
-  bool budget_exhausted = false;   // the first clique search ran out of nodes; its best clique is used
-  bool capacity_truncated = false; // some stage hit a Config capacity and kept a deterministic subset
+  uint32_t field_probes = 0;        // query-field probes computed by the GSF filter (cost driver)
+  uint32_t field_comparisons = 0;   // (query instance, map instance, yaw bin) similarities computed
+  bool refined = false;             // refinement ran and its result was accepted
+  bool budget_exhausted = false;    // the first clique search ran out of nodes; its best clique is used
+  bool capacity_truncated = false;  // some stage hit a Config capacity and kept a deterministic subset
   StageTimes times;
 };
 
@@ -122,7 +123,6 @@ class Localizer {
   size_t workspace_bytes() const { return arena_.used(); }
   // Switch the GSF filter without re-init (ablation: off = instance-only Outram behaviour).
   void set_use_gsf(bool on) { config_.match.use_gsf = on; }
-
 
  private:
   struct Impl;  // stage objects, bound into the arena (defined in localizer.cpp only)

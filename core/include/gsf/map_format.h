@@ -11,10 +11,10 @@
 #include <cstddef>
 #include <cstdint>
 
-#include "gsf/georeference.h"
 #include "gsf/detail/semantic_grid.h"
-#include "gsf/status.h"
 #include "gsf/detail/triangle.h"
+#include "gsf/georeference.h"
+#include "gsf/status.h"
 
 namespace gsf {
 
@@ -51,22 +51,22 @@ struct MapCounts {
   float road_length_m;     // length of the mapping drive, for bytes-per-km reporting
   float bounds_min[3];
   float bounds_max[3];
-  uint32_t semantic_tiles; // tiles of the semantic layer (0: no layer; verification is then off)
+  uint32_t semantic_tiles;  // tiles of the semantic layer (0: no layer; verification is then off)
 };
 static_assert(sizeof(MapCounts) == 48, "on-disk layout (docs/map-format.md)");
 
 struct MapHeader {
   char magic[8];
   uint32_t version;
-  uint32_t header_bytes;   // sizeof(MapHeader) + section table
-  uint64_t total_bytes;    // whole blob
+  uint32_t header_bytes;  // sizeof(MapHeader) + section table
+  uint64_t total_bytes;   // whole blob
   uint32_t section_count;
   uint32_t flags;
   MapGeoreference georef;  // double origin of the map-local frame and the name of the map's frame
   MapParams params;
   MapCounts counts;
-  uint32_t header_crc;     // CRC-32 of header (this field as 0) + section table
-  uint32_t pad[2];         // explicit, so the header has no compiler padding (all of it is CRC-covered)
+  uint32_t header_crc;  // CRC-32 of header (this field as 0) + section table
+  uint32_t pad[2];      // explicit, so the header has no compiler padding (all of it is CRC-covered)
 };
 
 enum class MapSection : uint32_t {
@@ -99,7 +99,7 @@ struct MapInstance {
   float stability;
   uint32_t inducing_count;  // rows used in FieldInputs/FieldAlpha (<= inducing_stride)
   uint32_t point_count;
-  uint8_t label;            // dense class
+  uint8_t label;  // dense class
   uint8_t pad[7];
 };
 static_assert(sizeof(MapInstance) == 32, "on-disk layout");

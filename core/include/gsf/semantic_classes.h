@@ -22,9 +22,25 @@ constexpr int kIgnoredClass = -1;
 constexpr int kUnknownClass = -2;
 
 enum SemanticClass : uint8_t {
-  kCar = 0, kBicycle, kMotorcycle, kTruck, kOtherVehicle, kPerson, kBicyclist, kMotorcyclist,
-  kRoad, kParking, kSidewalk, kOtherGround, kBuilding, kFence, kVegetation, kTrunk, kTerrain,
-  kPole, kTrafficSign,
+  kCar = 0,
+  kBicycle,
+  kMotorcycle,
+  kTruck,
+  kOtherVehicle,
+  kPerson,
+  kBicyclist,
+  kMotorcyclist,
+  kRoad,
+  kParking,
+  kSidewalk,
+  kOtherGround,
+  kBuilding,
+  kFence,
+  kVegetation,
+  kTrunk,
+  kTerrain,
+  kPole,
+  kTrafficSign,
 };
 
 // SemanticKITTI semantic id (low 16 bits of a .label word) -> dense class, kIgnoredClass or kUnknownClass.

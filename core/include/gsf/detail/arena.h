@@ -29,9 +29,15 @@ class Arena {
   // Raw aligned bytes. Returns nullptr (and sets overflowed) when the buffer is exhausted.
   void* allocate_bytes(size_t bytes, size_t align) {
     const size_t start = (used_ + (align - 1)) & ~(align - 1);
-    if (start < used_ || start + bytes < start) { overflowed_ = true; return nullptr; }
+    if (start < used_ || start + bytes < start) {
+      overflowed_ = true;
+      return nullptr;
+    }
     const size_t end = start + bytes;
-    if (!counting() && end > capacity_) { overflowed_ = true; return nullptr; }
+    if (!counting() && end > capacity_) {
+      overflowed_ = true;
+      return nullptr;
+    }
     used_ = end;
     if (used_ > high_water_) high_water_ = used_;
     return counting() ? nullptr : base_ + start;
@@ -40,11 +46,15 @@ class Arena {
   // Uninitialised array of n trivially-constructible T (value-initialised when zero=true).
   template <class T>
   T* allocate(size_t n, bool zero = false) {
-    if (n > SIZE_MAX / sizeof(T)) { overflowed_ = true; return nullptr; }
+    if (n > SIZE_MAX / sizeof(T)) {
+      overflowed_ = true;
+      return nullptr;
+    }
     void* p = allocate_bytes(n * sizeof(T), alignof(T) < 16 ? 16 : alignof(T));
     if (p == nullptr) return nullptr;
     T* t = static_cast<T*>(p);
-    if (zero) for (size_t i = 0; i < n; ++i) new (t + i) T();
+    if (zero)
+      for (size_t i = 0; i < n; ++i) new (t + i) T();
     return t;
   }
 

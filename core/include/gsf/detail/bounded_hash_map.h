@@ -20,8 +20,10 @@
 namespace gsf {
 
 inline uint64_t mix64(uint64_t x) {  // splitmix64 finaliser: good avalanche, deterministic
-  x ^= x >> 30; x *= 0xbf58476d1ce4e5b9ULL;
-  x ^= x >> 27; x *= 0x94d049bb133111ebULL;
+  x ^= x >> 30;
+  x *= 0xbf58476d1ce4e5b9ULL;
+  x ^= x >> 27;
+  x *= 0x94d049bb133111ebULL;
   x ^= x >> 31;
   return x;
 }
@@ -45,8 +47,14 @@ class BoundedHashMap {
     used_ = arena.allocate<uint8_t>(slots_);
     values_ = arena.allocate<V>(slots_);
     size_ = 0;
-    if (arena.counting()) { slots_ = active_ = 0; return true; }
-    if (!keys_ || !used_ || !values_) { slots_ = active_ = 0; return false; }
+    if (arena.counting()) {
+      slots_ = active_ = 0;
+      return true;
+    }
+    if (!keys_ || !used_ || !values_) {
+      slots_ = active_ = 0;
+      return false;
+    }
     active_ = slots_;
     clear();
     return true;

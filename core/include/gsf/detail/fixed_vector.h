@@ -52,10 +52,14 @@ class FixedVector {
     data_[size_++] = v;
     return true;
   }
-  void pop_back() { if (size_ > 0) --size_; }
+  void pop_back() {
+    if (size_ > 0) --size_;
+  }
   void clear() { size_ = 0; }
   // Shrink only; growing past size() would expose uninitialised elements.
-  void truncate(uint32_t n) { if (n < size_) size_ = n; }
+  void truncate(uint32_t n) {
+    if (n < size_) size_ = n;
+  }
   // Grow to n default-initialised elements if it fits.
   bool resize(uint32_t n) {
     if (n > capacity_) return false;

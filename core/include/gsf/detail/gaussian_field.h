@@ -14,9 +14,9 @@
 #include <cstdint>
 
 #include "gsf/detail/arena.h"
+#include "gsf/detail/voxel_layer.h"
 #include "gsf/semantic_classes.h"
 #include "gsf/status.h"
-#include "gsf/detail/voxel_layer.h"
 
 namespace gsf {
 
@@ -31,11 +31,11 @@ struct FieldConfig {
   float noise_variance = 0.05f;   // sigma_y^2
   uint32_t input_dims = 2;        // 2 = bird's-eye (x, y) field, 3 = full 3-D inputs
   uint32_t grid_nx = 6, grid_ny = 6;
-  float grid_spacing = 2.0f;      // m (6 x 6 at 2 m: as discriminative as 8 x 8 at 1.5 m, 1.8x cheaper)
-  uint32_t grid_layers = 1;       // heights (3-D fields only; 1 for bird's-eye)
-  float layer_spacing = 1.0f;     // m between layers
-  float grid_z0 = 0.0f;           // m; lowest layer height relative to the centroid
-  uint64_t seed = 7;              // Algorithm 1's random choice
+  float grid_spacing = 2.0f;   // m (6 x 6 at 2 m: as discriminative as 8 x 8 at 1.5 m, 1.8x cheaper)
+  uint32_t grid_layers = 1;    // heights (3-D fields only; 1 for bird's-eye)
+  float layer_spacing = 1.0f;  // m between layers
+  float grid_z0 = 0.0f;        // m; lowest layer height relative to the centroid
+  uint64_t seed = 7;           // Algorithm 1's random choice
 };
 
 Status validate(const FieldConfig& config);
@@ -64,10 +64,10 @@ uint32_t collect_field_points(const VoxelLayer& layer, const FieldConfig& config
 // Caller-owned scratch for fit_instance_field: room for `capacity` gathered points.
 struct FieldGather {
   uint32_t capacity = 0;
-  uint32_t* ids = nullptr;      // capacity
-  float* xyz = nullptr;         // capacity x 3
-  float* targets = nullptr;     // capacity x D
-  uint8_t* labels = nullptr;    // capacity
+  uint32_t* ids = nullptr;    // capacity
+  float* xyz = nullptr;       // capacity x 3
+  float* targets = nullptr;   // capacity x D
+  uint8_t* labels = nullptr;  // capacity
 };
 
 // Workspace for fitting and probing; all memory comes from the arena at bind().
@@ -105,7 +105,8 @@ class FieldSolver {
 // their fields cannot drift apart: collect_field_points within solver.config().radius of `center` into
 // `gather`, then FieldSolver::fit into inputs / alpha / chol (*m rows). *gathered: points used; *total:
 // points that matched (more than gathered: truncated by gather.capacity). Returns fit's status.
-Status fit_instance_field(FieldSolver& solver, const VoxelLayer& layer, const float center[3], const FieldGather& gather,
-                          float* inputs, float* alpha, float* chol, uint32_t* m, uint32_t* gathered, uint32_t* total);
+Status fit_instance_field(FieldSolver& solver, const VoxelLayer& layer, const float center[3],
+                          const FieldGather& gather, float* inputs, float* alpha, float* chol, uint32_t* m,
+                          uint32_t* gathered, uint32_t* total);
 
 }  // namespace gsf

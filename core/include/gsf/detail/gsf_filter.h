@@ -23,14 +23,14 @@
 namespace gsf {
 
 struct GsfFilterConfig {
-  uint32_t yaw_bins = 36;                 // rotation hypotheses are binned for probe caching (10 deg)
-  uint32_t probe_cache_slots = 1024;      // cached query-field probes (instance, yaw bin)
-  uint32_t similarity_cache_slots = 65536; // cached omega per (query instance, map instance, yaw bin)
-  float observed_variance = 0.6f;         // grid points where the query field's variance exceeds this
-                                          // fraction of the prior are unobserved and not compared
-  float normalize_mass = 0.0f;            // >0: compare per-point class distributions (wasserstein.h)
-  float covariance_weight = 0.0f;         // weight of the W2 covariance term (1 = the paper's W2)
-  float tau = 0.2f;                       // omega = exp(-w2 / tau), w2 per compared grid point
+  uint32_t yaw_bins = 36;                   // rotation hypotheses are binned for probe caching (10 deg)
+  uint32_t probe_cache_slots = 1024;        // cached query-field probes (instance, yaw bin)
+  uint32_t similarity_cache_slots = 65536;  // cached omega per (query instance, map instance, yaw bin)
+  float observed_variance = 0.6f;           // grid points where the query field's variance exceeds this
+                                            // fraction of the prior are unobserved and not compared
+  float normalize_mass = 0.0f;              // >0: compare per-point class distributions (wasserstein.h)
+  float covariance_weight = 0.0f;           // weight of the W2 covariance term (1 = the paper's W2)
+  float tau = 0.2f;                         // omega = exp(-w2 / tau), w2 per compared grid point
 };
 
 // The query instances' fitted fields (arrays owned by the localizer's arena).
@@ -55,7 +55,9 @@ class GsfFilter {
   void reset();  // forget the caches (a new scan)
   // Class weights of the W2 sum (default after bind: stability_weight(), paper Table III); a label set
   // with its own stabilities sets them here (copied).
-  void set_class_weights(const float* weights) { for (int c = 0; c < kNumClasses; ++c) weights_[c] = weights[c]; }
+  void set_class_weights(const float* weights) {
+    for (int c = 0; c < kNumClasses; ++c) weights_[c] = weights[c];
+  }
   float similarity(const QueryFields& fields, uint32_t qi, const MapView& map, uint32_t mi, uint32_t yaw_bin);
 
   uint32_t probes() const { return probe_used_ + probe_overflow_; }
@@ -67,9 +69,9 @@ class GsfFilter {
   FieldSolver* solver_ = nullptr;
   BoundedHashMap<uint32_t> probe_slot_;  // (query instance, yaw bin) -> cache slot
   BoundedHashMap<float> similarity_;     // (query instance, map instance, yaw bin) -> omega
-  float* grid_ = nullptr;        // G x 3
-  float* probe_mean_ = nullptr;  // (slots + 1) x G x D; the last slot is scratch when the cache is full
-  float* probe_var_ = nullptr;   // (slots + 1) x G
+  float* grid_ = nullptr;                // G x 3
+  float* probe_mean_ = nullptr;          // (slots + 1) x G x D; the last slot is scratch when the cache is full
+  float* probe_var_ = nullptr;           // (slots + 1) x G
   float weights_[kNumClasses];
   uint32_t probe_used_ = 0, probe_overflow_ = 0, comparisons_ = 0;
 };

@@ -18,35 +18,41 @@
 #pragma once
 #include <cstdint>
 
-#include "gsf/detail/arena.h"
 #include "gsf/class_table.h"
+#include "gsf/detail/arena.h"
+#include "gsf/detail/voxel_layer.h"
 #include "gsf/semantic_classes.h"
 #include "gsf/status.h"
-#include "gsf/detail/voxel_layer.h"
 
 namespace gsf {
 
 struct ClusterConfig {
   ClassMask instance_classes = kDefaultInstanceClasses;
-  float tolerance[kNumClasses];     // m, per class; default 0.6 (car 1.0)
-  uint32_t min_voxels[kNumClasses]; // default 3 (car 8)
-  float max_extent[kNumClasses];    // m, horizontal bbox diagonal; default 2.5 (car 8, trunk 2.5)
+  float tolerance[kNumClasses];      // m, per class; default 0.6 (car 1.0)
+  uint32_t min_voxels[kNumClasses];  // default 3 (car 8)
+  float max_extent[kNumClasses];     // m, horizontal bbox diagonal; default 2.5 (car 8, trunk 2.5)
   uint32_t max_instances = 128;
   ClusterConfig() {
-    for (int c = 0; c < kNumClasses; ++c) { tolerance[c] = 0.6f; min_voxels[c] = 3; max_extent[c] = 2.5f; }
-    tolerance[kCar] = 1.0f; min_voxels[kCar] = 8; max_extent[kCar] = 8.0f;
+    for (int c = 0; c < kNumClasses; ++c) {
+      tolerance[c] = 0.6f;
+      min_voxels[c] = 3;
+      max_extent[c] = 2.5f;
+    }
+    tolerance[kCar] = 1.0f;
+    min_voxels[kCar] = 8;
+    max_extent[kCar] = 8.0f;
     max_extent[kTrafficSign] = 3.0f;
   }
 };
 
 struct Instance {
   float centroid[3];
-  float extent[3];        // axis-aligned bbox size
-  float stability;        // stability_weight(label)
+  float extent[3];  // axis-aligned bbox size
+  float stability;  // stability_weight(label)
   uint32_t voxel_count;
   uint32_t point_count;
-  uint32_t first_voxel;   // discovery order key
-  uint8_t label;          // dense class
+  uint32_t first_voxel;  // discovery order key
+  uint8_t label;         // dense class
   uint8_t pad[3];
 };
 

@@ -63,11 +63,11 @@ class MaxCliqueSolver {
 
  private:
   struct Frame {
-    uint64_t* cand;     // candidate set P (words)
-    uint32_t* order;    // vertices of P in colour order
-    uint32_t* colour;   // their colour bounds
-    uint32_t count;     // entries in order/colour
-    uint32_t pos;       // next entry to branch on, counting down
+    uint64_t* cand;    // candidate set P (words)
+    uint32_t* order;   // vertices of P in colour order
+    uint32_t* colour;  // their colour bounds
+    uint32_t count;    // entries in order/colour
+    uint32_t pos;      // next entry to branch on, counting down
   };
   uint32_t colour_sort(const ConsistencyGraph& g, const uint64_t* cand, uint32_t* order, uint32_t* colour);
   uint32_t max_vertices_ = 0;

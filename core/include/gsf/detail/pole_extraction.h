@@ -16,7 +16,8 @@
 //  2. Chains: thin isolated segments of the same kind are linked upward when a voxel of one has a voxel
 //     of the other up to max_gap higher (empty levels in between, as a sparse beam pattern leaves) and
 //     within link_radius horizontally. Linked segments form a chain (union-find).
-//  3. Acceptance per chain: >= min_levels distinct levels, >= min_points points, and a vertical extent (centroid span + one
+//  3. Acceptance per chain: >= min_levels distinct levels, >= min_points points, and a vertical extent (centroid span +
+//  one
 //     voxel) >= min_height[kind]; an axis fitted by least squares of horizontal position on height
 //     (x = a + b z, y = c + d z, every voxel weight 1) tilted <= max_tilt_deg from vertical; and the
 //     residuals about that axis within a box of diagonal <= max_diameter[kind] (thickness, so a slightly
@@ -41,12 +42,12 @@
 #pragma once
 #include <cstdint>
 
-#include "gsf/detail/arena.h"
 #include "gsf/class_table.h"
+#include "gsf/detail/arena.h"
 #include "gsf/detail/instance_clustering.h"
+#include "gsf/detail/voxel_layer.h"
 #include "gsf/semantic_classes.h"
 #include "gsf/status.h"
-#include "gsf/detail/voxel_layer.h"
 
 namespace gsf {
 
@@ -58,16 +59,16 @@ enum PoleKind : uint8_t { kPoleKind = 0, kTrunkKind = 1 };
 struct PoleConfig {
   ClassMask pole_hosts = class_bit(kBuilding);     // e.g. nuScenes static.manmade
   ClassMask trunk_hosts = class_bit(kVegetation);  // e.g. nuScenes static.vegetation
-  float max_diameter[2] = {0.8f, 1.2f};  // m, per kind: slice box diagonal and thickness about the axis
-  float min_height[2] = {2.0f, 2.0f};    // m, per kind: vertical extent of a chain
-  uint32_t min_levels = 4;               // distinct voxel levels in a chain
-  uint32_t min_points = 0;               // LiDAR points in a chain
-  float max_tilt_deg = 12.0f;            // axis from vertical
-  float ring_width = 1.0f;               // m, isolation ring around a slice segment
-  uint32_t max_ring_voxels = 0;          // host voxels tolerated in that ring
-  float link_radius = 0.6f;              // m, horizontal offset of linked voxels of stacked segments
-  float max_gap = 1.2f;                  // m, empty height bridged between stacked segments
-  float stability[2] = {1.0f, 1.0f};     // instance stability per kind (stability_weight(kPole/kTrunk))
+  float max_diameter[2] = {0.8f, 1.2f};            // m, per kind: slice box diagonal and thickness about the axis
+  float min_height[2] = {2.0f, 2.0f};              // m, per kind: vertical extent of a chain
+  uint32_t min_levels = 4;                         // distinct voxel levels in a chain
+  uint32_t min_points = 0;                         // LiDAR points in a chain
+  float max_tilt_deg = 12.0f;                      // axis from vertical
+  float ring_width = 1.0f;                         // m, isolation ring around a slice segment
+  uint32_t max_ring_voxels = 0;                    // host voxels tolerated in that ring
+  float link_radius = 0.6f;                        // m, horizontal offset of linked voxels of stacked segments
+  float max_gap = 1.2f;                            // m, empty height bridged between stacked segments
+  float stability[2] = {1.0f, 1.0f};               // instance stability per kind (stability_weight(kPole/kTrunk))
   uint32_t max_instances = 64;
 
   // Hosts and stabilities from a label set's table (pole_host_classes, trunk_host_classes,
@@ -83,26 +84,26 @@ struct PoleConfig {
 // Per kept instance: how it was judged.
 struct PoleInfo {
   float score;
-  float height;     // m, vertical extent
-  float tilt_deg;   // axis from vertical
-  float thickness;  // m, residual box diagonal about the axis
-  float ring;       // mean ring voxels per segment
-  uint32_t levels;  // distinct voxel levels
+  float height;          // m, vertical extent
+  float tilt_deg;        // axis from vertical
+  float thickness;       // m, residual box diagonal about the axis
+  float ring;            // mean ring voxels per segment
+  uint32_t levels;       // distinct voxel levels
   uint32_t first_voxel;  // = instance(i).first_voxel
-  uint8_t kind;     // PoleKind
+  uint8_t kind;          // PoleKind
   uint8_t pad[3];
 };
 
 struct PoleStats {
   uint32_t host_voxels = 0;
-  uint32_t segments = 0;           // slice components of host voxels
-  uint32_t segments_wide = 0;      // not thin
-  uint32_t segments_crowded = 0;   // thin but not isolated
-  uint32_t chains = 0;             // linked thin isolated segments
-  uint32_t rejected_short = 0;     // too few levels or points, or too low
+  uint32_t segments = 0;          // slice components of host voxels
+  uint32_t segments_wide = 0;     // not thin
+  uint32_t segments_crowded = 0;  // thin but not isolated
+  uint32_t chains = 0;            // linked thin isolated segments
+  uint32_t rejected_short = 0;    // too few levels or points, or too low
   uint32_t rejected_tilt = 0;
   uint32_t rejected_thick = 0;
-  uint32_t dropped_capacity = 0;   // accepted but not among the best max_instances
+  uint32_t dropped_capacity = 0;  // accepted but not among the best max_instances
   uint32_t instances = 0;
 };
 
@@ -133,9 +134,9 @@ class PoleExtraction {
   PoleConfig config_{};
   Instance* instances_ = nullptr;
   PoleInfo* info_ = nullptr;
-  uint32_t* voxel_seg_ = nullptr;   // during build: segment id or a marker; after: kept instance id
-  uint32_t* queue_ = nullptr;       // slice BFS, then chain members grouped by root
-  uint32_t* offsets_ = nullptr;     // per segment (+1): chain member ranges, then root -> instance
+  uint32_t* voxel_seg_ = nullptr;  // during build: segment id or a marker; after: kept instance id
+  uint32_t* queue_ = nullptr;      // slice BFS, then chain members grouped by root
+  uint32_t* offsets_ = nullptr;    // per segment (+1): chain member ranges, then root -> instance
   Segment* segments_ = nullptr;
   uint32_t max_voxels_ = 0;
   uint32_t count_ = 0;

@@ -38,10 +38,10 @@ struct HypothesisConfig {
   // Weight of height differences in those distances. An instance centroid's height depends on how much
   // of a pole or trunk one scan sees (near columns lose their tops); 1 = Outram's 3-D distances.
   float consistency_z_weight = 1.0f;
-  float tls_threshold = 1.5f;      // m; residual truncation of the weighted TLS (paper Eq. 8)
-  uint32_t max_iterations = 50;    // GNC iterations
-  uint32_t min_inliers = 3;        // a clique or TLS solution with fewer is no hypothesis
-  float same_pose_m = 2.0f;        // hypotheses closer than this and same_pose_deg are one answer
+  float tls_threshold = 1.5f;    // m; residual truncation of the weighted TLS (paper Eq. 8)
+  uint32_t max_iterations = 50;  // GNC iterations
+  uint32_t min_inliers = 3;      // a clique or TLS solution with fewer is no hypothesis
+  float same_pose_m = 2.0f;      // hypotheses closer than this and same_pose_deg are one answer
   float same_pose_deg = 5.0f;
   // Upright prior: a hypothesis whose z axis leans more than this from the map's is re-solved upright
   // (yaw and translation on its inliers, which are then recounted; fewer than min_inliers: dropped).
@@ -54,18 +54,18 @@ struct HypothesisConfig {
 struct PoseHypothesis {
   Eigen::Isometry3d map_T_scan = Eigen::Isometry3d::Identity();
   uint32_t clique_size = 0;
-  uint32_t inliers = 0;        // TLS inliers
-  double support = 0.0;        // sum of the inliers' GSF weights
+  uint32_t inliers = 0;  // TLS inliers
+  double support = 0.0;  // sum of the inliers' GSF weights
   PoseVerification verification;
 };
 
 struct HypothesisStats {
-  uint32_t searches = 0;       // clique searches run
-  uint64_t nodes = 0;          // branch-and-bound nodes over all searches
+  uint32_t searches = 0;          // clique searches run
+  uint64_t nodes = 0;             // branch-and-bound nodes over all searches
   bool budget_exhausted = false;  // the first search ran out of nodes (best-so-far used)
-  uint32_t merged = 0;         // cliques or vote peaks whose pose repeated an earlier hypothesis
-  uint32_t voted = 0;          // vote peaks that gave a pose
-  uint32_t tilted = 0;         // poses the upright prior re-solved upright (max_tilt_deg)
+  uint32_t merged = 0;            // cliques or vote peaks whose pose repeated an earlier hypothesis
+  uint32_t voted = 0;             // vote peaks that gave a pose
+  uint32_t tilted = 0;            // poses the upright prior re-solved upright (max_tilt_deg)
 };
 
 class PoseHypotheses {
@@ -88,18 +88,18 @@ class PoseHypotheses {
   ConsistencyGraph graph_;
   MaxCliqueSolver solver_;
   FixedVector<uint32_t> clique_;
-  uint64_t* allowed_ = nullptr;   // words
-  uint32_t* owner_ = nullptr;     // per correspondence: 1 + hypothesis whose clique took it, 0 none
+  uint64_t* allowed_ = nullptr;  // words
+  uint32_t* owner_ = nullptr;    // per correspondence: 1 + hypothesis whose clique took it, 0 none
   float* sub_a_ = nullptr;
   float* sub_b_ = nullptr;
   float* sub_w_ = nullptr;
   float* tls_w_ = nullptr;
   uint8_t* mask_ = nullptr;
   PoseHypothesis* hyps_ = nullptr;
-  uint64_t* vote_key_ = nullptr;   // n: translation bin of each correspondence (shift votes)
-  uint32_t* vote_order_ = nullptr; // n
-  uint32_t* bin_first_ = nullptr;  // n: a correspondence of each bin
-  float* bin_weight_ = nullptr;    // n: the bin's summed weight
+  uint64_t* vote_key_ = nullptr;    // n: translation bin of each correspondence (shift votes)
+  uint32_t* vote_order_ = nullptr;  // n
+  uint32_t* bin_first_ = nullptr;   // n: a correspondence of each bin
+  float* bin_weight_ = nullptr;     // n: the bin's summed weight
   uint32_t max_n_ = 0, max_h_ = 0, count_ = 0;
 };
 

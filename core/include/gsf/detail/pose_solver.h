@@ -29,8 +29,8 @@ Status fit_upright(const float* a, const float* b, const float* w, const uint8_t
 
 struct TlsResult {
   Eigen::Isometry3d b_T_a = Eigen::Isometry3d::Identity();
-  uint32_t inliers = 0;   // residual <= c
-  double cost = 0.0;      // the truncated objective at the solution
+  uint32_t inliers = 0;  // residual <= c
+  double cost = 0.0;     // the truncated objective at the solution
   uint32_t iterations = 0;
 };
 

@@ -17,23 +17,23 @@
 
 #include <Eigen/Geometry>
 
+#include "gsf/class_table.h"
 #include "gsf/detail/arena.h"
 #include "gsf/detail/bounded_hash_map.h"
-#include "gsf/class_table.h"
-#include "gsf/status.h"
 #include "gsf/detail/voxel_layer.h"
+#include "gsf/status.h"
 
 namespace gsf {
 
 struct RefineConfig {
   bool enabled = false;
-  uint32_t max_points = 2000;      // query points used (deterministic stride subsample)
+  uint32_t max_points = 2000;          // query points used (deterministic stride subsample)
   uint32_t max_map_points = 1u << 18;  // capacity for the map's refinement layer
   uint32_t iterations = 10;
-  float radius_start = 1.5f;       // m, correspondence radius of the first iteration (<= 1.5 cell)
-  float radius_end = 0.5f;         // m, of the last
-  float cell = 1.0f;               // m, grid cell (>= the map's refine voxel)
-  float max_correction = 3.0f;     // m, larger moves are rejected
+  float radius_start = 1.5f;    // m, correspondence radius of the first iteration (<= 1.5 cell)
+  float radius_end = 0.5f;      // m, of the last
+  float cell = 1.0f;            // m, grid cell (>= the map's refine voxel)
+  float max_correction = 3.0f;  // m, larger moves are rejected
   uint32_t min_inliers = 100;
 };
 
@@ -49,7 +49,8 @@ class Refiner {
   Status bind(Arena& arena, const RefineConfig& config);
   // Indexes the map points (x, y, z, label) x n and estimates normals. InvalidArgument if n exceeds capacity.
   Status set_map(const float* points, uint32_t n);
-  Status refine(const VoxelLayer& query, const Eigen::Isometry3d& initial, Eigen::Isometry3d* refined, RefineStats* stats);
+  Status refine(const VoxelLayer& query, const Eigen::Isometry3d& initial, Eigen::Isometry3d* refined,
+                RefineStats* stats);
   // Which classes are long-term (stability 1) from this label set (not copied); nullptr (the default):
   // stability_weight().
   void set_classes(const ClassTable* table) { classes_ = table; }
@@ -69,13 +70,13 @@ class Refiner {
   uint64_t* cell_keys_ = nullptr;  // max_map_points
   uint32_t* begin_ = nullptr;      // max_map_points + 1
   uint32_t cells_ = 0;
-  float* points_ = nullptr;     // n x 3, sorted by cell (ascending map order within a cell)
-  float* normals_ = nullptr;    // n x 3, the same order (0 vector: no reliable normal)
-  float* query_ = nullptr;      // max_points x 3
+  float* points_ = nullptr;   // n x 3, sorted by cell (ascending map order within a cell)
+  float* normals_ = nullptr;  // n x 3, the same order (0 vector: no reliable normal)
+  float* query_ = nullptr;    // max_points x 3
   // Per query point, the grid cell it fell in at the last iteration and the cells found around it
   // (27 per point; kNotLooked until looked up): the pose moves little between iterations, so the same
   // cells are found again without probing the grid hash.
-  uint64_t* query_cell_ = nullptr;      // max_points
+  uint64_t* query_cell_ = nullptr;        // max_points
   uint32_t* query_neighbours_ = nullptr;  // max_points x 27
   uint32_t n_ = 0;
   bool bound_ = false;

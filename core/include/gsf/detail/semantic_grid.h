@@ -40,8 +40,8 @@ constexpr uint32_t kMaxSemanticTileCells = 64;
 bool semantic_tile_key(int64_t tx, int64_t ty, uint32_t* key);
 
 struct SemanticGridView {
-  float cell = 0.0f;          // m
-  uint32_t tile_cells = 0;    // cells per tile side
+  float cell = 0.0f;        // m
+  uint32_t tile_cells = 0;  // cells per tile side
   uint32_t tile_count = 0;
   const uint32_t* tile_keys = nullptr;  // tile_count, strictly increasing
   const uint32_t* cells = nullptr;      // tile_count x tile_cells^2, row-major (y, then x) per tile
@@ -55,17 +55,17 @@ struct SemanticGridView {
 };
 
 struct PoseVerification {
-  float score = 0.0f;      // agree - disagree (stability-weighted)
+  float score = 0.0f;  // agree - disagree (stability-weighted)
   float agree = 0.0f;
   float disagree = 0.0f;
-  uint32_t scored = 0;     // sampled voxels that landed on a known cell
-  uint32_t unknown = 0;    // sampled voxels that landed outside the map's layer
+  uint32_t scored = 0;   // sampled voxels that landed on a known cell
+  uint32_t unknown = 0;  // sampled voxels that landed outside the map's layer
 };
 
 // Scores map_T_scan over at most max_points voxels of the query's voxel layer, sampled with a uniform
 // stride over the layer (never "the first N"). weights: stability weight per dense class.
-PoseVerification verify_pose(const VoxelLayer& voxels, const SemanticGridView& grid, const Eigen::Isometry3d& map_T_scan,
-                             uint32_t max_points, const float* weights);
+PoseVerification verify_pose(const VoxelLayer& voxels, const SemanticGridView& grid,
+                             const Eigen::Isometry3d& map_T_scan, uint32_t max_points, const float* weights);
 
 // verify_pose after a small bird's-eye pattern search around map_T_scan (moves of step_m along x and y
 // and step_deg of heading, halved each round, scored on a quarter of the points), so a hypothesis whose

@@ -18,12 +18,12 @@
 namespace gsf {
 
 struct TriangleConfig {
-  uint32_t neighbours = 10;        // K nearest instances per anchor
-  float min_side = 0.5f;           // m
-  float max_side = 50.0f;          // m
-  float side_bin = 1.0f;           // m, key quantisation
+  uint32_t neighbours = 10;               // K nearest instances per anchor
+  float min_side = 0.5f;                  // m
+  float max_side = 50.0f;                 // m
+  float side_bin = 1.0f;                  // m, key quantisation
   float relative_side_tolerance = 0.03f;  // match if |d_q - d_m| < tol * d_q on every side
-  uint32_t max_triangles = 4096;   // per scan (capacity)
+  uint32_t max_triangles = 4096;          // per scan (capacity)
 };
 
 struct Triangle {  // also the on-disk map record (map_format.h)
@@ -54,8 +54,8 @@ class TriangleBuilder {
  private:
   TriangleConfig config_{};
   uint32_t max_instances_ = 0;
-  uint32_t* knn_ = nullptr;   // n x K neighbour ids
-  float* knn_d_ = nullptr;    // n x K distances
+  uint32_t* knn_ = nullptr;  // n x K neighbour ids
+  float* knn_d_ = nullptr;   // n x K distances
   uint32_t* knn_count_ = nullptr;
   BoundedHashMap<uint8_t> seen_;
   bool bound_ = false;

@@ -8,8 +8,8 @@
 #pragma once
 #include <cstdint>
 
-#include "gsf/status.h"
 #include "gsf/detail/triangle.h"
+#include "gsf/status.h"
 
 namespace gsf {
 

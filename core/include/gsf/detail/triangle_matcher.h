@@ -18,9 +18,9 @@
 #include <cstdint>
 
 #include "gsf/detail/arena.h"
-#include "gsf/status.h"
 #include "gsf/detail/triangle.h"
 #include "gsf/detail/triangle_index.h"
+#include "gsf/status.h"
 
 namespace gsf {
 
@@ -28,10 +28,10 @@ namespace gsf {
 constexpr uint8_t kTriangleVertexOrders[6][3] = {{0, 1, 2}, {2, 1, 0}, {1, 0, 2}, {0, 2, 1}, {1, 2, 0}, {2, 0, 1}};
 
 struct RankedTriangleMatch {
-  uint32_t map;     // map triangle id
-  float residual;   // max over sides of |d_q - d_m| / d_q
-  uint32_t tie;     // deterministic, position-free tie breaker (hash of map id and order)
-  uint8_t order;    // query vertex order (kTriangleVertexOrders row)
+  uint32_t map;    // map triangle id
+  float residual;  // max over sides of |d_q - d_m| / d_q
+  uint32_t tie;    // deterministic, position-free tie breaker (hash of map id and order)
+  uint8_t order;   // query vertex order (kTriangleVertexOrders row)
   uint8_t pad[3];
 };
 

@@ -22,9 +22,9 @@
 #pragma once
 #include <cstdint>
 
+#include "gsf/class_table.h"
 #include "gsf/detail/arena.h"
 #include "gsf/detail/bounded_hash_map.h"
-#include "gsf/class_table.h"
 #include "gsf/scan.h"
 #include "gsf/semantic_classes.h"
 #include "gsf/status.h"
@@ -32,18 +32,18 @@
 namespace gsf {
 
 struct VoxelConfig {
-  float voxel_size = 0.4f;     // m
-  float min_range = 2.5f;      // m; drops returns from the ego vehicle
-  float max_range = 80.0f;     // m
+  float voxel_size = 0.4f;  // m
+  float min_range = 2.5f;   // m; drops returns from the ego vehicle
+  float max_range = 80.0f;  // m
   uint32_t max_voxels = 100000;
-  float column_size = 2.0f;    // m; cell of the 2-D gather index
+  float column_size = 2.0f;      // m; cell of the 2-D gather index
   uint32_t max_columns = 16384;  // gather index cells (hash capacity)
 };
 
 struct Voxel {  // 96 B; what verification, clustering and refinement read sits in the first 20
   float centroid[3];
   uint32_t count;
-  uint8_t label;            // dense argmax class
+  uint8_t label;  // dense argmax class
   uint8_t pad[3];
   float prob[kNumClasses];  // mean class probability
 };
@@ -74,8 +74,8 @@ class VoxelLayer {
   // that matched, so a caller can tell it was truncated. Cost: the column cells of the query square,
   // clipped to the occupied columns' bounding box (so a huge radius stays bounded), plus their members.
   // A non-finite centre, a NaN radius or radius <= 0 matches nothing; radius = +inf matches every indexed voxel.
-  uint32_t gather_within(const float center[3], float radius, bool horizontal_only, uint32_t* out,
-                         uint32_t max_out, uint32_t* total = nullptr) const;
+  uint32_t gather_within(const float center[3], float radius, bool horizontal_only, uint32_t* out, uint32_t max_out,
+                         uint32_t* total = nullptr) const;
   // Index of the voxel containing point p, or UINT32_MAX.
   uint32_t find(const float p[3]) const;
   uint64_t key_of(const float p[3]) const;
@@ -85,7 +85,9 @@ class VoxelLayer {
   uint32_t find_cell(int32_t x, int32_t y, int32_t z) const;
 
  private:
-  struct ColumnCell { uint32_t begin, count; };
+  struct ColumnCell {
+    uint32_t begin, count;
+  };
   uint32_t build_columns();  // returns the number of voxels left unindexed
 
   VoxelConfig config_{};
@@ -99,9 +101,9 @@ class VoxelLayer {
   uint32_t* slots_ = nullptr;
   uint64_t* keys_ = nullptr;
   uint32_t slot_count_ = 0, active_slots_ = 0;
-  BoundedHashMap<ColumnCell> columns_; // column key -> range in column_members_
-  uint32_t* column_members_ = nullptr; // voxel ids grouped by column
-  uint32_t* column_of_ = nullptr;      // scratch: per voxel its column slot order
+  BoundedHashMap<ColumnCell> columns_;  // column key -> range in column_members_
+  uint32_t* column_members_ = nullptr;  // voxel ids grouped by column
+  uint32_t* column_of_ = nullptr;       // scratch: per voxel its column slot order
   uint32_t count_ = 0;
   int32_t column_lo_[2] = {0, 0}, column_hi_[2] = {-1, -1};  // occupied column bbox (empty: lo > hi)
   bool bound_ = false;

@@ -28,8 +28,8 @@ double w2_squared_diag(const float* mean1, const float* var1, const float* mean2
                        const float* weights);
 
 struct ObservedW2 {
-  double w2 = 0.0;     // summed over compared grid points
-  uint32_t used = 0;   // grid points compared
+  double w2 = 0.0;    // summed over compared grid points
+  uint32_t used = 0;  // grid points compared
 };
 // Diagonal W2 over the grid points where var_query(s) <= max_query_var.
 // normalize_mass > 0: compare class *distributions*: each grid point's mean vector is divided by its

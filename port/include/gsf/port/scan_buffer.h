@@ -9,9 +9,9 @@
 namespace gsf::port {
 
 struct ScanBuffer {
-  float* points = nullptr;    // capacity x 4 (x, y, z, intensity)
-  uint32_t* labels = nullptr; // capacity
-  float* logits = nullptr;    // capacity x kNumClasses, or nullptr
+  float* points = nullptr;     // capacity x 4 (x, y, z, intensity)
+  uint32_t* labels = nullptr;  // capacity
+  float* logits = nullptr;     // capacity x kNumClasses, or nullptr
   uint32_t capacity = 0;
   uint32_t count = 0;
   bool has_logits = false;

@@ -15,8 +15,8 @@ namespace gsf::port {
 
 struct KittiReadOptions {
   bool require_labels = true;
-  bool load_logits = true;        // when logits/ exists
-  bool drop_non_finite = false;   // false: a NaN/Inf point rejects the scan with InvalidInput
+  bool load_logits = true;       // when logits/ exists
+  bool drop_non_finite = false;  // false: a NaN/Inf point rejects the scan with InvalidInput
   // nuScenes-lidarseg only: keep the raw lidarseg class (0..30) as the label instead of mapping it to
   // a SemanticKITTI id; use with nuscenes_lidarseg_class_table() (or a user table of lidarseg ids).
   bool raw_labels = false;
@@ -54,7 +54,8 @@ class SemanticKittiSource final : public ScanSource {
 class SemanticKittiWriter {
  public:
   Status open(const std::string& dataset_root, const std::string& sequence);
-  Status write_scan(uint32_t frame, const float* xyzi, const uint32_t* labels, const float* logits_or_null, uint32_t count);
+  Status write_scan(uint32_t frame, const float* xyzi, const uint32_t* labels, const float* logits_or_null,
+                    uint32_t count);
   // Writes poses.txt (LiDAR poses, line i = frame i) and calib.txt with an identity Tr.
   Status write_poses(const std::vector<Eigen::Isometry3d>& world_T_lidar);
 
