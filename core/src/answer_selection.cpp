@@ -91,7 +91,8 @@ void AnswerSelector::choose(PoseHypotheses& hyps, const VoxelLayer& voxels, cons
       hyps[h].verification = verify_pose(voxels, semantic, hyps[h].map_T_scan, coarse_points, verify_weights_);
     uint32_t nt = top_by_score(hyps, H, nullptr, vc.full_top, top);
     for (uint32_t k = 0; k < nt; ++k) {
-      hyps[top[k]].verification = verify_pose(voxels, semantic, hyps[top[k]].map_T_scan, vc.max_points, verify_weights_);
+      hyps[top[k]].verification =
+          verify_pose(voxels, semantic, hyps[top[k]].map_T_scan, vc.max_points, verify_weights_);
       full_scored[top[k]] = 1;
     }
     nt = vc.refine_rounds > 0 ? top_by_score(hyps, H, full_scored, std::min(vc.refine_top, refine_top_), top) : 0;
