@@ -27,7 +27,10 @@
 namespace gsf {
 
 struct HypothesisConfig {
-  uint32_t max_hypotheses = 96;  // K: hypotheses per query (a 14 x 10 lattice has 140 shifts a heading)
+  // K: hypotheses per query. A 14 x 10 lattice has 140 shifts a heading and the shift votes share the
+  // slots among up to shift_headings headings; 96 left the true shift out in lattice zones (suite seeds
+  // 1-5, lattice zone 86.5% at 96, 97.0% at 192; docs/results.md). Verification scores each coarsely.
+  uint32_t max_hypotheses = 192;
   uint32_t max_peeled = 8;       // of which from peeled maximum cliques; the rest from shift votes,
                                  // shared evenly by the headings
   uint32_t shift_headings = 4;   // distinct clique headings whose translations are voted on
