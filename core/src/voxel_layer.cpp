@@ -6,7 +6,7 @@
 namespace gsf {
 namespace {
 
-constexpr int32_t kCoordLimit = 1 << 20;  // 21-bit packed voxel coordinates
+constexpr int32_t kCoordLimit = VoxelLayer::kCellLimit;  // 21-bit packed voxel coordinates
 
 bool cell_coord(float v, float inv_size, int32_t* out) {
   const float c = std::floor(v * inv_size);
@@ -15,10 +15,7 @@ bool cell_coord(float v, float inv_size, int32_t* out) {
   return true;
 }
 
-uint64_t pack3(int32_t x, int32_t y, int32_t z) {
-  return (uint64_t(uint32_t(x + kCoordLimit)) << 42) | (uint64_t(uint32_t(y + kCoordLimit)) << 21) |
-         uint64_t(uint32_t(z + kCoordLimit));
-}
+uint64_t pack3(int32_t x, int32_t y, int32_t z) { return VoxelLayer::pack_cell(x, y, z); }
 
 // exp(x) for x <= 0 (a softmax term l - max), within 1.4 ulp: Cody-Waite reduction by ln 2 and
 // Cephes' degree-5 polynomial in float, with no library call and no branch (the clamp is an integer
@@ -107,28 +104,10 @@ bool VoxelLayer::cell_of(const float p[3], int32_t out[3]) const {
   return cell_coord(p[0], inv, &out[0]) && cell_coord(p[1], inv, &out[1]) && cell_coord(p[2], inv, &out[2]);
 }
 
-uint32_t VoxelLayer::find_cell(int32_t x, int32_t y, int32_t z) const {
-  if (x <= -kCoordLimit || x >= kCoordLimit - 1 || y <= -kCoordLimit || y >= kCoordLimit - 1 || z <= -kCoordLimit ||
-      z >= kCoordLimit - 1)
-    return UINT32_MAX;
-  return index_find(pack3(x, y, z));
-}
-
 uint32_t VoxelLayer::find(const float p[3]) const {
   const uint64_t k = key_of(p);
   if (k == UINT64_MAX) return UINT32_MAX;
   return index_find(k);
-}
-
-uint32_t VoxelLayer::index_find(uint64_t key) const {
-  if (active_slots_ == 0) return UINT32_MAX;
-  const uint32_t mask = active_slots_ - 1;
-  for (uint32_t i = static_cast<uint32_t>(mix64(key)) & mask, n = 0; n < active_slots_; ++n, i = (i + 1) & mask) {
-    const uint32_t s = slots_[i];
-    if (s == 0) return UINT32_MAX;
-    if (keys_[s - 1] == key) return s - 1;
-  }
-  return UINT32_MAX;
 }
 
 Status VoxelLayer::build(const ScanView& scan, VoxelStats* stats_out) {
