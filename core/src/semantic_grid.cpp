@@ -36,15 +36,6 @@ struct TileCache {
   uint32_t value[kEntries] = {};
 };
 
-// std::floor(a / b): the quotient truncated through an int32 when it fits (SSE2 has no rounding
-// instruction, and std::floor is a longer sequence that also keeps -0 and huge values).
-inline float floor_quotient(float a, float b) {
-  const float q = a / b;
-  if (!(q > -4194304.0f && q < 4194304.0f)) return std::floor(q);  // and NaN
-  const float t = static_cast<float>(static_cast<int32_t>(q));
-  return t > q ? t - 1.0f : t;
-}
-
 // One axis of a map position in the semantic grid: tile coordinate and cell within the tile, as
 // SemanticGridView::cell_at computes them (tile < 0 - 32767: outside every representable tile).
 struct GridAxis {
@@ -70,13 +61,20 @@ GridConstants grid_constants(const SemanticGridView& g) {
 
 inline GridAxis grid_axis(const GridConstants& k, float x) {
   if (!k.usable) return {kOutsideTiles, 0};
-  const float f = floor_quotient(x, k.tile);
-  if (!(std::fabs(f) < 32768.0f)) return {kOutsideTiles, 0};  // also rejects NaN
-  // cell_at truncates (x - f tile) / cell and clamps to [0, n - 1]: flooring instead gives the same
-  // cell after the clamp (they differ only below 0).
-  int32_t c = static_cast<int32_t>(floor_quotient(x - f * k.tile, k.cell));
+  // cell_at's tile floor(x / tile) is valid within (-32768, 32768), i.e. for a quotient in
+  // [-32767, 32768), where truncation through an int32 floors it (SSE2 has no rounding instruction).
+  const float q = x / k.tile;
+  if (!(q >= -32767.0f && q < 32768.0f)) return {kOutsideTiles, 0};  // also rejects NaN
+  int32_t tile = static_cast<int32_t>(q);
+  float f = static_cast<float>(tile);
+  if (f > q) {
+    tile -= 1;
+    f -= 1.0f;
+  }
+  // The cell: (x - f tile) / cell truncated and clamped to [0, n - 1], as in cell_at.
+  int32_t c = static_cast<int32_t>((x - f * k.tile) / k.cell);
   c = c < 0 ? 0 : (c >= k.tile_cells ? k.tile_cells - 1 : c);  // float rounding at the tile's far edge
-  return {static_cast<int32_t>(f), c};
+  return {tile, c};
 }
 
 // cell_at(x, y) from the two axes, with the tile found through `cache` (identical results).
