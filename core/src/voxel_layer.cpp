@@ -8,10 +8,14 @@ namespace {
 
 constexpr int32_t kCoordLimit = VoxelLayer::kCellLimit;  // 21-bit packed voxel coordinates
 
+// floor(v * inv_size) if it lies in (-2^20, 2^20 - 1), i.e. for a product in [1 - 2^20, 2^20 - 1);
+// the floor truncates through an int32 (SSE2 has no rounding instruction; std::floor is a longer
+// sequence).
 bool cell_coord(float v, float inv_size, int32_t* out) {
-  const float c = std::floor(v * inv_size);
-  if (!(c > -float(kCoordLimit) && c < float(kCoordLimit - 1))) return false;
-  *out = static_cast<int32_t>(c);
+  const float q = v * inv_size;
+  if (!(q >= -float(kCoordLimit - 1) && q < float(kCoordLimit - 1))) return false;  // also NaN
+  const int32_t t = static_cast<int32_t>(q);
+  *out = static_cast<float>(t) > q ? t - 1 : t;
   return true;
 }
 
@@ -141,7 +145,9 @@ Status VoxelLayer::build(const ScanView& scan, VoxelStats* stats_out) {
   // Consecutive points of a scan line often share a voxel: the last key found skips the hash lookup.
   uint64_t last_key = UINT64_MAX;
   uint32_t last_voxel = 0;
-  float prob[kNumClasses];
+  // One padding lane (exp of 0, never summed or stored): the exp loop then runs whole 4-wide vectors.
+  constexpr int kLanes = (kNumClasses + 3) / 4 * 4;
+  float prob[kLanes], shifted[kLanes] = {};
   stats.points_in = scan.count;
   for (uint32_t i = 0; i < scan.count; ++i) {
     const float* p = scan.points + static_cast<size_t>(i) * scan.stride;
@@ -186,7 +192,8 @@ Status VoxelLayer::build(const ScanView& scan, VoxelStats* stats_out) {
         std::memcpy(&f, &b, sizeof f);
         return f;
       }();
-      for (int k = 0; k < kNumClasses; ++k) prob[k] = exp_nonpositive(l[k] - mx);
+      for (int k = 0; k < kNumClasses; ++k) shifted[k] = l[k] - mx;
+      for (int k = 0; k < kLanes; ++k) prob[k] = exp_nonpositive(shifted[k]);
       float sum = 0.0f;
       for (int k = 0; k < kNumClasses; ++k) sum += prob[k];
       const float inv = 1.0f / sum;
