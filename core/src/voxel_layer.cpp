@@ -3,6 +3,8 @@
 #include <cmath>
 #include <cstring>
 
+#include "fast_exp.h"
+
 namespace gsf {
 namespace {
 
@@ -20,42 +22,6 @@ bool cell_coord(float v, float inv_size, int32_t* out) {
 }
 
 uint64_t pack3(int32_t x, int32_t y, int32_t z) { return VoxelLayer::pack_cell(x, y, z); }
-
-// exp(x) for x <= 0 (a softmax term l - max), within 1.4 ulp: Cody-Waite reduction by ln 2 and
-// Cephes' degree-5 polynomial in float, with no library call and no branch (the clamp is an integer
-// min on the bits), so the loop over the classes vectorises; glibc's expf was 19 calls a point, half
-// the voxel layer's instructions. Only +, -, * in a fixed order, and this file is compiled with
-// -ffp-contract=off: the same bits on x86-64 and ARM64. Below -87 it returns exp(-87) = 1.6e-38
-// (glibc: a smaller subnormal), nothing next to the softmax sum's 1.
-inline float exp_nonpositive(float x) {
-  uint32_t bits;
-  std::memcpy(&bits, &x, sizeof bits);
-  const uint32_t minus_87 = 0xC2AE0000u;  // for x <= 0 (sign bit set or +0) a larger pattern is a smaller x
-  bits = bits < minus_87 ? bits : minus_87;
-  float xc;
-  std::memcpy(&xc, &bits, sizeof xc);
-  // n = round(x / ln 2) by the 1.5 * 2^23 shifter: its low mantissa bits then hold n as an integer.
-  const float shifter = 12582912.0f;
-  const float t = xc * 1.44269504088896341f + shifter;
-  const float n = t - shifter;
-  int32_t t_bits;
-  std::memcpy(&t_bits, &t, sizeof t_bits);
-  // r = x - n ln 2 with ln 2 split in two (n * 0.693359375 is exact for |n| < 2^15): |r| <= ln 2 / 2.
-  float r = xc - n * 0.693359375f;
-  r = r - n * -2.12194440e-4f;
-  const float r2 = r * r;
-  float p = 1.9875691500e-4f;
-  p = p * r + 1.3981999507e-3f;
-  p = p * r + 8.3334519073e-3f;
-  p = p * r + 4.1665795894e-2f;
-  p = p * r + 1.6666665459e-1f;
-  p = p * r + 5.0000001201e-1f;
-  const float e = p * r2 + r + 1.0f;
-  const int32_t scale_bits = (t_bits - 0x4B400000 + 127) << 23;  // 2^n, n in [-126, 0]: a normal float
-  float scale;
-  std::memcpy(&scale, &scale_bits, sizeof scale);
-  return e * scale;
-}
 
 // The float's order as a signed integer (for finite values): lets the max over the logits vectorise.
 inline int32_t ordered_bits(float v) {
@@ -193,7 +159,7 @@ Status VoxelLayer::build(const ScanView& scan, VoxelStats* stats_out) {
         return f;
       }();
       for (int k = 0; k < kNumClasses; ++k) shifted[k] = l[k] - mx;
-      for (int k = 0; k < kLanes; ++k) prob[k] = exp_nonpositive(shifted[k]);
+      for (int k = 0; k < kLanes; ++k) prob[k] = detail::exp_nonpositive(shifted[k]);
       float sum = 0.0f;
       for (int k = 0; k < kNumClasses; ++k) sum += prob[k];
       const float inv = 1.0f / sum;
