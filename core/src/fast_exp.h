@@ -11,8 +11,8 @@ namespace detail {
 // Cephes' degree-5 polynomial in float, with no library call and no branch (the clamp is an integer
 // min on the bits), so a loop over it vectorises (glibc's expf was half the voxel layer's and of the
 // field probes' instructions). Only +, -, * in a fixed order, and the files using it are compiled
-// with -ffp-contract=off (core/CMakeLists.txt): the same bits on x86-64 and ARM64. Below -87 it returns exp(-87) = 1.6e-38
-// (glibc: a smaller subnormal), nothing next to the softmax sum's 1.
+// with -ffp-contract=off (core/CMakeLists.txt): the same bits on x86-64 and ARM64. Below -87 it returns exp(-87)
+// = 1.6e-38 (glibc: a smaller subnormal), nothing next to the softmax sum's 1.
 inline float exp_nonpositive(float x) {
   uint32_t bits;
   std::memcpy(&bits, &x, sizeof bits);
