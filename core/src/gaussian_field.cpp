@@ -2,6 +2,7 @@
 
 #include <cmath>
 
+#include "fast_exp.h"
 #include "gsf/detail/sparsify.h"
 
 namespace gsf {
@@ -60,8 +61,23 @@ void backward_solve(const float* l, uint32_t m, float* b, uint32_t cols) {
 
 float matern32(float r, float length_scale, float signal_variance) {
   const float a = kSqrt3 * r / length_scale;
-  return signal_variance * (1.0f + a) * std::exp(-a);
+  return signal_variance * (1.0f + a) * detail::exp_nonpositive(-a);
 }
+
+namespace {
+// kernel(a, b_s) for the g points b_s of a probe grid, in two loops: squared distances (the grid is
+// x, y, z interleaved), then the kernel of each, a loop without branches that vectorises (sqrt,
+// divide and the exp). The same arithmetic as kernel().
+template <bool kThreeD>
+void kernel_row(const float* a, const float* grid, uint32_t g, float length_scale, float signal_variance, float* row) {
+  for (uint32_t s = 0; s < g; ++s) {
+    const float* b = grid + 3 * s;
+    const float dx = a[0] - b[0], dy = a[1] - b[1], dz = kThreeD ? a[2] - b[2] : 0.0f;
+    row[s] = dx * dx + dy * dy + dz * dz;
+  }
+  for (uint32_t s = 0; s < g; ++s) row[s] = matern32(std::sqrt(row[s]), length_scale, signal_variance);
+}
+}  // namespace
 
 Status validate(const FieldConfig& c) {
   if (!(c.radius > 0 && c.length_scale > 0 && c.signal_variance > 0 && c.noise_variance > 0 && c.grid_spacing > 0))
@@ -175,8 +191,12 @@ Status FieldSolver::probe(const FieldView& field, const float* chol, const float
   if (g == 0 || g > kMaxGridPoints || m > kMaxInducing) return Status::InvalidArgument;
   const float prior = config_.signal_variance;
   // k* (m x g), then mean = k*^T alpha accumulated row by row (inner loop over the D outputs).
-  for (uint32_t i = 0; i < m; ++i)
-    for (uint32_t s = 0; s < g; ++s) kstar_[i * g + s] = kernel(field.inputs + 3 * i, grid + 3 * s);
+  for (uint32_t i = 0; i < m; ++i) {
+    if (config_.input_dims == 3)
+      kernel_row<true>(field.inputs + 3 * i, grid, g, config_.length_scale, config_.signal_variance, kstar_ + i * g);
+    else
+      kernel_row<false>(field.inputs + 3 * i, grid, g, config_.length_scale, config_.signal_variance, kstar_ + i * g);
+  }
   for (uint32_t x = 0; x < g * kNumClasses; ++x) mean[x] = 0.0f;
   for (uint32_t i = 0; i < m; ++i) {
     const float* a = field.alpha + size_t(i) * kNumClasses;

@@ -1,6 +1,7 @@
 #include "gsf/detail/semantic_grid.h"
 
 #include <cmath>
+#include <cstdint>
 
 #include "gsf/detail/voxel_layer.h"
 
@@ -35,14 +36,52 @@ struct TileCache {
   uint32_t value[kEntries] = {};
 };
 
-// cell_at with the tile found through `cache` (identical results).
-inline uint32_t cell_at_cached(const SemanticGridView& g, float x, float y, TileCache& cache) {
-  if (g.tile_count == 0 || !(g.cell > 0.0f)) return 0;
-  const float tile = g.cell * static_cast<float>(g.tile_cells);
-  const float fx = std::floor(x / tile), fy = std::floor(y / tile);
-  if (!(std::fabs(fx) < 32768.0f && std::fabs(fy) < 32768.0f)) return 0;  // also rejects NaN
-  uint32_t key;
-  if (!semantic_tile_key(static_cast<int64_t>(fx), static_cast<int64_t>(fy), &key)) return 0;
+// One axis of a map position in the semantic grid: tile coordinate and cell within the tile, as
+// SemanticGridView::cell_at computes them (tile < 0 - 32767: outside every representable tile).
+struct GridAxis {
+  int32_t tile;
+  int32_t cell;
+};
+constexpr int32_t kOutsideTiles = INT32_MIN;
+
+struct GridConstants {
+  float cell, tile;
+  int32_t tile_cells;
+  bool usable;
+};
+
+GridConstants grid_constants(const SemanticGridView& g) {
+  GridConstants k;
+  k.usable = g.tile_count != 0 && g.cell > 0.0f;
+  k.cell = g.cell;
+  k.tile = g.cell * static_cast<float>(g.tile_cells);
+  k.tile_cells = static_cast<int32_t>(g.tile_cells);
+  return k;
+}
+
+inline GridAxis grid_axis(const GridConstants& k, float x) {
+  if (!k.usable) return {kOutsideTiles, 0};
+  // cell_at's tile floor(x / tile) is valid within (-32768, 32768), i.e. for a quotient in
+  // [-32767, 32768), where truncation through an int32 floors it (SSE2 has no rounding instruction).
+  const float q = x / k.tile;
+  if (!(q >= -32767.0f && q < 32768.0f)) return {kOutsideTiles, 0};  // also rejects NaN
+  int32_t tile = static_cast<int32_t>(q);
+  float f = static_cast<float>(tile);
+  if (f > q) {
+    tile -= 1;
+    f -= 1.0f;
+  }
+  // The cell: (x - f tile) / cell truncated and clamped to [0, n - 1], as in cell_at.
+  int32_t c = static_cast<int32_t>((x - f * k.tile) / k.cell);
+  c = c < 0 ? 0 : (c >= k.tile_cells ? k.tile_cells - 1 : c);  // float rounding at the tile's far edge
+  return {tile, c};
+}
+
+// cell_at(x, y) from the two axes, with the tile found through `cache` (identical results).
+inline uint32_t cell_at_axes(const SemanticGridView& g, const GridConstants& k, GridAxis ax, GridAxis ay,
+                             TileCache& cache) {
+  if (!k.usable || ax.tile == kOutsideTiles || ay.tile == kOutsideTiles) return 0;
+  const uint32_t key = (uint32_t(ax.tile + 32768) << 16) | uint32_t(ay.tile + 32768);
   const uint32_t e = static_cast<uint32_t>((key * 0x9E3779B1u) >> 26);  // 64 entries
   uint32_t t;
   if (cache.value[e] != 0 && cache.key[e] == key) {
@@ -56,11 +95,8 @@ inline uint32_t cell_at_cached(const SemanticGridView& g, float x, float y, Tile
     if (!found) return 0;
     t = lo;
   }
-  int32_t cx = static_cast<int32_t>((x - fx * tile) / g.cell), cy = static_cast<int32_t>((y - fy * tile) / g.cell);
-  const int32_t n = static_cast<int32_t>(g.tile_cells);
-  cx = cx < 0 ? 0 : (cx >= n ? n - 1 : cx);  // float rounding at the tile's far edge
-  cy = cy < 0 ? 0 : (cy >= n ? n - 1 : cy);
-  return g.cells[size_t(t) * g.tile_cells * g.tile_cells + size_t(cy) * g.tile_cells + size_t(cx)];
+  const size_t n = g.tile_cells;
+  return g.cells[size_t(t) * n * n + size_t(ay.cell) * n + size_t(ax.cell)];
 }
 
 }  // namespace
@@ -115,10 +151,12 @@ PoseVerification verify_pose(const VoxelLayer& voxels, const SemanticGridView& g
   const Eigen::Matrix3f R = Eigen::AngleAxisf(yaw, Eigen::Vector3f::UnitZ()).toRotationMatrix();
   const Eigen::Vector3f t = T.translation().cast<float>();
   TileCache cache;
+  const GridConstants k = grid_constants(grid);
   for (uint32_t i = 0; i < n; i += stride) {
     const Voxel& vx = voxels.voxel(i);
     const Eigen::Vector3f p = R * Eigen::Vector3f(vx.centroid[0], vx.centroid[1], vx.centroid[2]) + t;
-    const uint32_t mask = cell_at_cached(grid, p.x(), p.y(), cache);
+    const GridAxis ax = grid_axis(k, p.x()), ay = grid_axis(k, p.y());
+    const uint32_t mask = cell_at_axes(grid, k, ax, ay, cache);
     const uint32_t bit = class_bit(vx.label);
     const float w = weights[vx.label];
     int verdict = 0;  // +1 agree, -1 disagree, 0 unknown
@@ -129,11 +167,14 @@ PoseVerification verify_pose(const VoxelLayer& voxels, const SemanticGridView& g
     }
     if (verdict < 0) {
       // A hypothesis pose is good to about a cell: the class in a 4-neighbour cell still agrees (a
-      // lattice shift moves cues by metres, far beyond this tolerance).
+      // lattice shift moves cues by metres, far beyond this tolerance). A neighbour shares one axis
+      // with p, so only the other is computed again.
       const float c = grid.cell;
-      const float nx[4] = {p.x() - c, p.x() + c, p.x(), p.x()}, ny[4] = {p.y(), p.y(), p.y() - c, p.y() + c};
-      for (int k = 0; k < 4 && verdict < 0; ++k)
-        if (cell_at_cached(grid, nx[k], ny[k], cache) & bit) verdict = 1;
+      if ((cell_at_axes(grid, k, grid_axis(k, p.x() - c), ay, cache) & bit) ||
+          (cell_at_axes(grid, k, grid_axis(k, p.x() + c), ay, cache) & bit) ||
+          (cell_at_axes(grid, k, ax, grid_axis(k, p.y() - c), cache) & bit) ||
+          (cell_at_axes(grid, k, ax, grid_axis(k, p.y() + c), cache) & bit))
+        verdict = 1;
     }
     if (verdict == 0) {
       ++v.unknown;

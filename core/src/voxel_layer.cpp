@@ -3,21 +3,31 @@
 #include <cmath>
 #include <cstring>
 
+#include "fast_exp.h"
+
 namespace gsf {
 namespace {
 
-constexpr int32_t kCoordLimit = 1 << 20;  // 21-bit packed voxel coordinates
+constexpr int32_t kCoordLimit = VoxelLayer::kCellLimit;  // 21-bit packed voxel coordinates
 
+// floor(v * inv_size) if it lies in (-2^20, 2^20 - 1), i.e. for a product in [1 - 2^20, 2^20 - 1);
+// the floor truncates through an int32 (SSE2 has no rounding instruction; std::floor is a longer
+// sequence).
 bool cell_coord(float v, float inv_size, int32_t* out) {
-  const float c = std::floor(v * inv_size);
-  if (!(c > -float(kCoordLimit) && c < float(kCoordLimit - 1))) return false;
-  *out = static_cast<int32_t>(c);
+  const float q = v * inv_size;
+  if (!(q >= -float(kCoordLimit - 1) && q < float(kCoordLimit - 1))) return false;  // also NaN
+  const int32_t t = static_cast<int32_t>(q);
+  *out = static_cast<float>(t) > q ? t - 1 : t;
   return true;
 }
 
-uint64_t pack3(int32_t x, int32_t y, int32_t z) {
-  return (uint64_t(uint32_t(x + kCoordLimit)) << 42) | (uint64_t(uint32_t(y + kCoordLimit)) << 21) |
-         uint64_t(uint32_t(z + kCoordLimit));
+uint64_t pack3(int32_t x, int32_t y, int32_t z) { return VoxelLayer::pack_cell(x, y, z); }
+
+// The float's order as a signed integer (for finite values): lets the max over the logits vectorise.
+inline int32_t ordered_bits(float v) {
+  int32_t b;
+  std::memcpy(&b, &v, sizeof b);
+  return b ^ ((b >> 31) & 0x7FFFFFFF);
 }
 
 }  // namespace
@@ -59,28 +69,10 @@ bool VoxelLayer::cell_of(const float p[3], int32_t out[3]) const {
   return cell_coord(p[0], inv, &out[0]) && cell_coord(p[1], inv, &out[1]) && cell_coord(p[2], inv, &out[2]);
 }
 
-uint32_t VoxelLayer::find_cell(int32_t x, int32_t y, int32_t z) const {
-  if (x <= -kCoordLimit || x >= kCoordLimit - 1 || y <= -kCoordLimit || y >= kCoordLimit - 1 || z <= -kCoordLimit ||
-      z >= kCoordLimit - 1)
-    return UINT32_MAX;
-  return index_find(pack3(x, y, z));
-}
-
 uint32_t VoxelLayer::find(const float p[3]) const {
   const uint64_t k = key_of(p);
   if (k == UINT64_MAX) return UINT32_MAX;
   return index_find(k);
-}
-
-uint32_t VoxelLayer::index_find(uint64_t key) const {
-  if (active_slots_ == 0) return UINT32_MAX;
-  const uint32_t mask = active_slots_ - 1;
-  for (uint32_t i = static_cast<uint32_t>(mix64(key)) & mask, n = 0; n < active_slots_; ++n, i = (i + 1) & mask) {
-    const uint32_t s = slots_[i];
-    if (s == 0) return UINT32_MAX;
-    if (keys_[s - 1] == key) return s - 1;
-  }
-  return UINT32_MAX;
 }
 
 Status VoxelLayer::build(const ScanView& scan, VoxelStats* stats_out) {
@@ -114,7 +106,9 @@ Status VoxelLayer::build(const ScanView& scan, VoxelStats* stats_out) {
   // Consecutive points of a scan line often share a voxel: the last key found skips the hash lookup.
   uint64_t last_key = UINT64_MAX;
   uint32_t last_voxel = 0;
-  float prob[kNumClasses];
+  // One padding lane (exp of 0, never summed or stored): the exp loop then runs whole 4-wide vectors.
+  constexpr int kLanes = (kNumClasses + 3) / 4 * 4;
+  float prob[kLanes], shifted[kLanes] = {};
   stats.points_in = scan.count;
   for (uint32_t i = 0; i < scan.count; ++i) {
     const float* p = scan.points + static_cast<size_t>(i) * scan.stride;
@@ -138,22 +132,31 @@ Status VoxelLayer::build(const ScanView& scan, VoxelStats* stats_out) {
     }
     if (use_logits) {
       const float* l = scan.logits + static_cast<size_t>(i) * kNumClasses;
-      // Max and finiteness without branches (the max of finite values does not depend on the order).
-      float mx = l[0];
+      // Max and finiteness without branches, on integers so that both loops vectorise (a float max
+      // does not without -ffast-math). -0 and +0 order differently here, which moves no l - max.
       uint32_t non_finite = 0;
+      int32_t max_bits = ordered_bits(l[0]);
       for (int k = 0; k < kNumClasses; ++k) {
         uint32_t bits;
         std::memcpy(&bits, &l[k], sizeof bits);
         non_finite |= static_cast<uint32_t>((bits & 0x7F800000u) == 0x7F800000u);
-        mx = l[k] > mx ? l[k] : mx;
+        const int32_t o = ordered_bits(l[k]);
+        max_bits = o > max_bits ? o : max_bits;
       }
       if (non_finite) {
         ++stats.non_finite;
         continue;
       }
-      for (int k = 0; k < kNumClasses; ++k) prob[k] = std::exp(l[k] - mx);
+      const float mx = [&] {
+        const int32_t b = max_bits ^ ((max_bits >> 31) & 0x7FFFFFFF);
+        float f;
+        std::memcpy(&f, &b, sizeof f);
+        return f;
+      }();
+      for (int k = 0; k < kNumClasses; ++k) shifted[k] = l[k] - mx;
+      for (int k = 0; k < kLanes; ++k) prob[k] = detail::exp_nonpositive(shifted[k]);
       float sum = 0.0f;
-      for (int k = 0; k < kNumClasses; ++k) sum += prob[k];  // same order as before: bit-identical
+      for (int k = 0; k < kNumClasses; ++k) sum += prob[k];
       const float inv = 1.0f / sum;
       for (int k = 0; k < kNumClasses; ++k) prob[k] *= inv;
     }
