@@ -227,8 +227,7 @@ Status Localizer::init(const LocalizerConfig& config, const MapView& map, void* 
   s = bind_workspace(arena_, config, im, nullptr);
   if (s != Status::Ok) return s;
   if (config.refine.enabled) {
-    if (map.counts.refine_points > config.refine.max_map_points) return Status::CapacityExceeded;
-    s = im.refiner.set_map(map.refine_points, map.counts.refine_points);
+    s = im.refiner.set_map(map.refine_layer());
     if (s != Status::Ok) return s;
   }
   im.classes = label_set(config);
