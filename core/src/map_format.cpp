@@ -43,7 +43,10 @@ bool section_specs(const MapView& m, SectionSpec* s) {
   const uint64_t tc = m.params.semantic_tile_cells;
   if (tc > kMaxSemanticTileCells) return false;
   s[9] = {MapSection::SemanticTileKeys, sizeof(uint32_t), m.counts.semantic_tiles, m.semantic_tile_keys};
-  s[10] = {MapSection::SemanticCells, sizeof(uint32_t), uint64_t(m.counts.semantic_tiles) * tc * tc, m.semantic_cells};
+  const uint64_t tiles = m.counts.semantic_tiles;
+  s[10] = {MapSection::SemanticPaletteOffsets, sizeof(uint32_t), tiles ? tiles + 1 : 0, m.semantic_palette_offsets};
+  s[11] = {MapSection::SemanticPalette, sizeof(uint32_t), m.counts.semantic_palette, m.semantic_palette};
+  s[12] = {MapSection::SemanticCells, sizeof(uint8_t), tiles * tc * tc, m.semantic_cells};
   return true;
 }
 
@@ -128,6 +131,7 @@ Status check_contents(const MapView& m) {
   const Status rs = m.refine_layer().validate();
   if (rs != Status::Ok) return rs;
   if (m.counts.semantic_tiles > 0 && m.params.semantic_tile_cells == 0) return Status::CorruptData;
+  if (m.counts.semantic_tiles == 0 && m.counts.semantic_palette != 0) return Status::CorruptData;
   return m.semantic_grid().validate(d);
 }
 
@@ -214,7 +218,7 @@ Status load_map(const void* data, size_t bytes, MapView* out) {
   if (crc != h.header_crc) return Status::CorruptData;
   const Status ps = check_params(h.params);
   if (ps != Status::Ok) return ps;
-  if (h.flags != 0 || h.counts.reserved[0] | h.counts.reserved[1] | h.counts.reserved[2]) return Status::CorruptData;
+  if (h.flags != 0 || h.counts.reserved[0] | h.counts.reserved[1]) return Status::CorruptData;
   if (!valid_georeference(h.georef)) return Status::CorruptData;
 
   MapView m;
@@ -248,7 +252,9 @@ Status load_map(const void* data, size_t bytes, MapView* out) {
   m.refine_tiles = m.counts.refine_tiles ? static_cast<const MapRefineTile*>(ptr[7]) : nullptr;
   m.refine_points = m.counts.refine_points ? static_cast<const MapRefinePoint*>(ptr[8]) : nullptr;
   m.semantic_tile_keys = m.counts.semantic_tiles ? static_cast<const uint32_t*>(ptr[9]) : nullptr;
-  m.semantic_cells = m.counts.semantic_tiles ? static_cast<const uint32_t*>(ptr[10]) : nullptr;
+  m.semantic_palette_offsets = m.counts.semantic_tiles ? static_cast<const uint32_t*>(ptr[10]) : nullptr;
+  m.semantic_palette = m.counts.semantic_tiles ? static_cast<const uint32_t*>(ptr[11]) : nullptr;
+  m.semantic_cells = m.counts.semantic_tiles ? static_cast<const uint8_t*>(ptr[12]) : nullptr;
   const Status cs = check_contents(m);
   if (cs != Status::Ok) return cs;
   *out = m;

@@ -66,7 +66,8 @@ void RefineLayerView::find(const RefineCell& c, uint32_t* begin, uint32_t* end, 
   const int64_t lz = int64_t(c.z) - tiles[t].z_base;
   if (lz < 0 || lz >= kRefineTileZCells) return;
   const int32_t n = static_cast<int32_t>(kRefineTileCells);
-  const uint16_t local = static_cast<uint16_t>((uint32_t(lz) << 8) | (uint32_t(c.y - ty * n) << 4) | uint32_t(c.x - tx * n));
+  const uint16_t local =
+      static_cast<uint16_t>((uint32_t(lz) << 8) | (uint32_t(c.y - ty * n) << 4) | uint32_t(c.x - tx * n));
   const uint32_t first = tiles[t].first_point;
   const uint32_t last = t + 1 < tile_count ? tiles[t + 1].first_point : point_count;
   const MapRefinePoint* p = points + first;

@@ -86,16 +86,20 @@ inline std::vector<uint64_t> fuzz_seed_map(size_t* bytes) {
   p.semantic_cell = 1.0f;
   p.semantic_tile_cells = 2;
   static uint32_t tile_keys[2] = {(32768u << 16) | 32768u, (32768u << 16) | 32769u};
-  static uint32_t cells[8] = {gsf::kCellObserved | gsf::class_bit(gsf::kRoad),
-                              0,
-                              gsf::kCellObserved | gsf::class_bit(gsf::kPole),
-                              gsf::kCellObserved,
-                              0,
-                              gsf::kCellObserved | gsf::class_bit(gsf::kTerrain),
-                              0,
-                              0};
+  // Tile 0: road, (none), pole, observed-empty; tile 1: (none), terrain, (none), (none) - as palettes.
+  static uint32_t palette_offsets[3] = {0, 4, 6};
+  static uint32_t palette[6] = {gsf::kCellObserved | gsf::class_bit(gsf::kRoad),
+                                0,
+                                gsf::kCellObserved | gsf::class_bit(gsf::kPole),
+                                gsf::kCellObserved,
+                                0,
+                                gsf::kCellObserved | gsf::class_bit(gsf::kTerrain)};
+  static uint8_t cells[8] = {0, 1, 2, 3, 0, 1, 0, 0};
   v.counts.semantic_tiles = 2;
+  v.counts.semantic_palette = 6;
   v.semantic_tile_keys = tile_keys;
+  v.semantic_palette_offsets = palette_offsets;
+  v.semantic_palette = palette;
   v.semantic_cells = cells;
   *bytes = map_serialized_size(v);
   std::vector<uint64_t> buf(*bytes / 8 + 2);

@@ -89,9 +89,12 @@ int cmd_inspect(int argc, char** argv) {
               map.params.refine_cell);
   const uint64_t sem_cells =
       uint64_t(map.counts.semantic_tiles) * map.params.semantic_tile_cells * map.params.semantic_tile_cells;
-  std::printf("  semantic layer  %u tiles of %ux%u cells @ %.2f m (%.2f MB)\n", map.counts.semantic_tiles,
-              map.params.semantic_tile_cells, map.params.semantic_tile_cells, map.params.semantic_cell,
-              (sem_cells * 4 + uint64_t(map.counts.semantic_tiles) * 4) / 1e6);
+  // Tile keys and palette offsets (4 B each), the palettes' masks (4 B), a byte a cell.
+  const uint64_t sem_bytes = uint64_t(map.counts.semantic_tiles) * 8 + (map.counts.semantic_tiles ? 4 : 0) +
+                             uint64_t(map.counts.semantic_palette) * 4 + sem_cells;
+  std::printf("  semantic layer  %u tiles of %ux%u cells @ %.2f m, %u palette masks (%.2f MB)\n",
+              map.counts.semantic_tiles, map.params.semantic_tile_cells, map.params.semantic_tile_cells,
+              map.params.semantic_cell, map.counts.semantic_palette, sem_bytes / 1e6);
   // Bytes per section (format v4: docs/map-format.md), so the size can be traced to what it stores.
   const uint64_t n = map.counts.instances, g = map.grid_points(), d = map.params.num_classes;
   const struct {
@@ -105,7 +108,7 @@ int cmd_inspect(int argc, char** argv) {
       {"triangle index", uint64_t(map.counts.index_keys) * 12 + 4 + uint64_t(map.counts.triangles) * 4},
       {"refinement layer", uint64_t(map.counts.refine_tiles) * sizeof(MapRefineTile) +
                                uint64_t(map.counts.refine_points) * sizeof(MapRefinePoint)},
-      {"semantic layer", sem_cells * 4 + uint64_t(map.counts.semantic_tiles) * 4},
+      {"semantic layer", sem_bytes},
   };
   std::printf("  sections (MB)  ");
   for (const auto& sec : sections) std::printf(" %s %.2f;", sec.name, sec.bytes / 1e6);

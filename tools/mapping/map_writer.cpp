@@ -2,6 +2,7 @@
 
 #include "gsf/map_quantization.h"
 #include "mapping/refine_layer_builder.h"
+#include "mapping/semantic_layer.h"
 
 namespace gsf::mapping {
 
@@ -40,8 +41,20 @@ Status write_compact_map(const MapContents& c, std::vector<uint64_t>* blob, size
   view.index_entries = c.index_entries;
   view.refine_tiles = tiles.empty() ? nullptr : tiles.data();
   view.refine_points = points.empty() ? nullptr : points.data();
+  std::vector<uint32_t> palette_offsets, palette;
+  std::vector<uint8_t> palette_cells;
+  if (c.counts.semantic_tiles > 0) {
+    const uint32_t tc = c.params.semantic_tile_cells;
+    const std::vector<uint32_t> dense(c.semantic_cells, c.semantic_cells + size_t(c.counts.semantic_tiles) * tc * tc);
+    const Status s =
+        palette_semantic_layer(dense, c.counts.semantic_tiles, tc, &palette_offsets, &palette, &palette_cells);
+    if (s != Status::Ok) return s;
+  }
+  view.counts.semantic_palette = static_cast<uint32_t>(palette.size());
   view.semantic_tile_keys = c.semantic_tile_keys;
-  view.semantic_cells = c.semantic_cells;
+  view.semantic_palette_offsets = palette_offsets.empty() ? nullptr : palette_offsets.data();
+  view.semantic_palette = palette.empty() ? nullptr : palette.data();
+  view.semantic_cells = palette_cells.empty() ? nullptr : palette_cells.data();
   const size_t size = map_serialized_size(view);
   if (size == 0) return Status::InvalidArgument;
   blob->assign(size / 8 + 2, 0);

@@ -53,9 +53,10 @@ struct MapCounts {
   float road_length_m;     // length of the mapping drive, for bytes-per-km reporting
   float bounds_min[3];
   float bounds_max[3];
-  uint32_t semantic_tiles;  // tiles of the semantic layer (0: no layer; verification is then off)
-  uint32_t refine_tiles;    // tiles of the refinement layer (0 when refine_points is 0)
-  uint32_t reserved[3];     // 0
+  uint32_t semantic_tiles;    // tiles of the semantic layer (0: no layer; verification is then off)
+  uint32_t refine_tiles;      // tiles of the refinement layer (0 when refine_points is 0)
+  uint32_t semantic_palette;  // class masks over all semantic tiles' palettes (0 without the layer)
+  uint32_t reserved[2];       // 0
 };
 static_assert(sizeof(MapCounts) == 64, "on-disk layout (docs/map-format.md)");
 
@@ -74,19 +75,21 @@ struct MapHeader {
 };
 
 enum class MapSection : uint32_t {
-  Instances = 1,     // MapInstance x instances
-  GridMean,          // uint8 x instances x G x D  (posterior mean on the canonical, yaw-0 grid; quantised)
-  GridVar,           // uint16 x instances x G     (posterior variance on that grid; quantised)
-  Triangles,         // MapTriangle x triangles
-  IndexKeys,         // uint64 x index_keys (sorted, unique)
-  IndexOffsets,      // uint32 x (index_keys + 1), CSR into IndexEntries
-  IndexEntries,      // uint32 x triangles (triangle ids)
-  RefineTiles,       // MapRefineTile x refine_tiles (refine_layer.h) - optional
-  RefinePoints,      // MapRefinePoint x refine_points - optional
-  SemanticTileKeys,  // uint32 x semantic_tiles (sorted, unique; semantic_grid.h)
-  SemanticCells,     // uint32 x semantic_tiles x semantic_tile_cells^2 (class masks)
+  Instances = 1,           // MapInstance x instances
+  GridMean,                // uint8 x instances x G x D  (posterior mean on the canonical, yaw-0 grid; quantised)
+  GridVar,                 // uint16 x instances x G     (posterior variance on that grid; quantised)
+  Triangles,               // MapTriangle x triangles
+  IndexKeys,               // uint64 x index_keys (sorted, unique)
+  IndexOffsets,            // uint32 x (index_keys + 1), CSR into IndexEntries
+  IndexEntries,            // uint32 x triangles (triangle ids)
+  RefineTiles,             // MapRefineTile x refine_tiles (refine_layer.h) - optional
+  RefinePoints,            // MapRefinePoint x refine_points - optional
+  SemanticTileKeys,        // uint32 x semantic_tiles (sorted, unique; semantic_grid.h)
+  SemanticPaletteOffsets,  // uint32 x (semantic_tiles + 1; 0 without the layer): each tile's palette
+  SemanticPalette,         // uint32 x semantic_palette (class masks)
+  SemanticCells,           // uint8 x semantic_tiles x semantic_tile_cells^2 (indices into the tile's palette)
 };
-constexpr uint32_t kMapSectionCount = 11;
+constexpr uint32_t kMapSectionCount = 13;
 
 struct SectionEntry {
   uint32_t id;
@@ -132,7 +135,9 @@ struct MapView {
   const MapRefineTile* refine_tiles = nullptr;
   const MapRefinePoint* refine_points = nullptr;
   const uint32_t* semantic_tile_keys = nullptr;
-  const uint32_t* semantic_cells = nullptr;
+  const uint32_t* semantic_palette_offsets = nullptr;
+  const uint32_t* semantic_palette = nullptr;
+  const uint8_t* semantic_cells = nullptr;
   size_t total_bytes = 0;
 
   uint32_t grid_points() const { return params.grid_nx * params.grid_ny * params.grid_layers; }
@@ -141,7 +146,10 @@ struct MapView {
     g.cell = params.semantic_cell;
     g.tile_cells = params.semantic_tile_cells;
     g.tile_count = counts.semantic_tiles;
+    g.palette_count = counts.semantic_palette;
     g.tile_keys = semantic_tile_keys;
+    g.palette_offsets = semantic_palette_offsets;
+    g.palette = semantic_palette;
     g.cells = semantic_cells;
     return g;
   }

@@ -26,7 +26,7 @@
 
 namespace gsf {
 
-constexpr uint32_t kRefineTileCells = 16;  // columns per tile side (4 bits each of the cell id)
+constexpr uint32_t kRefineTileCells = 16;   // columns per tile side (4 bits each of the cell id)
 constexpr int32_t kRefineTileZCells = 256;  // z cells a tile spans above its z base (8 bits)
 
 struct MapRefineTile {
@@ -37,9 +37,9 @@ struct MapRefineTile {
 static_assert(sizeof(MapRefineTile) == 12, "on-disk layout (docs/map-format.md)");
 
 struct MapRefinePoint {
-  uint16_t cell;       // (z - z_base) << 8 | (y - 16 ty) << 4 | (x - 16 tx), non-decreasing in a tile
-  uint8_t offset[3];   // position in the cell: (offset + 0.5) / 256 of the cell per axis
-  int8_t normal[3];    // round(127 n); all zero: no reliable normal
+  uint16_t cell;      // (z - z_base) << 8 | (y - 16 ty) << 4 | (x - 16 tx), non-decreasing in a tile
+  uint8_t offset[3];  // position in the cell: (offset + 0.5) / 256 of the cell per axis
+  int8_t normal[3];   // round(127 n); all zero: no reliable normal
 };
 static_assert(sizeof(MapRefinePoint) == 8, "on-disk layout (docs/map-format.md)");
 
