@@ -263,6 +263,7 @@ uint64_t now(Clock* c) { return c ? c->now_ns() : 0; }
 // 1. Metric-semantic layer.
 Status Localizer::Impl::build_voxels(const ScanView& scan, LocalizeResult& out) {
   const Status s = voxels.build(scan, nullptr);
+  out.scan_voxels = voxels.size();
   if (s == Status::CapacityExceeded) out.capacity_truncated = true;
   return s == Status::CapacityExceeded ? Status::Ok : s;
 }
