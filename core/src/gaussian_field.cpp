@@ -102,10 +102,7 @@ uint32_t collect_field_points(const VoxelLayer& layer, const FieldConfig& config
 }
 
 size_t FieldSolver::required_bytes(const FieldConfig& config, uint32_t max_points) {
-  Arena counting;
-  FieldSolver s;
-  s.bind(counting, config, max_points);
-  return counting.used();
+  return counted_bytes<FieldSolver>(config, max_points);
 }
 
 Status FieldSolver::bind(Arena& arena, const FieldConfig& config, uint32_t max_points) {

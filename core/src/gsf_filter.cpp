@@ -31,10 +31,7 @@ uint32_t triangle_yaw_bin(const float* q[3], const float* m[3], uint32_t bins) {
 }
 
 size_t GsfFilter::required_bytes(const GsfFilterConfig& config, const FieldConfig& field) {
-  Arena counting;
-  GsfFilter f;
-  f.bind(counting, config, field, nullptr);
-  return counting.used();
+  return counted_bytes<GsfFilter>(config, field, nullptr);
 }
 
 Status GsfFilter::bind(Arena& ar, const GsfFilterConfig& config, const FieldConfig& field, FieldSolver* solver) {

@@ -6,10 +6,7 @@
 namespace gsf {
 
 size_t InstanceClustering::required_bytes(const ClusterConfig& config, uint32_t max_voxels) {
-  Arena counting;
-  InstanceClustering c;
-  c.bind(counting, config, max_voxels);
-  return counting.used();
+  return counted_bytes<InstanceClustering>(config, max_voxels);
 }
 
 Status InstanceClustering::bind(Arena& arena, const ClusterConfig& config, uint32_t max_voxels) {

@@ -10,12 +10,7 @@ inline int lowest_bit(uint64_t w) { return __builtin_ctzll(w); }
 
 }  // namespace
 
-size_t ConsistencyGraph::required_bytes(uint32_t max_vertices) {
-  Arena counting;
-  ConsistencyGraph g;
-  g.bind(counting, max_vertices);
-  return counting.used();
-}
+size_t ConsistencyGraph::required_bytes(uint32_t max_vertices) { return counted_bytes<ConsistencyGraph>(max_vertices); }
 
 Status ConsistencyGraph::bind(Arena& arena, uint32_t max_vertices) {
   if (max_vertices == 0 || max_vertices > 4096) return Status::InvalidArgument;
@@ -57,12 +52,7 @@ Status ConsistencyGraph::build(const float* a, const float* b, uint32_t n, float
   return Status::Ok;
 }
 
-size_t MaxCliqueSolver::required_bytes(uint32_t max_vertices) {
-  Arena counting;
-  MaxCliqueSolver s;
-  s.bind(counting, max_vertices);
-  return counting.used();
-}
+size_t MaxCliqueSolver::required_bytes(uint32_t max_vertices) { return counted_bytes<MaxCliqueSolver>(max_vertices); }
 
 Status MaxCliqueSolver::bind(Arena& arena, uint32_t max_vertices) {
   bound_ = false;

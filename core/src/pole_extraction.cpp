@@ -25,10 +25,7 @@ bool finite_positive(float v) { return std::isfinite(v) && v > 0.0f; }
 }  // namespace
 
 size_t PoleExtraction::required_bytes(const PoleConfig& config, uint32_t max_voxels) {
-  Arena counting;
-  PoleExtraction p;
-  p.bind(counting, config, max_voxels);
-  return counting.used();
+  return counted_bytes<PoleExtraction>(config, max_voxels);
 }
 
 Status PoleExtraction::bind(Arena& arena, const PoleConfig& config, uint32_t max_voxels) {

@@ -9,10 +9,7 @@
 namespace gsf {
 
 size_t PoseHypotheses::required_bytes(uint32_t max_correspondences, uint32_t max_hypotheses) {
-  Arena counting;
-  PoseHypotheses h;
-  h.bind(counting, max_correspondences, max_hypotheses);
-  return counting.used();
+  return counted_bytes<PoseHypotheses>(max_correspondences, max_hypotheses);
 }
 
 Status PoseHypotheses::bind(Arena& ar, uint32_t n, uint32_t k) {

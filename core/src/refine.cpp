@@ -9,12 +9,7 @@
 
 namespace gsf {
 
-size_t Refiner::required_bytes(const RefineConfig& config) {
-  Arena counting;
-  Refiner r;
-  r.bind(counting, config);
-  return counting.used();
-}
+size_t Refiner::required_bytes(const RefineConfig& config) { return counted_bytes<Refiner>(config); }
 
 Status Refiner::bind(Arena& arena, const RefineConfig& c) {
   bound_ = false;

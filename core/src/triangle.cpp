@@ -74,10 +74,7 @@ Triangle make_triangle(uint32_t a, uint32_t b, uint32_t c, const float* pa, cons
 }
 
 size_t TriangleBuilder::required_bytes(const TriangleConfig& config, uint32_t max_instances) {
-  Arena counting;
-  TriangleBuilder b;
-  b.bind(counting, config, max_instances);
-  return counting.used();
+  return counted_bytes<TriangleBuilder>(config, max_instances);
 }
 
 Status TriangleBuilder::bind(Arena& arena, const TriangleConfig& config, uint32_t max_instances) {

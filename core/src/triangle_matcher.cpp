@@ -28,12 +28,7 @@ void sift_down(RankedTriangleMatch* h, uint32_t n, uint32_t i) {
 
 }  // namespace
 
-size_t TriangleMatcher::required_bytes(uint32_t cap) {
-  Arena counting;
-  TriangleMatcher m;
-  m.bind(counting, cap);
-  return counting.used();
-}
+size_t TriangleMatcher::required_bytes(uint32_t cap) { return counted_bytes<TriangleMatcher>(cap); }
 
 Status TriangleMatcher::bind(Arena& arena, uint32_t cap) {
   cap_ = 0;

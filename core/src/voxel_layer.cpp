@@ -22,12 +22,7 @@ uint64_t pack3(int32_t x, int32_t y, int32_t z) {
 
 }  // namespace
 
-size_t VoxelLayer::required_bytes(const VoxelConfig& config) {
-  Arena counting;
-  VoxelLayer v;
-  v.bind(counting, config);
-  return counting.used();
-}
+size_t VoxelLayer::required_bytes(const VoxelConfig& config) { return counted_bytes<VoxelLayer>(config); }
 
 Status VoxelLayer::bind(Arena& arena, const VoxelConfig& config) {
   bound_ = false;

@@ -113,12 +113,7 @@ ObservedW2 w2_squared_diag_observed(const float* mq, const float* vq, const floa
   return r;
 }
 
-size_t W2Exact::required_bytes(uint32_t max_grid) {
-  Arena counting;
-  W2Exact w;
-  w.bind(counting, max_grid);
-  return counting.used();
-}
+size_t W2Exact::required_bytes(uint32_t max_grid) { return counted_bytes<W2Exact>(max_grid); }
 
 Status W2Exact::bind(Arena& arena, uint32_t max_grid) {
   if (max_grid == 0 || max_grid > kMaxGridPoints) return Status::InvalidArgument;

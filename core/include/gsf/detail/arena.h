@@ -72,4 +72,14 @@ class Arena {
   bool overflowed_ = false;
 };
 
+// Bytes a stage's bind(arena, args...) takes: the bind code itself runs on a counting arena, so a
+// stage's required_bytes can never disagree with its layout.
+template <class Stage, class... Args>
+size_t counted_bytes(const Args&... args) {
+  Arena counting;
+  Stage stage;
+  stage.bind(counting, args...);
+  return counting.used();
+}
+
 }  // namespace gsf

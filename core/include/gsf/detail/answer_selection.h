@@ -1,0 +1,66 @@
+// Internal (gsf/detail): a pipeline stage or building block, not part of the stable interface; it may
+// change between versions. The stable interface is localizer.h, config.h, map_format.h, scan.h, status.h,
+// platform.h, class_table.h, georeference.h and the C API gsf.h.
+// Choosing the answer among the pose hypotheses (after the max clique): whole-scan verification
+// against the map's semantic layer ranks them (coarse for all, full for the best, pattern-refined for
+// the leaders: each step ranks, then caps), and the answer's ambiguity says how far to trust it: how
+// clearly it beats the best rival at another place or heading, how many inliers carry it, and how well
+// the scan agrees with the map there.
+#pragma once
+#include <cstdint>
+
+#include <Eigen/Geometry>
+
+#include "gsf/config.h"
+#include "gsf/detail/arena.h"
+#include "gsf/detail/pose_hypotheses.h"
+#include "gsf/detail/semantic_grid.h"
+#include "gsf/detail/voxel_layer.h"
+#include "gsf/status.h"
+
+namespace gsf {
+
+struct LocalizeResult;
+
+// Verification weights for one scan: `base` (stability weights), each class scaled by (its share of
+// every stride-th voxel, max_points sampled)^-exponent, then all rescaled to keep the total weight, so
+// the few voxels of rare classes (the cues beside repeated objects) count for more than the road and
+// rows that agree at every lattice shift. exponent 0: out = base.
+void rarity_weights(const VoxelLayer& voxels, const float* base, float exponent, uint32_t max_points, float* out);
+
+// The ambiguity in [0, 1] of an answer (1 = do not trust). The largest of:
+// - rival: with verification exp(-max(0, best - rival score) / (margin_scale x scored voxels)), without
+//   it the rival's clique support over the answer's (0 without a rival);
+// - support: min_inliers / inliers (a bare-minimum clique with nothing competing is still a guess);
+// - quality: the answer's agreement q = (agree - disagree) / (agree + disagree) of the plain stability
+//   weights, mapped to 0 at quality_high and 1 at quality_low (only with verification).
+struct AmbiguityTerms {
+  double rival = 0.0, support = 0.0, quality = 0.0;
+  double value() const;
+};
+double agreement_ambiguity(const PoseVerification& plain, float quality_low, float quality_high);
+
+class AnswerSelector {
+ public:
+  static size_t required_bytes(uint32_t refine_top);
+  Status bind(Arena& arena, uint32_t refine_top);
+
+  // Verifies `hyps` (when verification is on and the map has a semantic layer), chooses the answer and
+  // fills out's pose, inliers, hypothesis reports and ambiguity. `weights`: the stability weights.
+  void choose(PoseHypotheses& hyps, const VoxelLayer& voxels, const SemanticGridView& semantic, const float* weights,
+              const HypothesisConfig& hypothesis_config, const VerifyConfig& verify_config, LocalizeResult& out);
+  uint32_t chosen() const { return chosen_; }
+  void forget() { chosen_ = UINT32_MAX; }
+  // The verification weights of the last choose() (the stability weights given here before any).
+  const float* verify_weights() const { return verify_weights_; }
+  void set_verify_weights(const float* weights);
+
+ private:
+  Eigen::Isometry3d* refined_pose_ = nullptr;  // refine_top: poses the pattern search chose
+  uint32_t* refined_id_ = nullptr;             // refine_top: their hypotheses
+  uint32_t refine_top_ = 0;
+  uint32_t chosen_ = UINT32_MAX;
+  float verify_weights_[kNumClasses] = {};
+};
+
+}  // namespace gsf

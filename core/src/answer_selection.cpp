@@ -1,0 +1,182 @@
+#include "gsf/detail/answer_selection.h"
+
+#include <algorithm>
+#include <cmath>
+
+#include "gsf/localizer.h"
+
+namespace gsf {
+namespace {
+
+constexpr double kRadToDeg = 57.29577951308232;
+constexpr double kPi = 3.14159265358979323846;
+
+// Indices of the best `cap` hypotheses by verification score (eligible[h] != 0, or all when null),
+// best first, ties to the earlier hypothesis. Returns how many (<= cap).
+uint32_t top_by_score(const PoseHypotheses& hyps, uint32_t H, const uint8_t* eligible, uint32_t cap, uint32_t* out) {
+  uint32_t n = 0;
+  for (uint32_t h = 0; h < H; ++h) {
+    if (eligible && !eligible[h]) continue;
+    const float sc = hyps[h].verification.score;
+    uint32_t pos = n < cap ? n++ : cap;
+    while (pos > 0 && hyps[out[pos - 1]].verification.score < sc) {
+      if (pos < cap) out[pos] = out[pos - 1];
+      --pos;
+    }
+    if (pos < cap) out[pos] = h;
+  }
+  return n;
+}
+
+double yaw_of(const Eigen::Isometry3d& T) { return std::atan2(T.linear()(1, 0), T.linear()(0, 0)); }
+
+}  // namespace
+
+void rarity_weights(const VoxelLayer& voxels, const float* base, float exponent, uint32_t max_points, float* out) {
+  for (int c = 0; c < kNumClasses; ++c) out[c] = base[c];
+  if (exponent <= 0.0f || voxels.size() == 0 || max_points == 0) return;
+  uint32_t counts[kNumClasses] = {};
+  const uint32_t nv = voxels.size(), stride = (nv + max_points - 1) / max_points;
+  uint32_t total = 0;
+  for (uint32_t i = 0; i < nv; i += stride, ++total) ++counts[voxels.voxel(i).label];
+  double mass = 0.0, scaled = 0.0;
+  for (int c = 0; c < kNumClasses; ++c) {
+    if (counts[c] == 0) continue;
+    out[c] = base[c] * static_cast<float>(std::pow(double(counts[c]) / total, -double(exponent)));
+    mass += double(base[c]) * counts[c];
+    scaled += double(out[c]) * counts[c];
+  }
+  if (scaled > 0.0)
+    for (int c = 0; c < kNumClasses; ++c) out[c] = static_cast<float>(out[c] * (mass / scaled));
+}
+
+double AmbiguityTerms::value() const { return std::min(1.0, std::max({rival, support, quality})); }
+
+double agreement_ambiguity(const PoseVerification& plain, float quality_low, float quality_high) {
+  if (plain.scored == 0) return 0.0;
+  const double weight = double(plain.agree) + plain.disagree;
+  const double q = weight > 0 ? (double(plain.agree) - plain.disagree) / weight : -1.0;
+  return (double(quality_high) - q) / (double(quality_high) - quality_low);
+}
+
+size_t AnswerSelector::required_bytes(uint32_t refine_top) { return counted_bytes<AnswerSelector>(refine_top); }
+
+Status AnswerSelector::bind(Arena& arena, uint32_t refine_top) {
+  refine_top_ = refine_top;
+  refined_pose_ = arena.allocate<Eigen::Isometry3d>(refine_top);
+  refined_id_ = arena.allocate<uint32_t>(refine_top);
+  chosen_ = UINT32_MAX;
+  return arena.overflowed() ? Status::BufferTooSmall : Status::Ok;
+}
+
+void AnswerSelector::set_verify_weights(const float* weights) {
+  for (int c = 0; c < kNumClasses; ++c) verify_weights_[c] = weights[c];
+}
+
+void AnswerSelector::choose(PoseHypotheses& hyps, const VoxelLayer& voxels, const SemanticGridView& semantic,
+                            const float* weights, const HypothesisConfig& hc, const VerifyConfig& vc,
+                            LocalizeResult& out) {
+  const uint32_t H = hyps.size();
+  const bool verify = vc.enabled && !semantic.empty();
+  uint32_t best = 0, second = UINT32_MAX;
+  uint8_t full_scored[PoseHypotheses::kMaxHypotheses] = {};
+  uint32_t refined_count = 0;
+  rarity_weights(voxels, weights, vc.rarity_exponent, vc.max_points, verify_weights_);
+  if (verify) {
+    // Coarse score for every hypothesis, the full score for the best `full_top`, then the best
+    // `refine_top` at their best local alignment. Each step ranks, then caps.
+    uint32_t top[PoseHypotheses::kMaxHypotheses];
+    const uint32_t coarse_points = std::max<uint32_t>(1, vc.max_points / vc.coarse_divisor);
+    for (uint32_t h = 0; h < H; ++h)
+      hyps[h].verification = verify_pose(voxels, semantic, hyps[h].map_T_scan, coarse_points, verify_weights_);
+    uint32_t nt = top_by_score(hyps, H, nullptr, vc.full_top, top);
+    for (uint32_t k = 0; k < nt; ++k) {
+      hyps[top[k]].verification =
+          verify_pose(voxels, semantic, hyps[top[k]].map_T_scan, vc.max_points, verify_weights_);
+      full_scored[top[k]] = 1;
+    }
+    nt = vc.refine_rounds > 0 ? top_by_score(hyps, H, full_scored, std::min(vc.refine_top, refine_top_), top) : 0;
+    refined_count = nt;
+    for (uint32_t k = 0; k < nt; ++k) {
+      refined_id_[k] = top[k];
+      hyps[top[k]].verification =
+          verify_pose_refined(voxels, semantic, hyps[top[k]].map_T_scan, vc.max_points, verify_weights_,
+                              vc.refine_rounds, vc.refine_step_m, vc.refine_step_deg, &refined_pose_[k]);
+    }
+    // The answer, and as runner-up the best fully scored hypothesis at another place or heading: a
+    // near-twin of the answer (within same_pose_m and same_pose_deg in the bird's-eye view the
+    // verification sees) is the same answer, not a rival.
+    nt = top_by_score(hyps, H, full_scored, H, top);
+    best = nt > 0 ? top[0] : 0;
+    const Eigen::Isometry3d& a = hyps[best].map_T_scan;
+    const double yaw_a = yaw_of(a), same_rad = double(hc.same_pose_deg) / kRadToDeg;
+    for (uint32_t k = 1; k < nt && second == UINT32_MAX; ++k) {
+      const Eigen::Isometry3d& b = hyps[top[k]].map_T_scan;
+      const double dx = b.translation().x() - a.translation().x(), dy = b.translation().y() - a.translation().y();
+      double dyaw = std::fabs(yaw_of(b) - yaw_a);
+      if (dyaw > kPi) dyaw = 2.0 * kPi - dyaw;
+      if (std::sqrt(dx * dx + dy * dy) > hc.same_pose_m || dyaw > same_rad) second = top[k];
+    }
+  } else {
+    second = H > 1 ? 1 : UINT32_MAX;
+  }
+  const PoseHypothesis& answer = hyps[best];
+  out.map_T_scan = answer.map_T_scan;
+  out.inliers = answer.inliers;
+  out.clique_size = answer.clique_size;
+  out.score = answer.support;
+  out.chosen_hypothesis = best;
+  out.verified = verify;
+  chosen_ = best;
+  // Report the best hypotheses by verified score (the order found without verification).
+  uint32_t shown[kMaxReportedHypotheses];
+  uint32_t reported = std::min(H, kMaxReportedHypotheses);
+  if (verify) reported = top_by_score(hyps, H, nullptr, kMaxReportedHypotheses, shown);
+  else
+    for (uint32_t k = 0; k < reported; ++k) shown[k] = k;
+  for (uint32_t k = 0; k < reported; ++k) {
+    const PoseHypothesis& p = hyps[shown[k]];
+    HypothesisReport& r = out.hypothesis[k];
+    r.x = static_cast<float>(p.map_T_scan.translation().x());
+    r.y = static_cast<float>(p.map_T_scan.translation().y());
+    r.yaw_deg = static_cast<float>(yaw_of(p.map_T_scan) * kRadToDeg);
+    r.clique_size = p.clique_size;
+    r.inliers = p.inliers;
+    r.support = static_cast<float>(p.support);
+    r.verified_score = p.verification.score;
+    r.verified_voxels = p.verification.scored;
+    r.verified_agree = p.verification.agree;
+    r.verified_disagree = p.verification.disagree;
+    r.verified_unknown = p.verification.unknown;
+    r.fully_verified = verify && full_scored[shown[k]];
+  }
+  AmbiguityTerms terms;
+  terms.support = double(hc.min_inliers) / double(answer.inliers);
+  if (second != UINT32_MAX) {
+    if (verify) {
+      const double margin = double(answer.verification.score) - hyps[second].verification.score;
+      const double scale = double(vc.margin_scale) * std::max<uint32_t>(answer.verification.scored, 1);
+      terms.rival = std::exp(-std::max(0.0, margin) / scale);
+    } else {
+      terms.rival = answer.support > 0 ? hyps[second].support / answer.support : 1.0;
+    }
+  }
+  // A verified answer that agrees poorly with the map is doubtful even without a rival (its true
+  // competitor may simply not be among the hypotheses). The agreement is a share, so a scan of mostly
+  // half-weight classes (vegetation, cars, terrain) is not judged worse than one of buildings and road,
+  // and it is taken with the plain stability weights (at the pose the verification chose), so rare
+  // classes' label noise does not read as disagreement.
+  if (verify) {
+    PoseVerification plain = answer.verification;
+    if (vc.rarity_exponent > 0.0f) {
+      const Eigen::Isometry3d* at = &answer.map_T_scan;
+      for (uint32_t k = 0; k < refined_count; ++k)
+        if (refined_id_[k] == best) at = &refined_pose_[k];
+      plain = verify_pose(voxels, semantic, *at, vc.max_points, weights);
+    }
+    terms.quality = agreement_ambiguity(plain, vc.quality_low, vc.quality_high);
+  }
+  out.ambiguity = terms.value();
+}
+
+}  // namespace gsf
