@@ -34,7 +34,8 @@ int cmd_inspect(int argc, char** argv) {
   MapView map;
   const Status s = load_map(file.data(), file.bytes, &map);
   if (s != Status::Ok) {
-    std::fprintf(stderr, "gsf inspect: '%s' is not a valid map: %s\n", args.get("map").c_str(), to_string(s));
+    std::fprintf(stderr, "gsf inspect: '%s' is not a valid map: %s\n", args.get("map").c_str(),
+                 map_load_error(file, s).c_str());
     return 1;
   }
   const uint32_t per_class_max = kNumClasses;
