@@ -71,6 +71,7 @@ Status Refiner::refine(const VoxelLayer& layer, const Eigen::Isometry3d& initial
   st.query_points = q;
   constexpr uint32_t kNotLooked = UINT32_MAX;
   uint32_t tile_hint = 0;
+  const float step = map_.cell / 256.0f;  // RefineLayerView::position_in's
   for (uint32_t i = 0; i < q; ++i) query_cell_[i] = UINT64_MAX;
   Eigen::Isometry3d t = initial;
   for (uint32_t it = 0; it < config_.iterations; ++it) {
@@ -84,8 +85,8 @@ Status Refiner::refine(const VoxelLayer& layer, const Eigen::Isometry3d& initial
     for (uint32_t i = 0; i < q; ++i) {
       const Eigen::Vector3d p = t * Eigen::Vector3d(query_[3 * i], query_[3 * i + 1], query_[3 * i + 2]);
       float best = r2;
-      bool found = false;
-      float nearest[3] = {0, 0, 0}, nearest_normal[3] = {0, 0, 0};
+      const MapRefinePoint* nearest_point = nullptr;
+      float nearest[3] = {0, 0, 0};
       const float pf[3] = {float(p.x()), float(p.y()), float(p.z())};
       // Gaps from p to the lower and upper faces of its own cell, shrunk by 1 mm (and a relative 1e-5):
       // every point of the cell below (above) lies at least the lower (upper) gap away along that axis,
@@ -129,20 +130,26 @@ Status Refiner::refine(const VoxelLayer& layer, const Eigen::Isometry3d& initial
             } else {
               map_.find(cell, &begin, &end, &tile_hint);
             }
+            if (begin == end) continue;
+            // The cell's corner once; each point adds its offset (the same arithmetic as position_in).
+            const float corner[3] = {float(cell.x) * map_.cell, float(cell.y) * map_.cell, float(cell.z) * map_.cell};
             for (uint32_t id = begin; id < end; ++id) {
-              float m[3];
-              map_.position_in(cell, map_.points[id], m);
+              const MapRefinePoint& mp = map_.points[id];
+              const float m[3] = {corner[0] + (float(mp.offset[0]) + 0.5f) * step,
+                                  corner[1] + (float(mp.offset[1]) + 0.5f) * step,
+                                  corner[2] + (float(mp.offset[2]) + 0.5f) * step};
               const float ex = m[0] - float(p.x()), ey = m[1] - float(p.y()), ez = m[2] - float(p.z());
               const float d2 = ex * ex + ey * ey + ez * ez;
               if (d2 < best) {
                 best = d2;
-                found = true;
+                nearest_point = &mp;
                 for (int k = 0; k < 3; ++k) nearest[k] = m[k];
-                RefineLayerView::normal(map_.points[id], nearest_normal);
               }
             }
           }
-      if (!found) continue;
+      if (nearest_point == nullptr) continue;
+      float nearest_normal[3];
+      RefineLayerView::normal(*nearest_point, nearest_normal);
       const Eigen::Vector3d nrm(nearest_normal[0], nearest_normal[1], nearest_normal[2]);
       if (nrm.squaredNorm() < 0.5) continue;
       const Eigen::Vector3d m(nearest[0], nearest[1], nearest[2]);
