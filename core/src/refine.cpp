@@ -120,17 +120,17 @@ Status Refiner::refine(const VoxelLayer& layer, const Eigen::Isometry3d& initial
             const bool named =
                 key == own + (uint64_t(int64_t(dx)) << 42) + (uint64_t(int64_t(dy)) << 21) + uint64_t(int64_t(dz));
             if (named && g > best * (1.0f + 1e-4f) + 1e-6f) continue;
-            const RefineCell cell = cell_of_key(key);
             uint32_t begin, end;
             if (named) {  // the cell at this offset from `own`: found before or looked up once now
               const int j = (dx + 1) * 9 + (dy + 1) * 3 + (dz + 1);
-              if (known_begin[j] == kNotLooked) map_.find(cell, &known_begin[j], &known_end[j], &tile_hint);
+              if (known_begin[j] == kNotLooked) map_.find(cell_of_key(key), &known_begin[j], &known_end[j], &tile_hint);
               begin = known_begin[j];
               end = known_end[j];
             } else {
-              map_.find(cell, &begin, &end, &tile_hint);
+              map_.find(cell_of_key(key), &begin, &end, &tile_hint);
             }
-            if (begin == end) continue;
+            if (begin == end) continue;  // most of the 27 cells are empty: decode the cell only when not
+            const RefineCell cell = cell_of_key(key);
             // The cell's corner once; each point adds its offset (the same arithmetic as position_in).
             const float corner[3] = {float(cell.x) * map_.cell, float(cell.y) * map_.cell, float(cell.z) * map_.cell};
             for (uint32_t id = begin; id < end; ++id) {
@@ -138,7 +138,7 @@ Status Refiner::refine(const VoxelLayer& layer, const Eigen::Isometry3d& initial
               const float m[3] = {corner[0] + (float(mp.offset[0]) + 0.5f) * step,
                                   corner[1] + (float(mp.offset[1]) + 0.5f) * step,
                                   corner[2] + (float(mp.offset[2]) + 0.5f) * step};
-              const float ex = m[0] - float(p.x()), ey = m[1] - float(p.y()), ez = m[2] - float(p.z());
+              const float ex = m[0] - pf[0], ey = m[1] - pf[1], ez = m[2] - pf[2];
               const float d2 = ex * ex + ey * ey + ez * ez;
               if (d2 < best) {
                 best = d2;

@@ -9,20 +9,19 @@ namespace {
 
 int32_t floor_div(int32_t a, int32_t b) { return a >= 0 ? a / b : -((-a + b - 1) / b); }
 
-// Index of the first element of [0, n) for which less(i) is false (n when none).
+// Index of the first element of [0, n) for which less(i) is false (n when none), for a predicate that is
+// true on a prefix. Branch-free halving (the same answer as the branching binary search without its
+// unpredictable branches; semantic_grid.cpp's tile search does the same).
 template <typename Less>
 uint32_t lower_bound_index(uint32_t n, Less less) {
-  uint32_t lo = 0;
-  while (n > 0) {
+  if (n == 0) return 0;
+  uint32_t base = 0;
+  while (n > 1) {
     const uint32_t half = n / 2;
-    if (less(lo + half)) {
-      lo += half + 1;
-      n -= half + 1;
-    } else {
-      n = half;
-    }
+    base = less(base + half) ? base + half : base;
+    n -= half;
   }
-  return lo;
+  return base + (less(base) ? 1u : 0u);
 }
 
 }  // namespace
