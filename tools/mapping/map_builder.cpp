@@ -34,6 +34,10 @@ uint64_t voxel_key(const Eigen::Vector3d& p, double size) {
   return (uint64_t(x & 0x1FFFFF) << 42) | (uint64_t(y & 0x1FFFFF) << 21) | uint64_t(z & 0x1FFFFF);
 }
 
+// Per-scan voxel capacity of the builder (the localizer's default before the 16 MiB budget; 14 MB of
+// host memory).
+constexpr uint32_t kMapScanMaxVoxels = 100000;
+
 // Arena-backed stage objects sized for a whole map.
 struct Workspace {
   std::vector<uint64_t> memory;
@@ -46,6 +50,9 @@ struct Workspace {
 MapBuilder::MapBuilder(const MapBuildConfig& config)
     : config_(config.stages), classes_(label_set(config.stages)), options_(config), georef_(local_georeference()) {
   if (config_.classes) config_.classes = &classes_;
+  // Map scans are voxelised on the host before accumulation: at least kMapScanMaxVoxels per scan, so the
+  // on-board default (voxel.max_voxels 32k, sized for the 16 MiB workspace) never truncates a map scan.
+  config_.voxel.max_voxels = std::max(config_.voxel.max_voxels, kMapScanMaxVoxels);
   scan_arena_.resize(VoxelLayer::required_bytes(config_.voxel) + 64);
   georef_valid_ = set_frame_name(&georef_, options_.frame.c_str());
   for (int k = 0; k < 3; ++k) georef_.origin[k] = options_.origin[k];
