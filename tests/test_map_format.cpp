@@ -125,6 +125,15 @@ struct Blob {
   }
 };
 
+bool same_semantic_layer(const MapView& a, const MapView& b) {
+  const uint64_t tiles = a.counts.semantic_tiles, tc = a.params.semantic_tile_cells;
+  if (tiles == 0) return b.counts.semantic_tiles == 0;
+  return std::memcmp(a.semantic_tile_keys, b.semantic_tile_keys, tiles * 4) == 0 &&
+         std::memcmp(a.semantic_palette_offsets, b.semantic_palette_offsets, (tiles + 1) * 4) == 0 &&
+         std::memcmp(a.semantic_palette, b.semantic_palette, a.counts.semantic_palette * 4) == 0 &&
+         std::memcmp(a.semantic_cells, b.semantic_cells, tiles * tc * tc) == 0;
+}
+
 bool same_map(const MapView& a, const MapView& b) {
   if (std::memcmp(&a.georef, &b.georef, sizeof(MapGeoreference)) != 0) return false;
   if (std::memcmp(&a.params, &b.params, sizeof(MapParams)) != 0) return false;
@@ -137,7 +146,8 @@ bool same_map(const MapView& a, const MapView& b) {
          std::memcmp(a.index_offsets, b.index_offsets, (a.counts.index_keys + 1) * 4) == 0 &&
          std::memcmp(a.index_entries, b.index_entries, a.counts.triangles * 4) == 0 &&
          std::memcmp(a.refine_tiles, b.refine_tiles, a.counts.refine_tiles * sizeof(MapRefineTile)) == 0 &&
-         std::memcmp(a.refine_points, b.refine_points, a.counts.refine_points * sizeof(MapRefinePoint)) == 0;
+         std::memcmp(a.refine_points, b.refine_points, a.counts.refine_points * sizeof(MapRefinePoint)) == 0 &&
+         same_semantic_layer(a, b);
 }
 
 // Rewrites the header with `edit` applied and its CRC re-sealed, as a writer of that header would.
@@ -218,6 +228,31 @@ TEST_CASE("Every flipped byte is rejected or loads an equivalent map") {
     }
   }
   CHECK(rejected > size);  // the vast majority are caught
+}
+
+TEST_CASE("Every flipped byte of the fuzz seed map (semantic palette layer included) is rejected or harmless") {
+  size_t size = 0;
+  const std::vector<uint64_t> seed = gsf_test::fuzz_seed_map(&size);
+  MapView original;
+  REQUIRE(load_map(seed.data(), size, &original) == Status::Ok);
+  REQUIRE(original.counts.semantic_tiles > 0);
+  REQUIRE(original.counts.refine_points > 0);
+  Blob work(size);
+  size_t rejected = 0;
+  for (size_t pos = 0; pos < size; ++pos) {
+    for (uint8_t flip : {uint8_t(0x01), uint8_t(0x80), uint8_t(0xFF)}) {
+      std::memcpy(work.data(), seed.data(), size);
+      work.data()[pos] ^= flip;
+      MapView v;
+      if (load_map(work.data(), size, &v) == Status::Ok) {
+        INFO("byte " << pos);
+        CHECK(same_map(original, v));
+      } else {
+        ++rejected;
+      }
+    }
+  }
+  CHECK(rejected > size);
 }
 
 TEST_CASE("Every truncation and bad framing is rejected") {
