@@ -64,6 +64,9 @@ int cmd_inspect(int argc, char** argv) {
     j.field("triangles", map.counts.triangles);
     j.field("index_keys", map.counts.index_keys);
     j.field("refine_points", map.counts.refine_points);
+    j.field("refine_tiles", map.counts.refine_tiles);
+    j.field("semantic_palette", map.counts.semantic_palette);
+    j.field("format_version", kMapVersion);
     j.field("grid_points", map.grid_points());
     j.field("inducing_stride", map.params.inducing_stride);
     j.key("instances_by_class");
