@@ -5,12 +5,19 @@
 #  - nuScenes-lidarseg: map 0004 -> queries 0002 (same street, opposite direction), the reverse, and
 #    scene 0001 as a distractor map.
 # Usage: bench/real_data.sh [DATA_DIR (default ../shared/data)] [OUT_DIR (default out/real)]
+# Environment: GSF=path (a gsf binary to use instead of building one), CLASSES=auto|nuscenes|FILE (the
+# nuScenes runs' label set, default auto), NUSCENES_ONLY=1 (skip the SemanticKITTI revisits).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 data=$(cd "${1:-../shared/data}" && pwd)
 out=${2:-out/real}
-cmake --preset release >/dev/null && cmake --build --preset release >/dev/null
-gsf=$PWD/build/release/tools/gsf
+if [ -n "${GSF:-}" ]; then
+  gsf=$GSF
+else
+  cmake --preset release >/dev/null && cmake --build --preset release >/dev/null
+  gsf=$PWD/build/release/tools/gsf
+fi
+classes=${CLASSES:-auto}
 rm -rf "$out" && mkdir -p "$out"
 S=$data/semantickitti-samples/sequences
 link() {  # link DEST_ROOT SEQ FRAME...
@@ -27,6 +34,7 @@ link "$out/kitti-query" 00 004501
 link "$out/kitti-map" 08 000720
 link "$out/kitti-query" 08 001500
 for seq in 00 08; do
+  [ "${NUSCENES_ONLY:-0}" = 1 ] && break
   $gsf build-map --dataset "$out/kitti-map" --sequence $seq --out "$out/kitti-$seq.gsfmap" --quiet
   $gsf evaluate --map "$out/kitti-$seq.gsfmap" --dataset "$out/kitti-query" --sequence $seq --map-sequence $seq \
     --mode instance,gsf,gsf+refine --quiet --json "$out/kitti-$seq.json" >/dev/null
@@ -46,11 +54,11 @@ done
 # not a hand-picked frame list); elsewhere the only right outcome is to decline.
 N=$data/nuscenes-lidarseg-samples
 for seq in 0001 0002 0004; do
-  $gsf build-map --dataset "$N" --sequence $seq --out "$out/nuscenes-$seq.gsfmap" --quiet
+  $gsf build-map --dataset "$N" --sequence $seq --classes "$classes" --out "$out/nuscenes-$seq.gsfmap" --quiet
 done
 for pair in 0004:0002 0002:0004 0001:0002; do
   m=${pair%%:*} q=${pair##*:}
-  $gsf evaluate --map "$out/nuscenes-$m.gsfmap" --dataset "$N" --sequence $q --map-sequence $m --quiet \
+  $gsf evaluate --map "$out/nuscenes-$m.gsfmap" --dataset "$N" --sequence $q --map-sequence $m --quiet --classes "$classes" \
     --mode instance,gsf,gsf+refine --json "$out/nuscenes-$m-$q.json" >/dev/null
 done
 python3 - "$N" "$out" <<'PY'

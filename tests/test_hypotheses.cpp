@@ -6,6 +6,7 @@
 #include <vector>
 
 #include "arena_buffer.h"
+#include "gsf/detail/max_clique.h"
 #include "gsf/detail/pose_hypotheses.h"
 #include "gsf/detail/semantic_grid.h"
 #include "gsf/detail/triangle_index.h"
@@ -293,4 +294,85 @@ TEST_CASE("Semantic layer validation rejects unsorted keys, foreign bits and bad
   uint32_t k;
   CHECK_FALSE(semantic_tile_key(40000, 0, &k));
   CHECK(semantic_tile_key(-32767, 32767, &k));
+}
+
+TEST_CASE("Heading-diverse cliques give the true heading a hypothesis when the largest cliques share a wrong one") {
+  // 8 correspondences agree on a wrong pose W (a lattice's 180 deg turn), 6 on the truth T (yaw 12 deg).
+  // With one peeled clique, every hypothesis (the clique and its shift votes) has W's heading; the
+  // heading-diverse search removes the edges at that heading and finds T's clique.
+  const double yaw_t = 12.0 * M_PI / 180.0, yaw_w = yaw_t + M_PI;
+  Eigen::Isometry3d T = Eigen::Isometry3d::Identity(), W = Eigen::Isometry3d::Identity();
+  T.linear() = Eigen::AngleAxisd(yaw_t, Eigen::Vector3d::UnitZ()).toRotationMatrix();
+  T.translation() = Eigen::Vector3d(100, 50, 0);
+  W.linear() = Eigen::AngleAxisd(yaw_w, Eigen::Vector3d::UnitZ()).toRotationMatrix();
+  W.translation() = Eigen::Vector3d(140, 70, 0);
+  const float true_pts[6][3] = {{3, 1, 0.5f}, {-7, 4, 1}, {12, -5, 0.2f}, {-2, -14, 1.5f}, {18, 9, 0.7f}, {-15, -3, 1}};
+  const float wrong_pts[8][3] = {{5, 17, 1},    {-19, 11, 0.5f}, {22, -13, 1.2f}, {-9, -21, 0.3f},
+                                 {9, -2, 0.9f}, {-4, 8, 1.1f},   {14, 3, 0.4f},   {-24, -9, 0.8f}};
+  std::vector<float> a, b;
+  auto add = [&](const float* p, const Eigen::Isometry3d& pose) {
+    const Eigen::Vector3d q(p[0], p[1], p[2]), m = pose * q;
+    for (int d = 0; d < 3; ++d) {
+      a.push_back(float(q[d]));
+      b.push_back(float(m[d]));
+    }
+  };
+  for (const auto& p : wrong_pts) add(p, W);
+  for (const auto& p : true_pts) add(p, T);
+  const uint32_t n = static_cast<uint32_t>(a.size() / 3);
+  std::vector<float> w(n, 1.0f);
+  HypothesisConfig hc;
+  hc.max_peeled = 1;
+  hc.shift_headings = 2;
+  ArenaBuffer buf(PoseHypotheses::required_bytes(64, 16));
+  PoseHypotheses hyp;
+  REQUIRE(hyp.bind(buf.arena, 64, 16) == Status::Ok);
+  auto has_pose = [&](const Eigen::Isometry3d& pose) {
+    for (uint32_t h = 0; h < hyp.size(); ++h) {
+      const Eigen::Isometry3d d = pose.inverse() * hyp[h].map_T_scan;
+      if (d.translation().norm() < 0.1 && Eigen::AngleAxisd(d.linear()).angle() < 0.01) return true;
+    }
+    return false;
+  };
+  auto has_heading = [&](double yaw) {
+    for (uint32_t h = 0; h < hyp.size(); ++h) {
+      const Eigen::Matrix3d R = hyp[h].map_T_scan.linear();
+      if (std::fabs(std::remainder(std::atan2(R(1, 0), R(0, 0)) - yaw, 2 * M_PI)) < 5.0 * M_PI / 180.0) return true;
+    }
+    return false;
+  };
+  HypothesisStats st;
+  hc.heading_cliques = 0;
+  REQUIRE(hyp.generate(a.data(), b.data(), w.data(), n, hc, &st) == Status::Ok);
+  CHECK(hyp[0].clique_size == 8);
+  CHECK(has_pose(W));
+  CHECK_FALSE(has_heading(yaw_t));  // the truth's heading is never tried
+  hc.heading_cliques = 3;
+  REQUIRE(hyp.generate(a.data(), b.data(), w.data(), n, hc, &st) == Status::Ok);
+  CHECK(hyp[0].clique_size == 8);  // the paper's answer stays first
+  CHECK(has_pose(W));
+  CHECK(has_pose(T));
+  CHECK(st.heading_cliques == 1);
+}
+
+TEST_CASE("Removing the edges at a heading removes exactly the pairs that turn by it") {
+  // Three correspondences turned by 90 deg (pairwise consistent), one pair of which is too short to
+  // tell a heading, and one correspondence consistent with all but turned by 0 deg relative to the first.
+  const float a[4 * 3] = {0, 0, 0, 10, 0, 0, 10, 0.5f, 0, 0, 10, 0};
+  const float b[4 * 3] = {0, 0, 0, 0, 10, 0, -0.5f, 10, 0, 0, 10, 0};
+  ArenaBuffer buf(ConsistencyGraph::required_bytes(8));
+  ConsistencyGraph g;
+  REQUIRE(g.bind(buf.arena, 8) == Status::Ok);
+  REQUIRE(g.build(a, b, 4, 0.1f) == Status::Ok);
+  REQUIRE(g.adjacent(0, 1));
+  REQUIRE(g.adjacent(0, 2));
+  REQUIRE(g.adjacent(1, 2));
+  REQUIRE(g.adjacent(0, 3));
+  const uint32_t removed = g.remove_edges_at_heading(a, b, M_PI / 2, 5.0 * M_PI / 180.0, 1.0f);
+  CHECK(removed == 2);  // (0,1) and (0,2); (1,2) is 0.5 m long
+  CHECK_FALSE(g.adjacent(0, 1));
+  CHECK_FALSE(g.adjacent(1, 0));
+  CHECK_FALSE(g.adjacent(0, 2));
+  CHECK(g.adjacent(1, 2));
+  CHECK(g.adjacent(0, 3));  // (0,3) turns by 0 deg
 }

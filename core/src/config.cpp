@@ -23,7 +23,8 @@ Status validate(const LocalizerConfig& c) {
   const HypothesisConfig& h = c.hypotheses;
   if (h.max_hypotheses == 0 || h.max_hypotheses > PoseHypotheses::kMaxHypotheses || h.first_budget == 0 ||
       h.next_budget == 0 || !(h.consistency_eps > 0) || !(h.tls_threshold > 0) || h.min_inliers < 3 ||
-      h.max_iterations == 0 || !(h.same_pose_m >= 0) || !(h.same_pose_deg >= 0) || h.max_peeled == 0 ||
+      h.max_iterations == 0 || !(h.same_pose_m >= 0) || !(h.same_pose_deg >= 0) ||
+      !(h.heading_separation_deg > 0.0f && h.heading_separation_deg < 90.0f) || h.max_peeled == 0 ||
       !(h.shift_bin > 0) || !(h.max_tilt_deg >= 0 && h.max_tilt_deg <= 180))
     return Status::InvalidArgument;
   if (c.verify.max_points == 0 || !(c.verify.margin_scale > 0) || !(c.verify.quality_high > c.verify.quality_low) ||
@@ -71,7 +72,7 @@ MapParams map_params_from(const LocalizerConfig& c) {
   p.grid_nx = c.field.grid_nx;
   p.grid_ny = c.field.grid_ny;
   p.grid_layers = c.field.grid_layers;
-  p.triangle_neighbours = c.triangle.neighbours;
+  p.triangle_neighbours = c.triangle.map_k();
   p.grid_spacing = c.field.grid_spacing;
   p.layer_spacing = c.field.layer_spacing;
   p.grid_z0 = c.field.grid_z0;

@@ -36,6 +36,34 @@ void ConsistencyGraph::add_edge(uint32_t i, uint32_t j) {
   bits_[size_t(j) * words_ + (i >> 6)] |= uint64_t(1) << (i & 63);
 }
 
+void ConsistencyGraph::remove_edge(uint32_t i, uint32_t j) {
+  if (i == j || i >= n_ || j >= n_) return;
+  bits_[size_t(i) * words_ + (j >> 6)] &= ~(uint64_t(1) << (j & 63));
+  bits_[size_t(j) * words_ + (i >> 6)] &= ~(uint64_t(1) << (i & 63));
+}
+
+uint32_t ConsistencyGraph::remove_edges_at_heading(const float* a, const float* b, double yaw, double tolerance,
+                                                   float min_length) {
+  const double c = std::cos(yaw), s = std::sin(yaw), cos_tol = std::cos(tolerance);
+  const double min2 = double(min_length) * min_length;
+  uint32_t removed = 0;
+  for (uint32_t i = 0; i < n_; ++i)
+    for (uint32_t j = i + 1; j < n_; ++j) {
+      if (!adjacent(i, j)) continue;
+      const double ax = double(a[3 * j]) - a[3 * i], ay = double(a[3 * j + 1]) - a[3 * i + 1];
+      const double bx = double(b[3 * j]) - b[3 * i], by = double(b[3 * j + 1]) - b[3 * i + 1];
+      const double la2 = ax * ax + ay * ay, lb2 = bx * bx + by * by;
+      if (la2 < min2 || lb2 < min2) continue;
+      // cos of the angle between the rotated query direction and the map direction
+      const double rx = c * ax - s * ay, ry = s * ax + c * ay;
+      if ((rx * bx + ry * by) >= cos_tol * std::sqrt(la2 * lb2)) {
+        remove_edge(i, j);
+        ++removed;
+      }
+    }
+  return removed;
+}
+
 Status ConsistencyGraph::build(const float* a, const float* b, uint32_t n, float eps, float z_weight) {
   const Status s = reset(n);
   if (s != Status::Ok) return s;

@@ -159,6 +159,49 @@ Status PoseHypotheses::generate(const float* a, const float* b, const float* w, 
     for (uint32_t i = 0; i < q; ++i) owner_[clique_[i]] = count_;
   }
 
+  // 1b. Heading-diverse cliques (HypothesisConfig::heading_cliques): the edges that make cliques at the
+  // headings found so far leave the graph, and the search runs again on every correspondence.
+  auto yaw_of = [](const Eigen::Isometry3d& T) { return std::atan2(T.linear()(1, 0), T.linear()(0, 0)); };
+  auto distinct_headings = [&]() {
+    uint32_t d = 0;
+    for (uint32_t hp = 0; hp < count_; ++hp) {
+      bool fresh = true;
+      for (uint32_t e = 0; e < hp && fresh; ++e)
+        fresh = Eigen::AngleAxisd(hyps_[e].map_T_scan.linear().transpose() * hyps_[hp].map_T_scan.linear()).angle() >=
+                same_rad;
+      d += fresh;
+    }
+    return d;
+  };
+  if (c.heading_cliques > 0 && count_ > 0 && count_ < K && distinct_headings() < c.shift_headings) {
+    const double separation = double(c.heading_separation_deg) * 3.14159265358979323846 / 180.0;
+    const float min_pair = c.tls_threshold;  // shorter pairs cannot tell a heading to within the separation
+    uint32_t cleared = 0;                    // hypotheses whose heading's edges are gone
+    for (uint32_t i = 0; i < words; ++i) allowed_[i] = 0;
+    for (uint32_t i = 0; i < n; ++i) allowed_[i >> 6] |= uint64_t(1) << (i & 63);
+    for (uint32_t extra = 0; extra < c.heading_cliques && count_ < K; ++extra) {
+      for (; cleared < count_; ++cleared)
+        graph_.remove_edges_at_heading(a, b, yaw_of(hyps_[cleared].map_T_scan), separation, min_pair);
+      if (distinct_headings() >= c.shift_headings) break;
+      CliqueStats cs;
+      solver_.solve(graph_, c.next_budget, clique_, &cs, allowed_);
+      ++st.searches;
+      st.nodes += cs.nodes;
+      const uint32_t q = clique_.size();
+      if (q < c.min_inliers) break;
+      for (uint32_t i = 0; i < q; ++i) copy_to_sub(i, clique_[i]);
+      TlsResult tls;
+      if (solve_tls(sub_a_, sub_b_, sub_w_, q, c.tls_threshold, c.max_iterations, &tls, mask_, tls_w_) != Status::Ok ||
+          tls.inliers < c.min_inliers || !record(tls, q, q)) {
+        // No hypothesis from it: its members leave, so the next search differs.
+        for (uint32_t i = 0; i < q; ++i) allowed_[clique_[i] >> 6] &= ~(uint64_t(1) << (clique_[i] & 63));
+        continue;
+      }
+      ++st.heading_cliques;
+      for (uint32_t i = 0; i < q; ++i) owner_[clique_[i]] = count_;
+    }
+  }
+
   // 2. Shift votes. In a repetitive layout the true answer is one translation among many that the
   // cliques' headings allow, and peeling may never form it. For each distinct heading found, every
   // correspondence votes for the translation b - R a (bins of shift_bin metres); the best-supported

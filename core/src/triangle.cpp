@@ -13,8 +13,9 @@ float dist(const float* a, const float* b) {
 }  // namespace
 
 Status validate(const TriangleConfig& c) {
-  if (c.neighbours < 2 || c.neighbours > 64 || !(c.min_side >= 0.0f) || !(c.max_side > c.min_side) ||
-      !(c.side_bin > 0.0f) || !(c.relative_side_tolerance > 0.0f) || c.max_triangles == 0)
+  if (c.neighbours < 2 || c.neighbours > 64 ||
+      (c.map_neighbours != 0 && (c.map_neighbours < c.neighbours || c.map_neighbours > 64)) || !(c.min_side >= 0.0f) ||
+      !(c.max_side > c.min_side) || !(c.side_bin > 0.0f) || !(c.relative_side_tolerance > 0.0f) || c.max_triangles == 0)
     return Status::InvalidArgument;
   return Status::Ok;
 }

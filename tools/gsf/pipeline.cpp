@@ -52,6 +52,8 @@ bool apply_override(LocalizerConfig* c, const std::string& a, std::string* error
       {"hypotheses.max_hypotheses", nullptr, &c->hypotheses.max_hypotheses},
       {"hypotheses.max_peeled", nullptr, &c->hypotheses.max_peeled},
       {"hypotheses.shift_headings", nullptr, &c->hypotheses.shift_headings},
+      {"hypotheses.heading_cliques", nullptr, &c->hypotheses.heading_cliques},
+      {"hypotheses.heading_separation_deg", &c->hypotheses.heading_separation_deg, nullptr},
       {"hypotheses.shift_bin", &c->hypotheses.shift_bin, nullptr},
       {"hypotheses.max_tilt_deg", &c->hypotheses.max_tilt_deg, nullptr},
       {"hypotheses.consistency_eps", &c->hypotheses.consistency_eps, nullptr},
@@ -79,6 +81,7 @@ bool apply_override(LocalizerConfig* c, const std::string& a, std::string* error
       {"field.grid_ny", nullptr, &c->field.grid_ny},
       {"triangle.relative_side_tolerance", &c->triangle.relative_side_tolerance, nullptr},
       {"triangle.neighbours", nullptr, &c->triangle.neighbours},
+      {"triangle.map_neighbours", nullptr, &c->triangle.map_neighbours},
       {"voxel.voxel_size", &c->voxel.voxel_size, nullptr},
   };
   for (const F& f : fields)

@@ -226,6 +226,8 @@ Status MapBuilder::build(std::vector<uint64_t>* blob, size_t* bytes_out, MapBuil
   // Triangles and the hash index over all map instances.
   const auto t_tri = std::chrono::steady_clock::now();
   TriangleConfig tc = config_.triangle;
+  tc.neighbours = tc.map_k();  // the map's K (TriangleConfig::map_neighbours)
+  tc.map_neighbours = 0;
   const uint64_t tri_cap = std::min<uint64_t>(uint64_t(ni) * tc.neighbours * (tc.neighbours - 1) / 2 + 16, 1u << 30);
   tc.max_triangles = static_cast<uint32_t>(tri_cap);
   Workspace tws(TriangleBuilder::required_bytes(tc, ni + 1) + size_t(tri_cap) * sizeof(Triangle) + 4096);

@@ -32,7 +32,7 @@ struct MapParams {
   uint32_t field_input_dims;     // 2 (bird's-eye) or 3
   uint32_t inducing_stride;      // M, inducing points of each field (the query's fields must use the same)
   uint32_t grid_nx, grid_ny, grid_layers;
-  uint32_t triangle_neighbours;  // K
+  uint32_t triangle_neighbours;  // K of the map's triangles (TriangleConfig::map_k())
   float grid_spacing, layer_spacing, grid_z0;
   float length_scale, signal_variance, noise_variance;
   float field_radius;

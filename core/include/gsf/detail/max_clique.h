@@ -30,6 +30,11 @@ class ConsistencyGraph {
   // Arbitrary graphs (tests, adversarial inputs).
   Status reset(uint32_t n);
   void add_edge(uint32_t i, uint32_t j);
+  void remove_edge(uint32_t i, uint32_t j);
+  // Removes every edge (i, j) whose bird's-eye pair direction turns by `yaw` (rad) from query to map,
+  // within `tolerance` (rad): the edges a clique at that heading is made of. Pairs shorter than
+  // min_length (m) on either side carry no usable direction and stay. Returns the edges removed.
+  uint32_t remove_edges_at_heading(const float* a, const float* b, double yaw, double tolerance, float min_length);
 
   uint32_t size() const { return n_; }
   uint32_t words() const { return words_; }

@@ -27,10 +27,17 @@
 namespace gsf {
 
 struct HypothesisConfig {
-  uint32_t max_hypotheses = 96;    // K: hypotheses per query (a 14 x 10 lattice has 140 shifts a heading)
-  uint32_t max_peeled = 8;         // of which from peeled maximum cliques; the rest from shift votes,
-                                   // shared evenly by the headings
-  uint32_t shift_headings = 4;     // distinct clique headings whose translations are voted on
+  uint32_t max_hypotheses = 96;  // K: hypotheses per query (a 14 x 10 lattice has 140 shifts a heading)
+  uint32_t max_peeled = 8;       // of which from peeled maximum cliques; the rest from shift votes,
+                                 // shared evenly by the headings
+  uint32_t shift_headings = 4;   // distinct clique headings whose translations are voted on
+  // Heading-diverse cliques: after peeling, while fewer than shift_headings distinct headings were found,
+  // up to this many more clique searches run with the consistency graph's edges at the found headings
+  // removed (pair directions within heading_separation_deg), so each finds a clique at another heading.
+  // In a symmetric layout (a lattice's 90 / 180 deg turns, a row's or avenue's 180) every large clique can
+  // share one wrong heading, and the shift votes then never see the true one. 0 = off.
+  uint32_t heading_cliques = 3;
+  float heading_separation_deg = 15.0f;
   float shift_bin = 2.0f;          // m; translation vote bins
   uint64_t first_budget = 200000;  // branch-and-bound nodes for the first (maximum) clique
   uint64_t next_budget = 20000;    // nodes for each further clique
@@ -66,6 +73,7 @@ struct HypothesisStats {
   uint32_t merged = 0;            // cliques or vote peaks whose pose repeated an earlier hypothesis
   uint32_t voted = 0;             // vote peaks that gave a pose
   uint32_t tilted = 0;            // poses the upright prior re-solved upright (max_tilt_deg)
+  uint32_t heading_cliques = 0;   // hypotheses from heading-diverse clique searches
 };
 
 class PoseHypotheses {

@@ -18,7 +18,12 @@
 namespace gsf {
 
 struct TriangleConfig {
-  uint32_t neighbours = 10;               // K nearest instances per anchor
+  uint32_t neighbours = 10;  // K nearest instances per anchor (query scans)
+  // K of the map's triangles (0: neighbours). A map holds every instance seen from any scan of the drive,
+  // a query only those it sees, so a query triangle's vertices may not be among the map apex's K
+  // nearest; a larger map K keeps them there. Must be 0 or >= neighbours; the map records it.
+  uint32_t map_neighbours = 0;
+  uint32_t map_k() const { return map_neighbours == 0 ? neighbours : map_neighbours; }
   float min_side = 0.5f;                  // m
   float max_side = 50.0f;                 // m
   float side_bin = 1.0f;                  // m, key quantisation
