@@ -2,6 +2,7 @@
 // corpus map of fuzz_map_loader), apply the input as (offset, xor) patches anywhere after the header, then re-seal all
 // CRCs so the loader's content checks (indices, labels, CSR offsets, floats) are what gets exercised.
 // Whatever loads must be safe to use: every index the localizer follows is touched.
+#include <cmath>
 #include <cstdint>
 #include <cstring>
 #include <vector>
@@ -9,6 +10,7 @@
 #include "fuzz_seed_map.h"
 #include "gsf/detail/crc32.h"
 #include "gsf/map_format.h"
+#include "gsf/map_quantization.h"
 
 namespace {
 
@@ -51,7 +53,30 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   for (float x = -3; x < 3; x += 0.7f)
     for (float y = -3; y < 40; y += 0.9f) sink = sink + float(grid.cell_at(x, y, &hint) & 0xFF);
   for (uint32_t i = 0; i < view.counts.instances; ++i)
-    if (view.instances[i].label >= gsf::kNumClasses || view.instances[i].inducing_count > view.params.inducing_stride)
-      __builtin_trap();
+    if (view.instances[i].label >= gsf::kNumClasses) __builtin_trap();
+  const gsf::RefineLayerView refine = view.refine_layer();
+  for (int32_t x = -2; x < 20; ++x)
+    for (int32_t z = -2; z < 3; ++z) {
+      uint32_t b = 0, e = 0;
+      refine.find(gsf::RefineCell{x, x / 2, z}, &b, &e, &hint);
+      if (e > view.counts.refine_points || b > e) __builtin_trap();
+      for (uint32_t k = b; k < e; ++k) {
+        float p[3], n[3];
+        refine.position_in(gsf::RefineCell{x, x / 2, z}, view.refine_points[k], p);
+        gsf::RefineLayerView::normal(view.refine_points[k], n);
+        sink = sink + p[0] + n[0];
+      }
+    }
+  // Dequantised grids: finite, variances >= 0.
+  static std::vector<float> mean, var;
+  mean.resize(size_t(view.grid_points()) * view.params.num_classes);
+  var.resize(view.grid_points());
+  for (uint32_t i = 0; i < view.counts.instances; ++i) {
+    gsf::dequantize_instance_grid(view, i, mean.data(), var.data());
+    for (float v : var)
+      if (!(v >= 0.0f) || !std::isfinite(v)) __builtin_trap();
+    for (float v : mean)
+      if (!std::isfinite(v)) __builtin_trap();
+  }
   return 0;
 }

@@ -9,6 +9,7 @@
 #include "gsf/detail/instance_clustering.h"
 #include "gsf/detail/voxel_layer.h"
 #include "gsf/detail/wasserstein.h"
+#include "gsf/map_quantization.h"
 #include "tiny_world.h"
 
 using namespace gsf;
@@ -69,7 +70,7 @@ TEST_CASE("Identical zone columns with different surroundings differ more than o
   REQUIRE(solver.bind(buf.arena, cfg.field, 4096) == Status::Ok);
   std::vector<uint32_t> ids(4096);
   std::vector<float> xyz(4096 * 3), tgt(4096 * kNumClasses), in(kMaxInducing * 3), al(kMaxInducing * kNumClasses),
-      ch(kMaxInducing * kMaxInducing), grid(G * 3), qm(G * kNumClasses), qv(G);
+      ch(kMaxInducing * kMaxInducing), grid(G * 3), qm(G * kNumClasses), qv(G), mm(G * kNumClasses), mv(G);
   std::vector<uint8_t> lab(4096);
   int same_closer = 0, pairs = 0;
   for (const auto& q : w.queries) {
@@ -99,8 +100,8 @@ TEST_CASE("Identical zone columns with different surroundings differ more than o
       REQUIRE(solver.probe(FieldView{in.data(), al.data(), used}, ch.data(), grid.data(), G, qm.data(), qv.data(),
                            nullptr) == Status::Ok);
       auto dist = [&](int k) {
-        const ObservedW2 r = w2_squared_diag_observed(qm.data(), qv.data(), map.grid_mean + size_t(k) * G * kNumClasses,
-                                                      map.grid_var + size_t(k) * G, G, weights,
+        dequantize_instance_grid(map, uint32_t(k), mm.data(), mv.data());
+        const ObservedW2 r = w2_squared_diag_observed(qm.data(), qv.data(), mm.data(), mv.data(), G, weights,
                                                       cfg.gsf.observed_variance * cfg.field.signal_variance);
         return r.used ? r.w2 / r.used : 1e9;
       };

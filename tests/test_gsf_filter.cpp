@@ -10,6 +10,7 @@
 #include "gsf/detail/gaussian_field.h"
 #include "gsf/detail/gsf_filter.h"
 #include "gsf/map_format.h"
+#include "gsf/map_quantization.h"
 
 using namespace gsf;
 
@@ -67,6 +68,9 @@ Fitted fit(FieldSolver& solver, const FieldConfig& fc, const Neighbourhood& nb, 
 // A map of `instances` copies of the neighbourhood at yaw 0, each probed on the canonical grid.
 struct OneMap {
   std::vector<float> mean, var;
+  std::vector<MapInstance> instances;
+  std::vector<uint8_t> q_mean;
+  std::vector<uint16_t> q_var;
   MapView view;
 };
 
@@ -83,8 +87,21 @@ OneMap make_map(FieldSolver& solver, const FieldConfig& fc, const Neighbourhood&
     REQUIRE(solver.probe(v, f.chol.data(), grid.data(), G, map.mean.data() + size_t(i) * G * kNumClasses,
                          map.var.data() + size_t(i) * G, nullptr) == Status::Ok);
   }
-  map.view.grid_mean = map.mean.data();
-  map.view.grid_var = map.var.data();
+  // Stored as the map format stores them: quantised per instance (map_quantization.h).
+  map.instances.assign(instances, MapInstance{});
+  map.q_mean.resize(map.mean.size());
+  map.q_var.resize(map.var.size());
+  for (uint32_t i = 0; i < instances; ++i)
+    quantize_instance_grid(map.mean.data() + size_t(i) * G * kNumClasses, map.var.data() + size_t(i) * G, G,
+                           kNumClasses, &map.instances[i], map.q_mean.data() + size_t(i) * G * kNumClasses,
+                           map.q_var.data() + size_t(i) * G);
+  map.view.instances = map.instances.data();
+  map.view.grid_mean = map.q_mean.data();
+  map.view.grid_var = map.q_var.data();
+  map.view.params.num_classes = kNumClasses;
+  map.view.params.grid_nx = fc.grid_nx;
+  map.view.params.grid_ny = fc.grid_ny;
+  map.view.params.grid_layers = fc.grid_layers;
   map.view.counts.instances = instances;
   return map;
 }

@@ -13,6 +13,7 @@
 #include "gsf/detail/triangle_matcher.h"
 #include "gsf/detail/voxel_layer.h"
 #include "gsf/detail/wasserstein.h"
+#include "mapping/semantic_layer.h"
 #include "test_cloud.h"
 
 using namespace gsf;
@@ -166,7 +167,9 @@ namespace {
 // The map's semantic layer over a 64 x 32 m patch: road everywhere, a column every 8 m along y = 0,
 // and ONE bush (vegetation) beside the column at x = 24.
 struct LatticeLayer {
-  std::vector<uint32_t> keys, cells;
+  std::vector<uint32_t> keys, cells;  // cells: dense masks, stored with a palette per tile as the map does
+  std::vector<uint32_t> palette_offsets, palette;
+  std::vector<uint8_t> indices;
   SemanticGridView view;
   LatticeLayer() {
     const uint32_t T = 16;
@@ -182,10 +185,15 @@ struct LatticeLayer {
     view.tile_cells = T;
     view.tile_count = static_cast<uint32_t>(keys.size());
     view.tile_keys = keys.data();
-    view.cells = cells.data();
     for (int c = 0; c < 8; ++c) set(8.0f * c + 0.5f, 0.5f, class_bit(kPole));
     for (float x = 26.0f; x < 28.5f; x += 1.0f)
       for (float y = 2.0f; y < 4.5f; y += 1.0f) set(x, y, class_bit(kVegetation));
+    REQUIRE(mapping::palette_semantic_layer(cells, view.tile_count, T, &palette_offsets, &palette, &indices) ==
+            Status::Ok);
+    view.palette_count = static_cast<uint32_t>(palette.size());
+    view.palette_offsets = palette_offsets.data();
+    view.palette = palette.data();
+    view.cells = indices.data();
   }
   void set(float x, float y, uint32_t bits) {
     const int tx = static_cast<int>(std::floor(x / 16)), ty = static_cast<int>(std::floor(y / 16));
@@ -263,9 +271,19 @@ TEST_CASE("Semantic layer validation rejects unsorted keys, foreign bits and bad
   v.tile_keys = keys.data();
   CHECK(v.validate(kNumClasses) == Status::CorruptData);
   v = layer.view;
-  std::vector<uint32_t> cells = layer.cells;
-  cells[5] |= 1u << 25;  // no class 25
+  std::vector<uint32_t> palette = layer.palette;
+  palette[1] |= 1u << 25;  // no class 25
+  v.palette = palette.data();
+  CHECK(v.validate(kNumClasses) == Status::CorruptData);
+  v = layer.view;
+  std::vector<uint8_t> cells = layer.indices;
+  cells[300] = uint8_t(layer.palette_offsets[2] - layer.palette_offsets[1]);  // one past tile 1's palette
   v.cells = cells.data();
+  CHECK(v.validate(kNumClasses) == Status::CorruptData);
+  v = layer.view;
+  std::vector<uint32_t> offsets = layer.palette_offsets;
+  offsets[3] = offsets[2];  // an empty palette
+  v.palette_offsets = offsets.data();
   CHECK(v.validate(kNumClasses) == Status::CorruptData);
   v = layer.view;
   v.tile_cells = 0;

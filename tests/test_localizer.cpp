@@ -299,3 +299,28 @@ TEST_CASE("The per-stage budget is the layout itself: its parts sum to required_
   bad.match.max_correspondences = 1;
   CHECK(Localizer::budget(bad).total == 0);
 }
+
+// A scan with more voxels than voxel.max_voxels is still localized on the first max_voxels voxels
+// (scan order), and the result says it was truncated; within the capacity it is not.
+TEST_CASE("A scan beyond voxel.max_voxels is truncated, reported, and still answered") {
+  const auto& w = tiny_world();
+  LocalizerConfig cfg = w.config;
+  Workspace full_ws(cfg);
+  Localizer full;
+  REQUIRE(full.init(cfg, w.map, full_ws.data(), full_ws.bytes()) == Status::Ok);
+  LocalizeResult r;
+  REQUIRE(full.localize(w.queries[0].view(), &r) == Status::Ok);
+  const uint32_t voxels = r.scan_voxels;
+  REQUIRE(voxels > 1000);
+  REQUIRE(voxels < cfg.voxel.max_voxels);
+  cfg.voxel.max_voxels = voxels - 500;
+  Workspace small_ws(cfg);
+  CHECK(Localizer::required_bytes(cfg) < Localizer::required_bytes(w.config));
+  Localizer small;
+  REQUIRE(small.init(cfg, w.map, small_ws.data(), small_ws.bytes()) == Status::Ok);
+  LocalizeResult t;
+  const Status s = small.localize(w.queries[0].view(), &t);
+  CHECK((s == Status::Ok || s == Status::NoSolution));
+  CHECK(t.scan_voxels == cfg.voxel.max_voxels);
+  CHECK(t.capacity_truncated);
+}

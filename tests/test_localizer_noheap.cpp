@@ -37,7 +37,6 @@ TEST_CASE("localize() never allocates after init with refinement on, on a lattic
                                  : gsf_test::tiny_nuscenes_world();
     LocalizerConfig cfg = w.config;
     cfg.refine.enabled = which == 0;
-    cfg.refine.max_map_points = w.map.counts.refine_points + 1;
     std::vector<uint64_t> ws(Localizer::required_bytes(cfg) / 8 + 2);
     Localizer loc;
     REQUIRE(loc.init(cfg, w.map, ws.data(), ws.size() * 8) == Status::Ok);

@@ -20,7 +20,10 @@ namespace {
 
 struct SmallMap {
   std::vector<MapInstance> instances;
-  std::vector<float> inputs, alpha, mean, var, refine;
+  std::vector<uint8_t> mean;
+  std::vector<uint16_t> var;
+  std::vector<MapRefineTile> refine_tiles;
+  std::vector<MapRefinePoint> refine;
   std::vector<MapTriangle> tris;
   std::vector<uint64_t> keys;
   std::vector<uint32_t> offsets, entries;
@@ -62,15 +65,16 @@ struct SmallMap {
       in.centroid[1] = float(i * i);
       in.centroid[2] = 1.0f;
       in.stability = 1.0f;
-      in.inducing_count = 3;
       in.point_count = 10 + i;
+      in.mean_min = -0.1f;
+      in.mean_step = 0.005f * float(i + 1);
+      in.var_min = 0.05f;
+      in.var_step = 1e-5f;
       in.label = kPole;
       instances.push_back(in);
     }
-    for (uint32_t i = 0; i < n * 4 * 3; ++i) inputs.push_back(0.1f * float(i % 17));
-    for (uint32_t i = 0; i < n * 4 * d; ++i) alpha.push_back(0.01f * float(i % 13) - 0.05f);
-    for (uint32_t i = 0; i < n * g * d; ++i) mean.push_back(0.02f * float(i % 11));
-    for (uint32_t i = 0; i < n * g; ++i) var.push_back(0.5f + 0.01f * float(i));
+    for (uint32_t i = 0; i < n * g * d; ++i) mean.push_back(uint8_t(i * 7 % 256));
+    for (uint32_t i = 0; i < n * g; ++i) var.push_back(uint16_t(i * 4099 % 65536));
     MapTriangle t;
     std::memset(&t, 0, sizeof(t));
     t.v[0] = 0;
@@ -87,21 +91,26 @@ struct SmallMap {
     keys = {11, 42};
     offsets = {0, 1, 2};
     entries = {1, 0};
-    refine = {1, 2, 3, 40, 4, 5, 6, 50};
+    // Refinement layer: two tiles, (0, 0) from z cell -1 and (1, 0) from z cell 3; a point without a normal.
+    p.refine_cell = 1.0f;
+    refine_tiles = {{(32768u << 16) | 32768u, 0, -1}, {(32769u << 16) | 32768u, 2, 3}};
+    refine = {{uint16_t(1 << 8 | 2 << 4 | 3), {10, 20, 30}, {0, 0, 127}},
+              {uint16_t(1 << 8 | 2 << 4 | 4), {255, 0, 128}, {0, 0, 0}},
+              {uint16_t(5), {1, 2, 3}, {90, -90, 0}}};
     view.counts.instances = n;
     view.counts.triangles = 2;
     view.counts.index_keys = 2;
-    view.counts.refine_points = 2;
+    view.counts.refine_points = 3;
+    view.counts.refine_tiles = 2;
     view.counts.road_length_m = 123.0f;
     view.instances = instances.data();
-    view.field_inputs = inputs.data();
-    view.field_alpha = alpha.data();
     view.grid_mean = mean.data();
     view.grid_var = var.data();
     view.triangles = tris.data();
     view.index_keys = keys.data();
     view.index_offsets = offsets.data();
     view.index_entries = entries.data();
+    view.refine_tiles = refine_tiles.data();
     view.refine_points = refine.data();
   }
 };
@@ -116,21 +125,29 @@ struct Blob {
   }
 };
 
+bool same_semantic_layer(const MapView& a, const MapView& b) {
+  const uint64_t tiles = a.counts.semantic_tiles, tc = a.params.semantic_tile_cells;
+  if (tiles == 0) return b.counts.semantic_tiles == 0;
+  return std::memcmp(a.semantic_tile_keys, b.semantic_tile_keys, tiles * 4) == 0 &&
+         std::memcmp(a.semantic_palette_offsets, b.semantic_palette_offsets, (tiles + 1) * 4) == 0 &&
+         std::memcmp(a.semantic_palette, b.semantic_palette, a.counts.semantic_palette * 4) == 0 &&
+         std::memcmp(a.semantic_cells, b.semantic_cells, tiles * tc * tc) == 0;
+}
+
 bool same_map(const MapView& a, const MapView& b) {
   if (std::memcmp(&a.georef, &b.georef, sizeof(MapGeoreference)) != 0) return false;
   if (std::memcmp(&a.params, &b.params, sizeof(MapParams)) != 0) return false;
   if (std::memcmp(&a.counts, &b.counts, sizeof(MapCounts)) != 0) return false;
-  const uint64_t n = a.counts.instances, g = a.grid_points(), d = a.params.num_classes, s = a.params.inducing_stride;
+  const uint64_t n = a.counts.instances, g = a.grid_points(), d = a.params.num_classes;
   return std::memcmp(a.instances, b.instances, n * sizeof(MapInstance)) == 0 &&
-         std::memcmp(a.field_inputs, b.field_inputs, n * s * 3 * 4) == 0 &&
-         std::memcmp(a.field_alpha, b.field_alpha, n * s * d * 4) == 0 &&
-         std::memcmp(a.grid_mean, b.grid_mean, n * g * d * 4) == 0 &&
-         std::memcmp(a.grid_var, b.grid_var, n * g * 4) == 0 &&
+         std::memcmp(a.grid_mean, b.grid_mean, n * g * d) == 0 && std::memcmp(a.grid_var, b.grid_var, n * g * 2) == 0 &&
          std::memcmp(a.triangles, b.triangles, a.counts.triangles * sizeof(MapTriangle)) == 0 &&
          std::memcmp(a.index_keys, b.index_keys, a.counts.index_keys * 8) == 0 &&
          std::memcmp(a.index_offsets, b.index_offsets, (a.counts.index_keys + 1) * 4) == 0 &&
          std::memcmp(a.index_entries, b.index_entries, a.counts.triangles * 4) == 0 &&
-         std::memcmp(a.refine_points, b.refine_points, a.counts.refine_points * 16) == 0;
+         std::memcmp(a.refine_tiles, b.refine_tiles, a.counts.refine_tiles * sizeof(MapRefineTile)) == 0 &&
+         std::memcmp(a.refine_points, b.refine_points, a.counts.refine_points * sizeof(MapRefinePoint)) == 0 &&
+         same_semantic_layer(a, b);
 }
 
 // Rewrites the header with `edit` applied and its CRC re-sealed, as a writer of that header would.
@@ -213,6 +230,31 @@ TEST_CASE("Every flipped byte is rejected or loads an equivalent map") {
   CHECK(rejected > size);  // the vast majority are caught
 }
 
+TEST_CASE("Every flipped byte of the fuzz seed map (semantic palette layer included) is rejected or harmless") {
+  size_t size = 0;
+  const std::vector<uint64_t> seed = gsf_test::fuzz_seed_map(&size);
+  MapView original;
+  REQUIRE(load_map(seed.data(), size, &original) == Status::Ok);
+  REQUIRE(original.counts.semantic_tiles > 0);
+  REQUIRE(original.counts.refine_points > 0);
+  Blob work(size);
+  size_t rejected = 0;
+  for (size_t pos = 0; pos < size; ++pos) {
+    for (uint8_t flip : {uint8_t(0x01), uint8_t(0x80), uint8_t(0xFF)}) {
+      std::memcpy(work.data(), seed.data(), size);
+      work.data()[pos] ^= flip;
+      MapView v;
+      if (load_map(work.data(), size, &v) == Status::Ok) {
+        INFO("byte " << pos);
+        CHECK(same_map(original, v));
+      } else {
+        ++rejected;
+      }
+    }
+  }
+  CHECK(rejected > size);
+}
+
 TEST_CASE("Every truncation and bad framing is rejected") {
   SmallMap sm;
   const size_t size = map_serialized_size(sm.view);
@@ -235,9 +277,7 @@ TEST_CASE("Every truncation and bad framing is rejected") {
 TEST_CASE("Version and class-table mismatches are named, not just corrupt") {
   SmallMap sm;
   sm.view.params.num_classes = kNumClasses + 1;
-  sm.alpha.resize(sm.view.counts.instances * 4 * (kNumClasses + 1));
   sm.mean.resize(sm.view.counts.instances * 4 * (kNumClasses + 1));
-  sm.view.field_alpha = sm.alpha.data();
   sm.view.grid_mean = sm.mean.data();
   const size_t size = map_serialized_size(sm.view);
   Blob blob(size);
@@ -266,11 +306,30 @@ TEST_CASE("Semantically invalid contents with valid CRCs are rejected") {
   MapView v;
   CHECK(load_map(blob.data(), size, &v) == Status::CorruptData);
 
-  SmallMap nan_map;
-  nan_map.mean[5] = std::numeric_limits<float>::quiet_NaN();
-  Blob b2(size);
-  REQUIRE(write_map(nan_map.view, b2.data(), size, nullptr) == Status::Ok);
-  CHECK(load_map(b2.data(), size, &v) == Status::CorruptData);
+  // Quantisation scales whose levels are not all finite (or variances below 0), behind valid CRCs.
+  for (int which = 0; which < 4; ++which) {
+    SmallMap bad;
+    MapInstance& in = bad.instances[2];
+    if (which == 0) in.mean_min = std::numeric_limits<float>::quiet_NaN();
+    if (which == 1) in.mean_step = 3e36f;  // min + 255 step overflows
+    if (which == 2) in.var_min = -0.5f;
+    if (which == 3) in.var_step = -1e-6f;
+    Blob b2(size);
+    REQUIRE(write_map(bad.view, b2.data(), size, nullptr) == Status::Ok);
+    INFO("scale case " << which);
+    CHECK(load_map(b2.data(), size, &v) == Status::CorruptData);
+  }
+  // Refinement layer: unsorted cells in a tile, a normal far from unit length, tiles out of order.
+  for (int which = 0; which < 3; ++which) {
+    SmallMap bad;
+    if (which == 0) std::swap(bad.refine[0], bad.refine[1]);
+    if (which == 1) bad.refine[2].normal[2] = 100;  // |(90, -90, 100)| = 162
+    if (which == 2) std::swap(bad.refine_tiles[0].key, bad.refine_tiles[1].key);
+    Blob b2(size);
+    REQUIRE(write_map(bad.view, b2.data(), size, nullptr) == Status::Ok);
+    INFO("refine case " << which);
+    CHECK(load_map(b2.data(), size, &v) == Status::CorruptData);
+  }
 
   SmallMap unsorted;
   unsorted.keys = {42, 11};
@@ -280,7 +339,16 @@ TEST_CASE("Semantically invalid contents with valid CRCs are rejected") {
   CHECK(load_map(b3.data(), size, &v) == Status::CorruptData);
 }
 
-TEST_CASE("Version 1 and 2 maps are refused as VersionMismatch, a real v2 file included") {
+TEST_CASE("Version 1, 2 and 3 maps are refused as VersionMismatch, real v2 and v3 files included") {
+  // tests/data/map_v3_small.gsfmap: the fuzz seed map as format version 3 wrote it (240-byte header,
+  // float grids, inducing inputs and alpha, raw refinement points).
+  const std::vector<uint8_t> v3 = read_file(std::string(GSF_SOURCE_DIR) + "/tests/data/map_v3_small.gsfmap");
+  REQUIRE(v3.size() == 2928);
+  Blob old3(v3.size());
+  std::memcpy(old3.data(), v3.data(), v3.size());
+  MapView v3view;
+  CHECK(load_map(old3.data(), v3.size(), &v3view) == Status::VersionMismatch);
+  CHECK(v3view.instances == nullptr);
   // tests/data/map_v2_small.gsfmap: the fuzz seed map as format version 2 wrote it (184-byte header).
   const std::vector<uint8_t> v2 = read_file(std::string(GSF_SOURCE_DIR) + "/tests/data/map_v2_small.gsfmap");
   REQUIRE(v2.size() == 2880);
@@ -292,7 +360,7 @@ TEST_CASE("Version 1 and 2 maps are refused as VersionMismatch, a real v2 file i
   // A current map relabelled as version 1 or 2 (header CRC re-sealed): the version decides, not the CRC.
   SmallMap sm;
   const size_t size = map_serialized_size(sm.view);
-  for (uint32_t version : {1u, 2u}) {
+  for (uint32_t version : {1u, 2u, 3u}) {
     Blob b(size);
     REQUIRE(write_map(sm.view, b.data(), size, nullptr) == Status::Ok);
     reseal_header(b.data(), [&](MapHeader* h) { h->version = version; });

@@ -1,6 +1,6 @@
 // Refinement alone (core/include/gsf/detail/refine.h): it pulls a nearby global pose onto the map's point
-// layer, refuses corrections beyond its limit, rejects an oversized map layer, and ignores map points
-// without a reliable normal.
+// layer (built as the map builder builds it: mapping/refine_layer_builder.h), refuses corrections beyond
+// its limit, refuses a layer of another cell size, and ignores map points without a reliable normal.
 #include <catch2/catch.hpp>
 
 #include <cmath>
@@ -10,6 +10,7 @@
 #include "gsf/detail/refine.h"
 #include "gsf/detail/voxel_layer.h"
 #include "gsf/semantic_classes.h"
+#include "mapping/refine_layer_builder.h"
 #include "test_cloud.h"
 
 using namespace gsf;
@@ -31,6 +32,24 @@ std::vector<float> street_corner(float step) {
   for (float z = step; z <= 5; z += step) add(4.0f, -3.0f, z, kPole);
   return p;
 }
+
+// The map's refinement layer from (x, y, z, label) samples, as the map builder writes it.
+struct Layer {
+  std::vector<MapRefineTile> tiles;
+  std::vector<MapRefinePoint> points;
+  RefineLayerView view;
+  Layer(const std::vector<float>& xyzl, float cell) {
+    std::vector<float> xyz;
+    for (size_t i = 0; i < xyzl.size(); i += 4) xyz.insert(xyz.end(), {xyzl[i], xyzl[i + 1], xyzl[i + 2]});
+    REQUIRE(mapping::build_refine_layer(xyz.data(), uint32_t(xyz.size() / 3), cell, &tiles, &points) == Status::Ok);
+    view.cell = cell;
+    view.tile_count = uint32_t(tiles.size());
+    view.point_count = uint32_t(points.size());
+    view.tiles = tiles.data();
+    view.points = points.data();
+    REQUIRE(view.validate() == Status::Ok);
+  }
+};
 
 Eigen::Isometry3d pose(double x, double y, double yaw_deg) {
   Eigen::Isometry3d t = Eigen::Isometry3d::Identity();
@@ -85,11 +104,11 @@ double degrees(const Eigen::Isometry3d& a, const Eigen::Isometry3d& b) {
 
 TEST_CASE("Refinement pulls a nearby pose onto the map and is accepted") {
   Fixture f;
-  const std::vector<float> map = street_corner(1.0f);
+  const Layer map(street_corner(1.0f), f.rc.cell);
   ArenaBuffer buf(Refiner::required_bytes(f.rc));
   Refiner r;
   REQUIRE(r.bind(buf.arena, f.rc) == Status::Ok);
-  REQUIRE(r.set_map(map.data(), uint32_t(map.size() / 4)) == Status::Ok);
+  REQUIRE(r.set_map(map.view) == Status::Ok);
   const Eigen::Isometry3d initial = perturbed(f.truth);
   REQUIRE(metres(initial, f.truth) > 0.5);
   RefineStats st;
@@ -105,11 +124,11 @@ TEST_CASE("Refinement pulls a nearby pose onto the map and is accepted") {
 TEST_CASE("Refinement refuses a correction beyond max_correction and returns the initial pose") {
   Fixture f;
   f.rc.max_correction = 0.3f;  // the needed correction is about 1 m
-  const std::vector<float> map = street_corner(1.0f);
+  const Layer map(street_corner(1.0f), f.rc.cell);
   ArenaBuffer buf(Refiner::required_bytes(f.rc));
   Refiner r;
   REQUIRE(r.bind(buf.arena, f.rc) == Status::Ok);
-  REQUIRE(r.set_map(map.data(), uint32_t(map.size() / 4)) == Status::Ok);
+  REQUIRE(r.set_map(map.view) == Status::Ok);
   const Eigen::Isometry3d initial = perturbed(f.truth);
   RefineStats st;
   const Eigen::Isometry3d out = f.run(r, initial, &st);
@@ -117,20 +136,20 @@ TEST_CASE("Refinement refuses a correction beyond max_correction and returns the
   CHECK(out.isApprox(initial));
 }
 
-TEST_CASE("Refinement rejects a map layer beyond its capacity and ignores points without normals") {
+TEST_CASE("Refinement refuses a layer of another cell size and ignores points without normals") {
   Fixture f;
-  f.rc.max_map_points = 100;
-  const std::vector<float> map = street_corner(1.0f);
   ArenaBuffer buf(Refiner::required_bytes(f.rc));
   Refiner r;
   REQUIRE(r.bind(buf.arena, f.rc) == Status::Ok);
-  CHECK(r.set_map(map.data(), uint32_t(map.size() / 4)) == Status::InvalidArgument);
+  const Layer coarse(street_corner(1.0f), 2.0f * f.rc.cell);
+  CHECK(r.set_map(coarse.view) == Status::ConfigMismatch);
   // Isolated points 6 m apart have no neighbourhood to fit a plane in: no normals, nothing to pull on.
   std::vector<float> sparse;
   for (float x = -18; x <= 18; x += 6)
     for (float y = -18; y <= 18; y += 6) sparse.insert(sparse.end(), {x, y, 0.0f, float(kRoad)});
-  REQUIRE(sparse.size() / 4 <= 100);
-  REQUIRE(r.set_map(sparse.data(), uint32_t(sparse.size() / 4)) == Status::Ok);
+  const Layer sparse_layer(sparse, f.rc.cell);
+  for (const MapRefinePoint& p : sparse_layer.points) CHECK((p.normal[0] == 0 && p.normal[1] == 0 && p.normal[2] == 0));
+  REQUIRE(r.set_map(sparse_layer.view) == Status::Ok);
   const Eigen::Isometry3d initial = perturbed(f.truth);
   RefineStats st;
   const Eigen::Isometry3d out = f.run(r, initial, &st);

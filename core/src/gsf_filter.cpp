@@ -3,6 +3,7 @@
 #include <cmath>
 
 #include "gsf/detail/wasserstein.h"
+#include "gsf/map_quantization.h"
 
 namespace gsf {
 namespace {
@@ -44,8 +45,11 @@ Status GsfFilter::bind(Arena& ar, const GsfFilterConfig& config, const FieldConf
   grid_ = ar.allocate<float>(size_t(G) * 3);
   probe_mean_ = ar.allocate<float>(size_t(config.probe_cache_slots + 1) * G * kNumClasses);
   probe_var_ = ar.allocate<float>(size_t(config.probe_cache_slots + 1) * G);
+  map_mean_ = ar.allocate<float>(size_t(G) * kNumClasses);
+  map_var_ = ar.allocate<float>(G);
   if (ar.counting()) return Status::Ok;
-  if (!ok || !grid_ || !probe_mean_ || !probe_var_ || !solver_) return Status::BufferTooSmall;
+  if (!ok || !grid_ || !probe_mean_ || !probe_var_ || !map_mean_ || !map_var_ || !solver_)
+    return Status::BufferTooSmall;
   stability_weights(weights_);
   reset();
   return Status::Ok;
@@ -92,9 +96,10 @@ float GsfFilter::similarity(const QueryFields& qf, uint32_t qi, const MapView& m
       f.m = qf.m[qi];
       solver_->probe(f, qf.chol + size_t(qi) * M * M, grid_, G, mean, var, nullptr);
     }
-    const ObservedW2 r = w2_squared_diag_observed(
-        mean, var, map.grid_mean + size_t(mi) * G * kNumClasses, map.grid_var + size_t(mi) * G, G, weights_,
-        config_.observed_variance * field_.signal_variance, config_.normalize_mass, config_.covariance_weight);
+    dequantize_instance_grid(map, mi, map_mean_, map_var_);
+    const ObservedW2 r = w2_squared_diag_observed(mean, var, map_mean_, map_var_, G, weights_,
+                                                  config_.observed_variance * field_.signal_variance,
+                                                  config_.normalize_mass, config_.covariance_weight);
     if (r.used >= 4) omega = static_cast<float>(std::exp(-(r.w2 / r.used) / config_.tau));
   }
   if (float* slot = similarity_.find_or_insert(skey)) *slot = omega;

@@ -177,8 +177,7 @@ Status Localizer::init(const LocalizerConfig& config, const MapView& map, void* 
   s = bind_workspace(arena_, config, im, nullptr);
   if (s != Status::Ok) return s;
   if (config.refine.enabled) {
-    if (map.counts.refine_points > config.refine.max_map_points) return Status::CapacityExceeded;
-    s = im.refiner.set_map(map.refine_points, map.counts.refine_points);
+    s = im.refiner.set_map(map.refine_layer());
     if (s != Status::Ok) return s;
   }
   im.classes = label_set(config);
@@ -215,6 +214,7 @@ uint64_t now(Clock* c) { return c ? c->now_ns() : 0; }
 // 1. Metric-semantic layer.
 Status Localizer::Impl::build_voxels(const ScanView& scan, LocalizeResult& out) {
   const Status s = voxels.build(scan, nullptr);
+  out.scan_voxels = voxels.size();
   if (s == Status::CapacityExceeded) out.capacity_truncated = true;
   return s == Status::CapacityExceeded ? Status::Ok : s;
 }

@@ -4,6 +4,7 @@
 #include <cstring>
 
 #include "gsf/detail/crc32.h"
+#include "gsf/map_quantization.h"
 #include "gsf/semantic_classes.h"
 
 namespace gsf {
@@ -31,19 +32,21 @@ bool section_specs(const MapView& m, SectionSpec* s) {
   const uint64_t g = static_cast<uint64_t>(m.params.grid_nx) * m.params.grid_ny * m.params.grid_layers;
   if (stride > kMaxInducingStride || g > kMaxGridPointsInMap || d > 64) return false;
   s[0] = {MapSection::Instances, sizeof(MapInstance), n, m.instances};
-  s[1] = {MapSection::FieldInputs, sizeof(float), n * stride * 3, m.field_inputs};
-  s[2] = {MapSection::FieldAlpha, sizeof(float), n * stride * d, m.field_alpha};
-  s[3] = {MapSection::GridMean, sizeof(float), n * g * d, m.grid_mean};
-  s[4] = {MapSection::GridVar, sizeof(float), n * g, m.grid_var};
-  s[5] = {MapSection::Triangles, sizeof(MapTriangle), m.counts.triangles, m.triangles};
-  s[6] = {MapSection::IndexKeys, sizeof(uint64_t), m.counts.index_keys, m.index_keys};
-  s[7] = {MapSection::IndexOffsets, sizeof(uint32_t), uint64_t(m.counts.index_keys) + 1, m.index_offsets};
-  s[8] = {MapSection::IndexEntries, sizeof(uint32_t), m.counts.triangles, m.index_entries};
-  s[9] = {MapSection::RefinePoints, sizeof(float), uint64_t(m.counts.refine_points) * 4, m.refine_points};
+  s[1] = {MapSection::GridMean, sizeof(uint8_t), n * g * d, m.grid_mean};
+  s[2] = {MapSection::GridVar, sizeof(uint16_t), n * g, m.grid_var};
+  s[3] = {MapSection::Triangles, sizeof(MapTriangle), m.counts.triangles, m.triangles};
+  s[4] = {MapSection::IndexKeys, sizeof(uint64_t), m.counts.index_keys, m.index_keys};
+  s[5] = {MapSection::IndexOffsets, sizeof(uint32_t), uint64_t(m.counts.index_keys) + 1, m.index_offsets};
+  s[6] = {MapSection::IndexEntries, sizeof(uint32_t), m.counts.triangles, m.index_entries};
+  s[7] = {MapSection::RefineTiles, sizeof(MapRefineTile), m.counts.refine_tiles, m.refine_tiles};
+  s[8] = {MapSection::RefinePoints, sizeof(MapRefinePoint), m.counts.refine_points, m.refine_points};
   const uint64_t tc = m.params.semantic_tile_cells;
   if (tc > kMaxSemanticTileCells) return false;
-  s[10] = {MapSection::SemanticTileKeys, sizeof(uint32_t), m.counts.semantic_tiles, m.semantic_tile_keys};
-  s[11] = {MapSection::SemanticCells, sizeof(uint32_t), uint64_t(m.counts.semantic_tiles) * tc * tc, m.semantic_cells};
+  s[9] = {MapSection::SemanticTileKeys, sizeof(uint32_t), m.counts.semantic_tiles, m.semantic_tile_keys};
+  const uint64_t tiles = m.counts.semantic_tiles;
+  s[10] = {MapSection::SemanticPaletteOffsets, sizeof(uint32_t), tiles ? tiles + 1 : 0, m.semantic_palette_offsets};
+  s[11] = {MapSection::SemanticPalette, sizeof(uint32_t), m.counts.semantic_palette, m.semantic_palette};
+  s[12] = {MapSection::SemanticCells, sizeof(uint8_t), tiles * tc * tc, m.semantic_cells};
   return true;
 }
 
@@ -69,7 +72,7 @@ Status check_params(const MapParams& p) {
   const uint64_t g = uint64_t(p.grid_nx) * p.grid_ny * p.grid_layers;
   if (g == 0 || g > kMaxGridPointsInMap) return Status::CorruptData;
   const float fs[] = {p.grid_spacing, p.layer_spacing, p.grid_z0,  p.length_scale, p.signal_variance, p.noise_variance,
-                      p.field_radius, p.voxel_size,    p.side_bin, p.min_side,     p.max_side};
+                      p.field_radius, p.voxel_size,    p.side_bin, p.min_side,     p.max_side,        p.refine_cell};
   if (!all_finite(fs, sizeof(fs) / sizeof(fs[0]))) return Status::CorruptData;
   if (!(p.grid_spacing > 0 && p.length_scale > 0 && p.signal_variance > 0 && p.noise_variance > 0 &&
         p.field_radius > 0 && p.voxel_size > 0 && p.side_bin > 0 && p.min_side >= 0 && p.max_side > p.min_side))
@@ -79,7 +82,13 @@ Status check_params(const MapParams& p) {
   if (!no_layer && !(std::isfinite(p.semantic_cell) && p.semantic_cell > 0 && p.semantic_tile_cells > 0 &&
                      p.semantic_tile_cells <= kMaxSemanticTileCells))
     return Status::CorruptData;
+  if (p.refine_cell < 0.0f) return Status::CorruptData;
   return Status::Ok;
+}
+
+// A quantisation scale: finite, step >= 0, and the largest level finite.
+bool valid_scale(float min, float step, uint32_t levels) {
+  return std::isfinite(min) && std::isfinite(step) && step >= 0.0f && std::isfinite(min + step * float(levels));
 }
 
 // Semantic checks on the validated sections: everything a later stage indexes with must be in range.
@@ -90,14 +99,14 @@ Status check_contents(const MapView& m) {
   for (uint32_t i = 0; i < n; ++i) {
     const MapInstance& in = m.instances[i];
     if (!all_finite(in.centroid, 3) || !std::isfinite(in.stability) || in.stability < 0) return Status::CorruptData;
-    if (in.label >= d || in.inducing_count > m.params.inducing_stride) return Status::CorruptData;
+    if (in.label >= d) return Status::CorruptData;
+    // Dequantised grids must be finite, variances >= 0 (every level of a valid scale is).
+    if (!valid_scale(in.mean_min, in.mean_step, kGridMeanLevels) ||
+        !valid_scale(in.var_min, in.var_step, kGridVarLevels) || in.var_min < 0.0f)
+      return Status::CorruptData;
+    if (in.pad[0] | in.pad[1] | in.pad[2]) return Status::CorruptData;
   }
-  const uint64_t stride = m.params.inducing_stride;
-  if (!all_finite(m.field_inputs, n * stride * 3) || !all_finite(m.field_alpha, n * stride * d) ||
-      !all_finite(m.grid_mean, n * g * d) || !all_finite(m.grid_var, n * g))
-    return Status::CorruptData;
-  for (uint64_t i = 0; i < n * g; ++i)
-    if (m.grid_var[i] < 0) return Status::CorruptData;
+  (void)g;
   for (uint32_t t = 0; t < m.counts.triangles; ++t) {
     const MapTriangle& tri = m.triangles[t];
     for (int k = 0; k < 3; ++k) {
@@ -116,8 +125,13 @@ Status check_contents(const MapView& m) {
   }
   for (uint32_t i = 0; i < m.counts.triangles; ++i)
     if (m.index_entries[i] >= m.counts.triangles) return Status::CorruptData;
-  if (!all_finite(m.refine_points, uint64_t(m.counts.refine_points) * 4)) return Status::CorruptData;
+  // Refinement layer: present exactly when it has points, with a cell size; then structurally valid.
+  if ((m.counts.refine_points == 0) != (m.counts.refine_tiles == 0)) return Status::CorruptData;
+  if (m.counts.refine_points > 0 && !(m.params.refine_cell > 0.0f)) return Status::CorruptData;
+  const Status rs = m.refine_layer().validate();
+  if (rs != Status::Ok) return rs;
   if (m.counts.semantic_tiles > 0 && m.params.semantic_tile_cells == 0) return Status::CorruptData;
+  if (m.counts.semantic_tiles == 0 && m.counts.semantic_palette != 0) return Status::CorruptData;
   return m.semantic_grid().validate(d);
 }
 
@@ -204,6 +218,7 @@ Status load_map(const void* data, size_t bytes, MapView* out) {
   if (crc != h.header_crc) return Status::CorruptData;
   const Status ps = check_params(h.params);
   if (ps != Status::Ok) return ps;
+  if (h.flags != 0 || h.counts.reserved[0] | h.counts.reserved[1]) return Status::CorruptData;
   if (!valid_georeference(h.georef)) return Status::CorruptData;
 
   MapView m;
@@ -228,17 +243,18 @@ Status load_map(const void* data, size_t bytes, MapView* out) {
     prev_end = e.offset + e.bytes;
   }
   m.instances = static_cast<const MapInstance*>(ptr[0]);
-  m.field_inputs = static_cast<const float*>(ptr[1]);
-  m.field_alpha = static_cast<const float*>(ptr[2]);
-  m.grid_mean = static_cast<const float*>(ptr[3]);
-  m.grid_var = static_cast<const float*>(ptr[4]);
-  m.triangles = static_cast<const MapTriangle*>(ptr[5]);
-  m.index_keys = static_cast<const uint64_t*>(ptr[6]);
-  m.index_offsets = static_cast<const uint32_t*>(ptr[7]);
-  m.index_entries = static_cast<const uint32_t*>(ptr[8]);
-  m.refine_points = m.counts.refine_points ? static_cast<const float*>(ptr[9]) : nullptr;
-  m.semantic_tile_keys = m.counts.semantic_tiles ? static_cast<const uint32_t*>(ptr[10]) : nullptr;
-  m.semantic_cells = m.counts.semantic_tiles ? static_cast<const uint32_t*>(ptr[11]) : nullptr;
+  m.grid_mean = static_cast<const uint8_t*>(ptr[1]);
+  m.grid_var = static_cast<const uint16_t*>(ptr[2]);
+  m.triangles = static_cast<const MapTriangle*>(ptr[3]);
+  m.index_keys = static_cast<const uint64_t*>(ptr[4]);
+  m.index_offsets = static_cast<const uint32_t*>(ptr[5]);
+  m.index_entries = static_cast<const uint32_t*>(ptr[6]);
+  m.refine_tiles = m.counts.refine_tiles ? static_cast<const MapRefineTile*>(ptr[7]) : nullptr;
+  m.refine_points = m.counts.refine_points ? static_cast<const MapRefinePoint*>(ptr[8]) : nullptr;
+  m.semantic_tile_keys = m.counts.semantic_tiles ? static_cast<const uint32_t*>(ptr[9]) : nullptr;
+  m.semantic_palette_offsets = m.counts.semantic_tiles ? static_cast<const uint32_t*>(ptr[10]) : nullptr;
+  m.semantic_palette = m.counts.semantic_tiles ? static_cast<const uint32_t*>(ptr[11]) : nullptr;
+  m.semantic_cells = m.counts.semantic_tiles ? static_cast<const uint8_t*>(ptr[12]) : nullptr;
   const Status cs = check_contents(m);
   if (cs != Status::Ok) return cs;
   *out = m;

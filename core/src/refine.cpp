@@ -4,7 +4,6 @@
 #include <cmath>
 
 #include <Eigen/Cholesky>
-#include <Eigen/Eigenvalues>
 
 #include "gsf/semantic_classes.h"
 
@@ -14,24 +13,17 @@ size_t Refiner::required_bytes(const RefineConfig& config) { return counted_byte
 
 Status Refiner::bind(Arena& arena, const RefineConfig& c) {
   bound_ = false;
-  if (c.max_points == 0 || c.max_map_points == 0 || c.iterations == 0 || !(c.cell > 0) || !(c.radius_end > 0) ||
+  if (c.max_points == 0 || c.iterations == 0 || !(c.cell > 0) || !(c.radius_end > 0) ||
       !(c.radius_start >= c.radius_end) || c.radius_start > c.cell * 1.5f)
     return Status::InvalidArgument;
   config_ = c;
-  slot_count_ = BoundedHashMap<uint32_t>::slots_for(c.max_map_points);
-  slots_ = arena.allocate<uint32_t>(slot_count_);
-  cell_keys_ = arena.allocate<uint64_t>(c.max_map_points);
-  begin_ = arena.allocate<uint32_t>(size_t(c.max_map_points) + 1);
-  points_ = arena.allocate<float>(size_t(c.max_map_points) * 3);
-  normals_ = arena.allocate<float>(size_t(c.max_map_points) * 3);
   query_ = arena.allocate<float>(size_t(c.max_points) * 3);
   query_cell_ = arena.allocate<uint64_t>(c.max_points);
-  query_neighbours_ = arena.allocate<uint32_t>(size_t(c.max_points) * 27);
-  n_ = 0;
-  cells_ = 0;
+  query_begin_ = arena.allocate<uint32_t>(size_t(c.max_points) * 27);
+  query_end_ = arena.allocate<uint32_t>(size_t(c.max_points) * 27);
+  map_ = RefineLayerView();
   if (arena.counting()) return Status::Ok;
-  if (!slots_ || !cell_keys_ || !begin_ || !points_ || !normals_ || !query_ || !query_cell_ || !query_neighbours_)
-    return Status::BufferTooSmall;
+  if (!query_ || !query_cell_ || !query_begin_ || !query_end_) return Status::BufferTooSmall;
   bound_ = true;
   return Status::Ok;
 }
@@ -45,95 +37,16 @@ uint64_t Refiner::cell_key(float x, float y, float z) const {
 }
 
 namespace {
-// Slot hash of a cell key (x << 42 | y << 21 | z): mix64 of the column (x, y) plus z, so the cells of
-// one column sit in neighbouring slots and the 3 z-neighbours a search visits share a cache line.
-inline uint32_t cell_hash(uint64_t key) {
-  return static_cast<uint32_t>(mix64(key >> 21)) + static_cast<uint32_t>(key & 0x1FFFFFu);
+RefineCell cell_of_key(uint64_t key) {
+  return RefineCell{int32_t((key >> 42) & 0x1FFFFF) - (1 << 20), int32_t((key >> 21) & 0x1FFFFF) - (1 << 20),
+                    int32_t(key & 0x1FFFFF) - (1 << 20)};
 }
 }  // namespace
 
-uint32_t Refiner::find_cell(uint64_t key) const {
-  const uint32_t mask = slot_count_ - 1;
-  for (uint32_t i = cell_hash(key) & mask, n = 0; n < slot_count_; ++n, i = (i + 1) & mask) {
-    const uint32_t s = slots_[i];
-    if (s == 0) return UINT32_MAX;
-    if (cell_keys_[s - 1] == key) return s - 1;
-  }
-  return UINT32_MAX;
-}
-
-Status Refiner::set_map(const float* pts, uint32_t n) {
+Status Refiner::set_map(const RefineLayerView& layer) {
   if (!bound_) return Status::NotInitialized;
-  if (n > config_.max_map_points) return Status::InvalidArgument;
-  n_ = 0;
-  cells_ = 0;
-  for (uint32_t i = 0; i < slot_count_; ++i) slots_[i] = 0;
-  // Counting sort of the points by cell: cells in order of first appearance, points in map order
-  // within a cell (the order the nearest-neighbour search visits them in; ties go to the first).
-  // begin_ first counts per cell, then becomes the exclusive prefix sum.
-  const uint32_t mask = slot_count_ - 1;
-  uint32_t* cell_of = reinterpret_cast<uint32_t*>(normals_);  // scratch until the normals are computed
-  for (uint32_t i = 0; i < n; ++i) {
-    const uint64_t key = cell_key(pts[4 * i], pts[4 * i + 1], pts[4 * i + 2]);
-    uint32_t c = find_cell(key);
-    if (c == UINT32_MAX) {
-      if (cells_ >= config_.max_map_points) return Status::CapacityExceeded;
-      uint32_t j = cell_hash(key) & mask;
-      while (slots_[j] != 0) j = (j + 1) & mask;  // load <= 0.5: an empty slot exists
-      c = cells_++;
-      slots_[j] = c + 1;
-      cell_keys_[c] = key;
-      begin_[c] = 0;
-    }
-    ++begin_[c];  // count for now
-    cell_of[i] = c;
-  }
-  uint32_t run = 0;
-  for (uint32_t c = 0; c < cells_; ++c) {
-    const uint32_t count = begin_[c];
-    begin_[c] = run;
-    run += count;
-  }
-  begin_[cells_] = run;
-  // Place each point at its cell's next free position: begin_[c] is advanced while filling, then
-  // shifted back by one cell.
-  for (uint32_t i = 0; i < n; ++i) {
-    const uint32_t at = begin_[cell_of[i]]++;
-    for (int k = 0; k < 3; ++k) points_[3 * at + k] = pts[4 * i + k];
-  }
-  for (uint32_t c = cells_; c > 0; --c) begin_[c] = begin_[c - 1];
-  begin_[0] = 0;
-  n_ = n;
-  // Normals: PCA of the points in the 27 surrounding cells (smallest eigenvector), if planar enough.
-  for (uint32_t i = 0; i < n; ++i) {
-    const float* p = points_ + 3 * i;
-    Eigen::Vector3d mean = Eigen::Vector3d::Zero();
-    Eigen::Matrix3d cov = Eigen::Matrix3d::Zero();
-    uint32_t m = 0;
-    for (int dx = -1; dx <= 1; ++dx)
-      for (int dy = -1; dy <= 1; ++dy)
-        for (int dz = -1; dz <= 1; ++dz) {
-          const uint32_t c =
-              find_cell(cell_key(p[0] + dx * config_.cell, p[1] + dy * config_.cell, p[2] + dz * config_.cell));
-          if (c == UINT32_MAX) continue;
-          for (uint32_t k = begin_[c]; k < begin_[c + 1]; ++k) {
-            const float* q = points_ + 3 * k;
-            const Eigen::Vector3d v(q[0], q[1], q[2]);
-            mean += v;
-            cov += v * v.transpose();
-            ++m;
-          }
-        }
-    normals_[3 * i] = normals_[3 * i + 1] = normals_[3 * i + 2] = 0.0f;
-    if (m < 5) continue;
-    mean /= m;
-    cov = cov / m - mean * mean.transpose();
-    Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig(cov);
-    const Eigen::Vector3d ev = eig.eigenvalues();
-    if (!(ev(0) < 0.3 * ev(1))) continue;  // not planar: no normal, not used
-    const Eigen::Vector3d nrm = eig.eigenvectors().col(0);
-    for (int k = 0; k < 3; ++k) normals_[3 * i + k] = static_cast<float>(nrm[k]);
-  }
+  if (layer.point_count > 0 && layer.cell != config_.cell) return Status::ConfigMismatch;
+  map_ = layer;
   return Status::Ok;
 }
 
@@ -142,7 +55,7 @@ Status Refiner::refine(const VoxelLayer& layer, const Eigen::Isometry3d& initial
   RefineStats st;
   *out = initial;
   if (!bound_) return Status::NotInitialized;
-  if (n_ == 0) return Status::Unsupported;
+  if (map_.empty()) return Status::Unsupported;
   // Query points: long-term voxels, deterministic stride subsample.
   uint32_t eligible = 0;
   for (uint32_t i = 0; i < layer.size(); ++i) eligible += long_term(layer.voxel(i).label);
@@ -156,7 +69,9 @@ Status Refiner::refine(const VoxelLayer& layer, const Eigen::Isometry3d& initial
     ++q;
   }
   st.query_points = q;
-  constexpr uint32_t kNotLooked = UINT32_MAX - 1;
+  constexpr uint32_t kNotLooked = UINT32_MAX;
+  uint32_t tile_hint = 0;
+  const float step = map_.cell / 256.0f;  // RefineLayerView::position_in's
   for (uint32_t i = 0; i < q; ++i) query_cell_[i] = UINT64_MAX;
   Eigen::Isometry3d t = initial;
   for (uint32_t it = 0; it < config_.iterations; ++it) {
@@ -170,16 +85,18 @@ Status Refiner::refine(const VoxelLayer& layer, const Eigen::Isometry3d& initial
     for (uint32_t i = 0; i < q; ++i) {
       const Eigen::Vector3d p = t * Eigen::Vector3d(query_[3 * i], query_[3 * i + 1], query_[3 * i + 2]);
       float best = r2;
-      int32_t nn = -1;
+      const MapRefinePoint* nearest_point = nullptr;
+      float nearest[3] = {0, 0, 0};
       const float pf[3] = {float(p.x()), float(p.y()), float(p.z())};
       // Gaps from p to the lower and upper faces of its own cell, shrunk by 1 mm (and a relative 1e-5):
       // every point of the cell below (above) lies at least the lower (upper) gap away along that axis,
       // whatever the float rounding of its cell key and of d2.
       const uint64_t own = cell_key(pf[0], pf[1], pf[2]);
-      uint32_t* known = query_neighbours_ + size_t(i) * 27;  // cells around `own`, by offset
+      uint32_t* known_begin = query_begin_ + size_t(i) * 27;  // point ranges of the cells around `own`
+      uint32_t* known_end = query_end_ + size_t(i) * 27;
       if (query_cell_[i] != own) {
         query_cell_[i] = own;
-        for (int j = 0; j < 27; ++j) known[j] = kNotLooked;
+        for (int j = 0; j < 27; ++j) known_begin[j] = kNotLooked;
       }
       float gap[3][3];  // [axis][offset + 1]: 0 for the own cell
       for (int k = 0; k < 3; ++k) {
@@ -203,29 +120,39 @@ Status Refiner::refine(const VoxelLayer& layer, const Eigen::Isometry3d& initial
             const bool named =
                 key == own + (uint64_t(int64_t(dx)) << 42) + (uint64_t(int64_t(dy)) << 21) + uint64_t(int64_t(dz));
             if (named && g > best * (1.0f + 1e-4f) + 1e-6f) continue;
-            uint32_t c;
+            uint32_t begin, end;
             if (named) {  // the cell at this offset from `own`: found before or looked up once now
-              uint32_t& slot = known[(dx + 1) * 9 + (dy + 1) * 3 + (dz + 1)];
-              if (slot == kNotLooked) slot = find_cell(key);
-              c = slot;
+              const int j = (dx + 1) * 9 + (dy + 1) * 3 + (dz + 1);
+              if (known_begin[j] == kNotLooked) map_.find(cell_of_key(key), &known_begin[j], &known_end[j], &tile_hint);
+              begin = known_begin[j];
+              end = known_end[j];
             } else {
-              c = find_cell(key);
+              map_.find(cell_of_key(key), &begin, &end, &tile_hint);
             }
-            if (c == UINT32_MAX) continue;
-            for (uint32_t id = begin_[c]; id < begin_[c + 1]; ++id) {
-              const float ex = points_[3 * id] - float(p.x()), ey = points_[3 * id + 1] - float(p.y()),
-                          ez = points_[3 * id + 2] - float(p.z());
+            if (begin == end) continue;  // most of the 27 cells are empty: decode the cell only when not
+            const RefineCell cell = cell_of_key(key);
+            // The cell's corner once; each point adds its offset (the same arithmetic as position_in).
+            const float corner[3] = {float(cell.x) * map_.cell, float(cell.y) * map_.cell, float(cell.z) * map_.cell};
+            for (uint32_t id = begin; id < end; ++id) {
+              const MapRefinePoint& mp = map_.points[id];
+              const float m[3] = {corner[0] + (float(mp.offset[0]) + 0.5f) * step,
+                                  corner[1] + (float(mp.offset[1]) + 0.5f) * step,
+                                  corner[2] + (float(mp.offset[2]) + 0.5f) * step};
+              const float ex = m[0] - pf[0], ey = m[1] - pf[1], ez = m[2] - pf[2];
               const float d2 = ex * ex + ey * ey + ez * ez;
               if (d2 < best) {
                 best = d2;
-                nn = static_cast<int32_t>(id);
+                nearest_point = &mp;
+                for (int k = 0; k < 3; ++k) nearest[k] = m[k];
               }
             }
           }
-      if (nn < 0) continue;
-      const Eigen::Vector3d nrm(normals_[3 * nn], normals_[3 * nn + 1], normals_[3 * nn + 2]);
+      if (nearest_point == nullptr) continue;
+      float nearest_normal[3];
+      RefineLayerView::normal(*nearest_point, nearest_normal);
+      const Eigen::Vector3d nrm(nearest_normal[0], nearest_normal[1], nearest_normal[2]);
       if (nrm.squaredNorm() < 0.5) continue;
-      const Eigen::Vector3d m(points_[3 * nn], points_[3 * nn + 1], points_[3 * nn + 2]);
+      const Eigen::Vector3d m(nearest[0], nearest[1], nearest[2]);
       const double r = nrm.dot(p - m);  // point-to-plane residual
       Eigen::Matrix<double, 6, 1> J;
       J.head<3>() = p.cross(nrm);  // d r / d (small rotation)

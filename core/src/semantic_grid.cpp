@@ -96,7 +96,7 @@ inline uint32_t cell_at_axes(const SemanticGridView& g, const GridConstants& k, 
     t = lo;
   }
   const size_t n = g.tile_cells;
-  return g.cells[size_t(t) * n * n + size_t(ay.cell) * n + size_t(ax.cell)];
+  return g.palette[g.palette_offsets[t] + g.cells[size_t(t) * n * n + size_t(ay.cell) * n + size_t(ax.cell)]];
 }
 
 }  // namespace
@@ -121,20 +121,28 @@ uint32_t SemanticGridView::cell_at(float x, float y, uint32_t* hint) const {
   const int32_t n = static_cast<int32_t>(tile_cells);
   cx = cx < 0 ? 0 : (cx >= n ? n - 1 : cx);  // float rounding at the tile's far edge
   cy = cy < 0 ? 0 : (cy >= n ? n - 1 : cy);
-  return cells[size_t(t) * tile_cells * tile_cells + size_t(cy) * tile_cells + size_t(cx)];
+  return palette[palette_offsets[t] +
+                 cells[size_t(t) * tile_cells * tile_cells + size_t(cy) * tile_cells + size_t(cx)]];
 }
 
 Status SemanticGridView::validate(uint32_t num_classes) const {
   if (tile_count == 0) return Status::Ok;
-  if (!tile_keys || !cells) return Status::CorruptData;
+  if (!tile_keys || !cells || !palette_offsets || !palette) return Status::CorruptData;
   if (!(cell > 0.0f) || !std::isfinite(cell) || tile_cells == 0 || tile_cells > kMaxSemanticTileCells)
     return Status::CorruptData;
   const uint32_t allowed = kCellObserved | (num_classes >= 31 ? 0x7FFFFFFFu : ((1u << num_classes) - 1));
   for (uint32_t i = 1; i < tile_count; ++i)
     if (tile_keys[i - 1] >= tile_keys[i]) return Status::CorruptData;
-  const uint64_t n = uint64_t(tile_count) * tile_cells * tile_cells;
-  for (uint64_t i = 0; i < n; ++i)
-    if (cells[i] & ~allowed) return Status::CorruptData;
+  if (palette_offsets[0] != 0 || palette_offsets[tile_count] != palette_count) return Status::CorruptData;
+  const uint32_t per_tile = tile_cells * tile_cells;
+  for (uint32_t t = 0; t < tile_count; ++t) {
+    const uint32_t lo = palette_offsets[t], hi = palette_offsets[t + 1];
+    if (hi <= lo || hi - lo > 256) return Status::CorruptData;
+    for (uint32_t c = 0; c < per_tile; ++c)
+      if (cells[size_t(t) * per_tile + c] >= hi - lo) return Status::CorruptData;
+  }
+  for (uint32_t i = 0; i < palette_count; ++i)
+    if (palette[i] & ~allowed) return Status::CorruptData;
   return Status::Ok;
 }
 

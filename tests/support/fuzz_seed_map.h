@@ -43,10 +43,19 @@ inline std::vector<uint64_t> fuzz_seed_map(size_t* bytes) {
     in[i].centroid[1] = float(i * i);
     in[i].stability = 1;
     in[i].label = kPole;
-    in[i].inducing_count = 2;
+    in[i].mean_min = -0.1f;
+    in[i].mean_step = 0.004f;
+    in[i].var_min = 0.01f;
+    in[i].var_step = 1.5e-5f;
   }
-  static std::vector<float> inputs(4 * 2 * 3, 0.5f), alpha(4 * 2 * kNumClasses, 0.1f), mean(4 * 4 * kNumClasses, 0.2f),
-      var(16, 0.3f), refine(8, 1.0f);
+  static std::vector<uint8_t> mean(4 * 4 * kNumClasses, 77);
+  static std::vector<uint16_t> var(16, 3000);
+  // A two-tile refinement layer (1 m cells) so its checks are fuzzed too.
+  p.refine_cell = 1.0f;
+  static MapRefineTile refine_tiles[2] = {{(32768u << 16) | 32768u, 0, -1}, {(32768u << 16) | 32769u, 2, 0}};
+  static MapRefinePoint refine[3] = {{uint16_t(1 << 8 | 1 << 4 | 2), {10, 20, 30}, {0, 0, 127}},
+                                     {uint16_t(1 << 8 | 1 << 4 | 3), {200, 100, 50}, {0, 0, 0}},
+                                     {uint16_t(2 << 4 | 1), {128, 128, 128}, {0, 127, 0}}};
   static Triangle t[2] = {};
   for (int k = 0; k < 2; ++k) {
     t[k].v[0] = 0;
@@ -62,31 +71,35 @@ inline std::vector<uint64_t> fuzz_seed_map(size_t* bytes) {
   v.counts.instances = 4;
   v.counts.triangles = 2;
   v.counts.index_keys = 2;
-  v.counts.refine_points = 2;
+  v.counts.refine_points = 3;
+  v.counts.refine_tiles = 2;
   v.instances = in;
-  v.field_inputs = inputs.data();
-  v.field_alpha = alpha.data();
   v.grid_mean = mean.data();
   v.grid_var = var.data();
   v.triangles = t;
   v.index_keys = keys;
   v.index_offsets = off;
   v.index_entries = ent;
-  v.refine_points = refine.data();
+  v.refine_tiles = refine_tiles;
+  v.refine_points = refine;
   // A two-tile semantic layer (2 x 2 cells per tile) so its checks are fuzzed too.
   p.semantic_cell = 1.0f;
   p.semantic_tile_cells = 2;
   static uint32_t tile_keys[2] = {(32768u << 16) | 32768u, (32768u << 16) | 32769u};
-  static uint32_t cells[8] = {gsf::kCellObserved | gsf::class_bit(gsf::kRoad),
-                              0,
-                              gsf::kCellObserved | gsf::class_bit(gsf::kPole),
-                              gsf::kCellObserved,
-                              0,
-                              gsf::kCellObserved | gsf::class_bit(gsf::kTerrain),
-                              0,
-                              0};
+  // Tile 0: road, (none), pole, observed-empty; tile 1: (none), terrain, (none), (none) - as palettes.
+  static uint32_t palette_offsets[3] = {0, 4, 6};
+  static uint32_t palette[6] = {gsf::kCellObserved | gsf::class_bit(gsf::kRoad),
+                                0,
+                                gsf::kCellObserved | gsf::class_bit(gsf::kPole),
+                                gsf::kCellObserved,
+                                0,
+                                gsf::kCellObserved | gsf::class_bit(gsf::kTerrain)};
+  static uint8_t cells[8] = {0, 1, 2, 3, 0, 1, 0, 0};
   v.counts.semantic_tiles = 2;
+  v.counts.semantic_palette = 6;
   v.semantic_tile_keys = tile_keys;
+  v.semantic_palette_offsets = palette_offsets;
+  v.semantic_palette = palette;
   v.semantic_cells = cells;
   *bytes = map_serialized_size(v);
   std::vector<uint64_t> buf(*bytes / 8 + 2);

@@ -34,7 +34,8 @@ int cmd_inspect(int argc, char** argv) {
   MapView map;
   const Status s = load_map(file.data(), file.bytes, &map);
   if (s != Status::Ok) {
-    std::fprintf(stderr, "gsf inspect: '%s' is not a valid map: %s\n", args.get("map").c_str(), to_string(s));
+    std::fprintf(stderr, "gsf inspect: '%s' is not a valid map: %s\n", args.get("map").c_str(),
+                 map_load_error(file, s).c_str());
     return 1;
   }
   const uint32_t per_class_max = kNumClasses;
@@ -63,6 +64,9 @@ int cmd_inspect(int argc, char** argv) {
     j.field("triangles", map.counts.triangles);
     j.field("index_keys", map.counts.index_keys);
     j.field("refine_points", map.counts.refine_points);
+    j.field("refine_tiles", map.counts.refine_tiles);
+    j.field("semantic_palette", map.counts.semantic_palette);
+    j.field("format_version", kMapVersion);
     j.field("grid_points", map.grid_points());
     j.field("inducing_stride", map.params.inducing_stride);
     j.key("instances_by_class");
@@ -85,12 +89,34 @@ int cmd_inspect(int argc, char** argv) {
   for (int c = 0; c < kNumClasses; ++c)
     if (per_class[c]) std::printf("    %-14s %u\n", class_name(c), per_class[c]);
   std::printf("  triangles       %u in %u hash keys\n", map.counts.triangles, map.counts.index_keys);
-  std::printf("  refine points   %u\n", map.counts.refine_points);
+  std::printf("  refine points   %u in %u tiles, cell %.2f m\n", map.counts.refine_points, map.counts.refine_tiles,
+              map.params.refine_cell);
   const uint64_t sem_cells =
       uint64_t(map.counts.semantic_tiles) * map.params.semantic_tile_cells * map.params.semantic_tile_cells;
-  std::printf("  semantic layer  %u tiles of %ux%u cells @ %.2f m (%.2f MB)\n", map.counts.semantic_tiles,
-              map.params.semantic_tile_cells, map.params.semantic_tile_cells, map.params.semantic_cell,
-              (sem_cells * 4 + uint64_t(map.counts.semantic_tiles) * 4) / 1e6);
+  // Tile keys and palette offsets (4 B each), the palettes' masks (4 B), a byte a cell.
+  const uint64_t sem_bytes = uint64_t(map.counts.semantic_tiles) * 8 + (map.counts.semantic_tiles ? 4 : 0) +
+                             uint64_t(map.counts.semantic_palette) * 4 + sem_cells;
+  std::printf("  semantic layer  %u tiles of %ux%u cells @ %.2f m, %u palette masks (%.2f MB)\n",
+              map.counts.semantic_tiles, map.params.semantic_tile_cells, map.params.semantic_tile_cells,
+              map.params.semantic_cell, map.counts.semantic_palette, sem_bytes / 1e6);
+  // Bytes per section (format v4: docs/map-format.md), so the size can be traced to what it stores.
+  const uint64_t n = map.counts.instances, g = map.grid_points(), d = map.params.num_classes;
+  const struct {
+    const char* name;
+    uint64_t bytes;
+  } sections[] = {
+      {"instances", n * sizeof(MapInstance)},
+      {"grid means (u8)", n * g * d},
+      {"grid variances (u16)", n * g * 2},
+      {"triangles", uint64_t(map.counts.triangles) * sizeof(MapTriangle)},
+      {"triangle index", uint64_t(map.counts.index_keys) * 12 + 4 + uint64_t(map.counts.triangles) * 4},
+      {"refinement layer", uint64_t(map.counts.refine_tiles) * sizeof(MapRefineTile) +
+                               uint64_t(map.counts.refine_points) * sizeof(MapRefinePoint)},
+      {"semantic layer", sem_bytes},
+  };
+  std::printf("  sections (MB)  ");
+  for (const auto& sec : sections) std::printf(" %s %.2f;", sec.name, sec.bytes / 1e6);
+  std::printf("\n");
   std::printf(
       "  field           %uD inputs, M <= %u inducing, grid %ux%ux%u @ %.2f m, kappa %.2f, noise %.3f, r %.1f m\n",
       map.params.field_input_dims, map.params.inducing_stride, map.params.grid_nx, map.params.grid_ny,
@@ -122,9 +148,9 @@ int cmd_inspect(int argc, char** argv) {
   for (const auto& r : rows) std::printf("    %-18s %10.2f MB\n", r.name, r.bytes / 1e6);
   std::printf("    %-18s %10.2f MB  (%.2f MB without refinement)\n", "total", b.total / 1e6,
               (b.total - b.refine) / 1e6);
-  if (map.counts.refine_points > cfg.refine.max_map_points)
-    std::printf("    note: the map's %u refine points exceed refine.max_map_points %u\n", map.counts.refine_points,
-                cfg.refine.max_map_points);
+  if (map.counts.refine_points > 0 && map.params.refine_cell != cfg.refine.cell)
+    std::printf("    note: the map's refinement cell %.2f m differs from refine.cell %.2f m (init: ConfigMismatch)\n",
+                map.params.refine_cell, cfg.refine.cell);
   return 0;
 }
 

@@ -48,7 +48,7 @@ int cmd_localize(int argc, char** argv) {
   MapView map;
   Status s = load_map(file.data(), file.bytes, &map);
   if (s != Status::Ok) {
-    std::fprintf(stderr, "gsf localize: invalid map: %s\n", to_string(s));
+    std::fprintf(stderr, "gsf localize: invalid map: %s\n", map_load_error(file, s).c_str());
     return 1;
   }
   LabelSet labels;

@@ -24,6 +24,9 @@ struct MapFile {
   const void* data() const { return file.data(); }
 };
 Status read_map_file(const std::string& path, MapFile* out, std::string* error);
+// Why load_map refused a map file, for a message: the status, and for VersionMismatch the file's format
+// version and what to do (rebuild with gsf build-map).
+std::string map_load_error(const MapFile& file, Status status);
 bool write_file(const std::string& path, const void* data, size_t bytes, std::string* error);
 
 // True if --help/-h is among the arguments (then print usage and exit 0).

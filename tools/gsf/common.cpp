@@ -1,9 +1,23 @@
+#include <cstddef>
 #include <cstdio>
+#include <cstring>
 #include <fstream>
 
 #include "commands.h"
+#include "gsf/map_format.h"
 
 namespace gsf::cli {
+
+std::string map_load_error(const MapFile& file, Status status) {
+  std::string msg = to_string(status);
+  if (status == Status::VersionMismatch && file.bytes >= offsetof(MapHeader, header_bytes)) {
+    uint32_t version = 0;
+    std::memcpy(&version, static_cast<const uint8_t*>(file.data()) + offsetof(MapHeader, version), sizeof(version));
+    msg += " (the file is map format version " + std::to_string(version) + ", this build reads version " +
+           std::to_string(kMapVersion) + ": rebuild the map with gsf build-map)";
+  }
+  return msg;
+}
 
 Status read_map_file(const std::string& path, MapFile* out, std::string* error) {
   const Status s = out->file.open(path);

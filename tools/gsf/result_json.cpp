@@ -40,6 +40,7 @@ void write_pose(JsonWriter& j, const char* key, const Eigen::Isometry3d& pose) {
 void write_result_diagnostics(JsonWriter& j, const LocalizeResult& x, const QueryTruth* truth) {
   j.key("diagnostics");
   j.begin_object();
+  j.field("scan_voxels", x.scan_voxels);
   j.field("instances", x.query_instances);
   j.field("pole_instances", x.pole_instances);
   j.field("pole_instances_dropped", x.pole_instances_dropped);

@@ -208,7 +208,7 @@ int run_evaluation(const EvalOptions& o) {
   MapView map;
   Status s = load_map(file.data(), file.bytes, &map);
   if (s != Status::Ok) {
-    std::fprintf(stderr, "gsf evaluate: invalid map '%s': %s\n", o.map_path.c_str(), to_string(s));
+    std::fprintf(stderr, "gsf evaluate: invalid map '%s': %s\n", o.map_path.c_str(), map_load_error(file, s).c_str());
     return 1;
   }
   LabelSet labels;

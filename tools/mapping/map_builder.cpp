@@ -16,6 +16,7 @@
 #include "gsf/detail/triangle_index.h"
 #include "gsf/detail/voxel_layer.h"
 #include "gsf/map_format.h"
+#include "mapping/map_writer.h"
 
 namespace gsf::mapping {
 namespace {
@@ -33,6 +34,10 @@ uint64_t voxel_key(const Eigen::Vector3d& p, double size) {
   return (uint64_t(x & 0x1FFFFF) << 42) | (uint64_t(y & 0x1FFFFF) << 21) | uint64_t(z & 0x1FFFFF);
 }
 
+// Per-scan voxel capacity of the builder (the localizer's default before the 16 MiB budget; 14 MB of
+// host memory).
+constexpr uint32_t kMapScanMaxVoxels = 100000;
+
 // Arena-backed stage objects sized for a whole map.
 struct Workspace {
   std::vector<uint64_t> memory;
@@ -45,6 +50,9 @@ struct Workspace {
 MapBuilder::MapBuilder(const MapBuildConfig& config)
     : config_(config.stages), classes_(label_set(config.stages)), options_(config), georef_(local_georeference()) {
   if (config_.classes) config_.classes = &classes_;
+  // Map scans are voxelised on the host before accumulation: at least kMapScanMaxVoxels per scan, so the
+  // on-board default (voxel.max_voxels 32k, sized for the 16 MiB workspace) never truncates a map scan.
+  config_.voxel.max_voxels = std::max(config_.voxel.max_voxels, kMapScanMaxVoxels);
   scan_arena_.resize(VoxelLayer::required_bytes(config_.voxel) + 64);
   georef_valid_ = set_frame_name(&georef_, options_.frame.c_str());
   for (int k = 0; k < 3; ++k) georef_.origin[k] = options_.origin[k];
@@ -178,7 +186,8 @@ Status MapBuilder::build(std::vector<uint64_t>* blob, size_t* bytes_out, MapBuil
   FieldSolver solver;
   if (solver.bind(fws.arena, fc, max_pts) != Status::Ok) return Status::InvalidArgument;
   std::vector<MapInstance> instances(ni);
-  std::vector<float> inputs(size_t(ni) * M * 3, 0.0f), alpha(size_t(ni) * M * D, 0.0f);
+  // Each field's inducing inputs and weights are needed only to probe its grid (the map stores the grid).
+  std::vector<float> inputs(size_t(M) * 3), alpha(size_t(M) * D);
   std::vector<float> mean(size_t(ni) * G * D, 0.0f), var(size_t(ni) * G, fc.signal_variance);
   std::vector<uint32_t> ids(max_pts);
   std::vector<float> xyz(size_t(max_pts) * 3), targets(size_t(max_pts) * D), chol(size_t(M) * M), grid(size_t(G) * 3);
@@ -198,13 +207,12 @@ Status MapBuilder::build(std::vector<uint64_t>* blob, size_t* bytes_out, MapBuil
     // The same per-instance fit as the localizer's query fields (gaussian_field.h).
     const FieldGather gather{max_pts, ids.data(), xyz.data(), targets.data(), gl.data()};
     uint32_t m = 0, got = 0, total = 0;
-    float* in_i = inputs.data() + size_t(i) * M * 3;
-    float* al_i = alpha.data() + size_t(i) * M * D;
+    float* in_i = inputs.data();
+    float* al_i = alpha.data();
     const Status fit =
         fit_instance_field(solver, layer, in.centroid, gather, in_i, al_i, chol.data(), &m, &got, &total);
     st.field_points_dropped += total - got;
     if (fit == Status::Ok) {
-      mi.inducing_count = m;
       FieldView f{in_i, al_i, m};
       solver.probe(f, chol.data(), grid.data(), G, mean.data() + size_t(i) * G * D, var.data() + size_t(i) * G,
                    nullptr);
@@ -259,23 +267,22 @@ Status MapBuilder::build(std::vector<uint64_t>* blob, size_t* bytes_out, MapBuil
     std::sort(order.begin(), order.end());
     for (uint64_t k : order) {
       const auto& c = cells[k];
-      refine.insert(refine.end(), {float(c.first.x()), float(c.first.y()), float(c.first.z()), float(c.second)});
+      refine.insert(refine.end(), {float(c.first.x()), float(c.first.y()), float(c.first.z())});
     }
   }
-  st.refine_points = static_cast<uint32_t>(refine.size() / 4);
+  st.refine_points = static_cast<uint32_t>(refine.size() / 3);
 
   // Semantic layer for whole-scan verification of pose hypotheses.
   std::vector<uint32_t> sem_keys, sem_cells;
   if (options_.semantic_layer.cell > 0.0f) build_semantic_layer(layer, options_.semantic_layer, &sem_keys, &sem_cells);
   st.semantic_tiles = static_cast<uint32_t>(sem_keys.size());
 
-  MapView view;
+  MapContents view;
   view.georef = georef_;
   view.params = map_params_from(config_);
   view.counts.instances = ni;
   view.counts.triangles = nt;
   view.counts.index_keys = key_count;
-  view.counts.refine_points = st.refine_points;
   view.counts.road_length_m = options_.road_length_m;
   view.counts.semantic_tiles = st.semantic_tiles;
   if (st.semantic_tiles > 0) {
@@ -296,20 +303,17 @@ Status MapBuilder::build(std::vector<uint64_t>* blob, size_t* bytes_out, MapBuil
   if (ni == 0)
     for (int k = 0; k < 3; ++k) view.counts.bounds_min[k] = view.counts.bounds_max[k] = 0.0f;
   view.instances = instances.data();
-  view.field_inputs = inputs.data();
-  view.field_alpha = alpha.data();
   view.grid_mean = mean.data();
   view.grid_var = var.data();
   view.triangles = tris.data();
   view.index_keys = ikeys.data();
   view.index_offsets = offsets.data();
   view.index_entries = entries.data();
-  view.refine_points = refine.empty() ? nullptr : refine.data();
-  const size_t size = map_serialized_size(view);
-  if (size == 0) return Status::InvalidArgument;
-  blob->assign(size / 8 + 2, 0);
+  view.refine_xyz = refine.empty() ? nullptr : refine.data();
+  view.refine_points = st.refine_points;
+  view.refine_cell = config_.refine.cell;
   size_t written = 0;
-  s = write_map(view, blob->data(), blob->size() * 8, &written);
+  s = write_compact_map(view, blob, &written, &st.refine_tiles);
   if (s != Status::Ok) return s;
   *bytes_out = written;
   st.bytes = written;

@@ -36,6 +36,7 @@ struct MapBuildStats {
   uint32_t triangles = 0;
   uint32_t index_keys = 0;
   uint32_t refine_points = 0;
+  uint32_t refine_tiles = 0;
   uint32_t semantic_tiles = 0;
   uint32_t fields_failed = 0;
   size_t bytes = 0;
@@ -61,7 +62,9 @@ struct MapBuildConfig {
   SemanticLayerConfig semantic_layer;
   // Length of the mapped road (m), recorded in the map's counts for reporting; 0 if unknown.
   float road_length_m = 0.0f;
-  float refine_voxel = 1.0f;  // m; cell of the refinement point layer (<= 0: no layer)
+  // m; the refinement layer keeps one point per refine_voxel cube (<= 0: no layer). The layer's grid is
+  // stages.refine.cell (the localizer's), so at the default 1 m each grid cell holds one point.
+  float refine_voxel = 1.0f;
   // Capacities of the whole-map stages (no hidden constants; what they cut is counted in MapBuildStats).
   // Clustered instances kept, the largest by points first, and geometric poles / trunks kept, the best
   // by score first: each at most 65535 (InstanceClustering's and PoleExtraction's limit, ClusterConfig).

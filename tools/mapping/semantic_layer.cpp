@@ -49,4 +49,30 @@ uint32_t build_semantic_layer(const VoxelLayer& voxels, const SemanticLayerConfi
   return skipped;
 }
 
+Status palette_semantic_layer(const std::vector<uint32_t>& cells, uint32_t tile_count, uint32_t tile_cells,
+                              std::vector<uint32_t>* palette_offsets, std::vector<uint32_t>* palette,
+                              std::vector<uint8_t>* indices) {
+  palette_offsets->clear();
+  palette->clear();
+  indices->clear();
+  if (tile_cells == 0 || tile_cells > kMaxSemanticTileCells) return Status::InvalidArgument;
+  const size_t per_tile = size_t(tile_cells) * tile_cells;
+  if (cells.size() != per_tile * tile_count) return Status::InvalidArgument;
+  if (tile_count == 0) return Status::Ok;
+  indices->resize(cells.size());
+  palette_offsets->push_back(0);
+  for (uint32_t t = 0; t < tile_count; ++t) {
+    const size_t first = palette->size();
+    for (size_t c = 0; c < per_tile; ++c) {
+      const uint32_t mask = cells[t * per_tile + c];
+      size_t k = first;
+      while (k < palette->size() && (*palette)[k] != mask) ++k;  // <= 256 masks a tile
+      if (k == palette->size()) palette->push_back(mask);
+      (*indices)[t * per_tile + c] = static_cast<uint8_t>(k - first);
+    }
+    palette_offsets->push_back(static_cast<uint32_t>(palette->size()));
+  }
+  return Status::Ok;
+}
+
 }  // namespace gsf::mapping

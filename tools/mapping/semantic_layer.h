@@ -6,12 +6,13 @@
 #include <vector>
 
 #include "gsf/detail/voxel_layer.h"
+#include "gsf/status.h"
 
 namespace gsf::mapping {
 
 struct SemanticLayerConfig {
   float cell = 1.0f;         // m
-  uint32_t tile_cells = 16;  // cells per tile side (16 x 16 x 4 B = 1 KiB a tile)
+  uint32_t tile_cells = 16;  // cells per tile side (<= 16: 16 x 16 one-byte palette indices a tile)
   float min_share = 0.1f;    // a class is in a cell's mask if it has this share of the cell's group
 };
 
@@ -19,5 +20,12 @@ struct SemanticLayerConfig {
 // tile range are skipped; returns how many.
 uint32_t build_semantic_layer(const VoxelLayer& voxels, const SemanticLayerConfig& config, std::vector<uint32_t>* keys,
                               std::vector<uint32_t>* cells);
+
+// The stored form (semantic_grid.h, format v4): per tile its distinct masks in order of first appearance
+// (row-major) and each cell's index into them. `cells` is tile_count x tile_cells^2 dense masks.
+// InvalidArgument when tile_cells exceeds kMaxSemanticTileCells.
+Status palette_semantic_layer(const std::vector<uint32_t>& cells, uint32_t tile_count, uint32_t tile_cells,
+                              std::vector<uint32_t>* palette_offsets, std::vector<uint32_t>* palette,
+                              std::vector<uint8_t>* indices);
 
 }  // namespace gsf::mapping

@@ -55,6 +55,7 @@ struct LocalizeResult {
   // the answer's score, and at least min_inliers / inliers (weak support). 0 = unambiguous, 1 = a
   // different pose is as well supported, or the answer rests on the bare minimum (decline to answer).
   double ambiguity = 1.0;
+  uint32_t scan_voxels = 0;             // voxels of the query's layer (at most voxel.max_voxels)
   uint32_t pole_instances = 0;          // geometric pole / trunk instances among query_instances
   uint32_t pole_instances_dropped = 0;  // ... not kept because cluster.max_instances was full
   uint32_t query_instances = 0, query_triangles = 0, triangle_matches = 0, gsf_survivors = 0, correspondences = 0;

@@ -11,6 +11,7 @@
 #include <cstddef>
 #include <cstdint>
 
+#include "gsf/detail/refine_layer.h"
 #include "gsf/detail/semantic_grid.h"
 #include "gsf/detail/triangle.h"
 #include "gsf/georeference.h"
@@ -19,16 +20,17 @@
 namespace gsf {
 
 constexpr char kMapMagic[8] = {'G', 'S', 'F', 'M', 'A', 'P', '\r', '\n'};
-// 2: semantic layer for hypothesis verification; 3: georeference (origin + frame) and the class table id.
-// Older maps -> VersionMismatch (rebuild with gsf build-map).
-constexpr uint32_t kMapVersion = 3;
+// 2: semantic layer for hypothesis verification; 3: georeference (origin + frame) and the class table id;
+// 4: compact - only what the localizer reads, grids quantised, the refinement layer stored in its grid
+// with normals. Older maps -> VersionMismatch (rebuild with gsf build-map).
+constexpr uint32_t kMapVersion = 4;
 
 // Parameters the map was built with that a localizer must agree with (checked by the Localizer).
 struct MapParams {
   uint32_t num_classes;          // D
   uint32_t instance_class_mask;  // ClassMask of instantiable classes
   uint32_t field_input_dims;     // 2 (bird's-eye) or 3
-  uint32_t inducing_stride;      // rows reserved per instance in the inducing/alpha sections (max M)
+  uint32_t inducing_stride;      // M, inducing points of each field (the query's fields must use the same)
   uint32_t grid_nx, grid_ny, grid_layers;
   uint32_t triangle_neighbours;  // K of the map's triangles (TriangleConfig::map_k())
   float grid_spacing, layer_spacing, grid_z0;
@@ -39,7 +41,7 @@ struct MapParams {
   float semantic_cell;           // m; cell of the semantic layer (0 when the map has none)
   uint32_t semantic_tile_cells;  // cells per tile side (0 when the map has none)
   uint32_t class_table_id;       // ClassTable::id() of the label set the map was built with (class_table.h)
-  uint32_t reserved;
+  float refine_cell;             // m; cell of the refinement layer's grid (0 when the map has none)
 };
 static_assert(sizeof(MapParams) == 92, "on-disk layout (docs/map-format.md)");
 
@@ -51,9 +53,12 @@ struct MapCounts {
   float road_length_m;     // length of the mapping drive, for bytes-per-km reporting
   float bounds_min[3];
   float bounds_max[3];
-  uint32_t semantic_tiles;  // tiles of the semantic layer (0: no layer; verification is then off)
+  uint32_t semantic_tiles;    // tiles of the semantic layer (0: no layer; verification is then off)
+  uint32_t refine_tiles;      // tiles of the refinement layer (0 when refine_points is 0)
+  uint32_t semantic_palette;  // class masks over all semantic tiles' palettes (0 without the layer)
+  uint32_t reserved[2];       // 0
 };
-static_assert(sizeof(MapCounts) == 48, "on-disk layout (docs/map-format.md)");
+static_assert(sizeof(MapCounts) == 64, "on-disk layout (docs/map-format.md)");
 
 struct MapHeader {
   char magic[8];
@@ -70,20 +75,21 @@ struct MapHeader {
 };
 
 enum class MapSection : uint32_t {
-  Instances = 1,     // MapInstance x instances
-  FieldInputs,       // float x instances x inducing_stride x 3 (instance-local frame)
-  FieldAlpha,        // float x instances x inducing_stride x D  ((K + s^2 I)^-1 Y)
-  GridMean,          // float x instances x G x D  (posterior mean on the canonical, yaw-0 grid)
-  GridVar,           // float x instances x G      (posterior variance on that grid)
-  Triangles,         // MapTriangle x triangles
-  IndexKeys,         // uint64 x index_keys (sorted, unique)
-  IndexOffsets,      // uint32 x (index_keys + 1), CSR into IndexEntries
-  IndexEntries,      // uint32 x triangles (triangle ids)
-  RefinePoints,      // float x refine_points x 4 (x, y, z, label) - optional
-  SemanticTileKeys,  // uint32 x semantic_tiles (sorted, unique; semantic_grid.h)
-  SemanticCells,     // uint32 x semantic_tiles x semantic_tile_cells^2 (class masks)
+  Instances = 1,           // MapInstance x instances
+  GridMean,                // uint8 x instances x G x D  (posterior mean on the canonical, yaw-0 grid; quantised)
+  GridVar,                 // uint16 x instances x G     (posterior variance on that grid; quantised)
+  Triangles,               // MapTriangle x triangles
+  IndexKeys,               // uint64 x index_keys (sorted, unique)
+  IndexOffsets,            // uint32 x (index_keys + 1), CSR into IndexEntries
+  IndexEntries,            // uint32 x triangles (triangle ids)
+  RefineTiles,             // MapRefineTile x refine_tiles (refine_layer.h) - optional
+  RefinePoints,            // MapRefinePoint x refine_points - optional
+  SemanticTileKeys,        // uint32 x semantic_tiles (sorted, unique; semantic_grid.h)
+  SemanticPaletteOffsets,  // uint32 x (semantic_tiles + 1; 0 without the layer): each tile's palette
+  SemanticPalette,         // uint32 x semantic_palette (class masks)
+  SemanticCells,           // uint8 x semantic_tiles x semantic_tile_cells^2 (indices into the tile's palette)
 };
-constexpr uint32_t kMapSectionCount = 12;
+constexpr uint32_t kMapSectionCount = 13;
 
 struct SectionEntry {
   uint32_t id;
@@ -94,20 +100,23 @@ struct SectionEntry {
   uint32_t reserved;
 };
 
+// An instance and the scales of its quantised grids: mean = mean_min + q * mean_step (q: uint8 of
+// GridMean), variance = var_min + q * var_step (q: uint16 of GridVar); map_quantization.h.
 struct MapInstance {
   float centroid[3];
   float stability;
-  uint32_t inducing_count;  // rows used in FieldInputs/FieldAlpha (<= inducing_stride)
   uint32_t point_count;
+  float mean_min, mean_step;
+  float var_min, var_step;
   uint8_t label;  // dense class
-  uint8_t pad[7];
+  uint8_t pad[3];
 };
-static_assert(sizeof(MapInstance) == 32, "on-disk layout");
+static_assert(sizeof(MapInstance) == 40, "on-disk layout");
 
 using MapTriangle = Triangle;  // triangle.h: sides sorted d01 <= d12 <= d20
-static_assert(sizeof(MapHeader) == 240 && sizeof(SectionEntry) == 32, "on-disk layout (docs/map-format.md)");
+static_assert(sizeof(MapHeader) == 256 && sizeof(SectionEntry) == 32, "on-disk layout (docs/map-format.md)");
 static_assert(offsetof(MapHeader, georef) == 32 && offsetof(MapHeader, params) == 88 &&
-                  offsetof(MapHeader, counts) == 180 && offsetof(MapHeader, header_crc) == 228,
+                  offsetof(MapHeader, counts) == 180 && offsetof(MapHeader, header_crc) == 244,
               "on-disk layout (docs/map-format.md)");
 
 // Zero-copy view over a validated blob (or, for write_map, over the builder's arrays). Coordinates in
@@ -117,17 +126,18 @@ struct MapView {
   MapParams params{};
   MapCounts counts{};
   const MapInstance* instances = nullptr;
-  const float* field_inputs = nullptr;
-  const float* field_alpha = nullptr;
-  const float* grid_mean = nullptr;
-  const float* grid_var = nullptr;
+  const uint8_t* grid_mean = nullptr;  // quantised; map_quantization.h dequantises an instance's grid
+  const uint16_t* grid_var = nullptr;
   const MapTriangle* triangles = nullptr;
   const uint64_t* index_keys = nullptr;
   const uint32_t* index_offsets = nullptr;
   const uint32_t* index_entries = nullptr;
-  const float* refine_points = nullptr;
+  const MapRefineTile* refine_tiles = nullptr;
+  const MapRefinePoint* refine_points = nullptr;
   const uint32_t* semantic_tile_keys = nullptr;
-  const uint32_t* semantic_cells = nullptr;
+  const uint32_t* semantic_palette_offsets = nullptr;
+  const uint32_t* semantic_palette = nullptr;
+  const uint8_t* semantic_cells = nullptr;
   size_t total_bytes = 0;
 
   uint32_t grid_points() const { return params.grid_nx * params.grid_ny * params.grid_layers; }
@@ -136,9 +146,21 @@ struct MapView {
     g.cell = params.semantic_cell;
     g.tile_cells = params.semantic_tile_cells;
     g.tile_count = counts.semantic_tiles;
+    g.palette_count = counts.semantic_palette;
     g.tile_keys = semantic_tile_keys;
+    g.palette_offsets = semantic_palette_offsets;
+    g.palette = semantic_palette;
     g.cells = semantic_cells;
     return g;
+  }
+  RefineLayerView refine_layer() const {
+    RefineLayerView r;
+    r.cell = params.refine_cell;
+    r.tile_count = counts.refine_tiles;
+    r.point_count = counts.refine_points;
+    r.tiles = refine_tiles;
+    r.points = refine_points;
+    return r;
   }
 };
 

@@ -70,6 +70,8 @@ class GsfFilter {
   BoundedHashMap<uint32_t> probe_slot_;  // (query instance, yaw bin) -> cache slot
   BoundedHashMap<float> similarity_;     // (query instance, map instance, yaw bin) -> omega
   float* grid_ = nullptr;                // G x 3
+  float* map_mean_ = nullptr;            // G x D, the compared map instance's grid dequantised
+  float* map_var_ = nullptr;             // G
   float* probe_mean_ = nullptr;          // (slots + 1) x G x D; the last slot is scratch when the cache is full
   float* probe_var_ = nullptr;           // (slots + 1) x G
   float weights_[kNumClasses];

@@ -4,9 +4,9 @@
 // Pose refinement against the map's point layer (paper Table IV "w/ rf"): point-to-plane ICP from the
 // global pose, on long-term structure only (stability weight 1: buildings, poles, fences, ground...).
 //
-// At init the map's refinement points are put in a uniform-grid hash (CSR: the points and their normals
-// are stored sorted by cell, a cell is a key and a start offset) and each gets a normal from the PCA of
-// its grid neighbourhood - all in the arena. Per scan: up to max_points query voxel centroids
+// The map's refinement layer (refine_layer.h) already holds the points sorted into the grid with their
+// normals (the builder computed them), so the refiner reads it in place; its workspace is the query
+// buffers only. Per scan: up to max_points query voxel centroids
 // of long-term classes, a bounded number of Gauss-Newton iterations with a shrinking correspondence
 // radius, nearest neighbours from the 27 surrounding cells, a 6x6 solve per iteration.
 // The refined pose is accepted only if it keeps enough inliers and stays within max_correction of the
@@ -19,7 +19,7 @@
 
 #include "gsf/class_table.h"
 #include "gsf/detail/arena.h"
-#include "gsf/detail/bounded_hash_map.h"
+#include "gsf/detail/refine_layer.h"
 #include "gsf/detail/voxel_layer.h"
 #include "gsf/status.h"
 
@@ -27,12 +27,11 @@ namespace gsf {
 
 struct RefineConfig {
   bool enabled = false;
-  uint32_t max_points = 2000;          // query points used (deterministic stride subsample)
-  uint32_t max_map_points = 1u << 18;  // capacity for the map's refinement layer
+  uint32_t max_points = 2000;  // query points used (deterministic stride subsample)
   uint32_t iterations = 10;
   float radius_start = 1.5f;    // m, correspondence radius of the first iteration (<= 1.5 cell)
   float radius_end = 0.5f;      // m, of the last
-  float cell = 1.0f;            // m, grid cell (>= the map's refine voxel)
+  float cell = 1.0f;            // m, grid cell: must equal the map's (MapParams::refine_cell)
   float max_correction = 3.0f;  // m, larger moves are rejected
   uint32_t min_inliers = 100;
 };
@@ -47,8 +46,9 @@ class Refiner {
  public:
   static size_t required_bytes(const RefineConfig& config);
   Status bind(Arena& arena, const RefineConfig& config);
-  // Indexes the map points (x, y, z, label) x n and estimates normals. InvalidArgument if n exceeds capacity.
-  Status set_map(const float* points, uint32_t n);
+  // The map's layer (read in place; must outlive the refiner's use). ConfigMismatch when its cell is not
+  // config.cell.
+  Status set_map(const RefineLayerView& layer);
   Status refine(const VoxelLayer& query, const Eigen::Isometry3d& initial, Eigen::Isometry3d* refined,
                 RefineStats* stats);
   // Which classes are long-term (stability 1) from this label set (not copied); nullptr (the default):
@@ -58,27 +58,16 @@ class Refiner {
  private:
   bool long_term(int label) const { return (classes_ ? classes_->stability(label) : stability_weight(label)) >= 1.0f; }
   uint64_t cell_key(float x, float y, float z) const;
-  // Cell of a key: its index (UINT32_MAX if absent); its points are begin_[c] .. begin_[c + 1] - 1.
-  uint32_t find_cell(uint64_t key) const;
   RefineConfig config_{};
   const ClassTable* classes_ = nullptr;
-  // Grid hash: open addressing (column hash + z, linear probing, load <= 0.5) over 4-byte slots holding
-  // cell index + 1 (0 = empty); per cell its key and its first point (the next cell's first point ends
-  // it). 4 B a slot + 12 B a cell (was 17 B a slot + 4 B a point of order).
-  uint32_t* slots_ = nullptr;
-  uint32_t slot_count_ = 0;
-  uint64_t* cell_keys_ = nullptr;  // max_map_points
-  uint32_t* begin_ = nullptr;      // max_map_points + 1
-  uint32_t cells_ = 0;
-  float* points_ = nullptr;   // n x 3, sorted by cell (ascending map order within a cell)
-  float* normals_ = nullptr;  // n x 3, the same order (0 vector: no reliable normal)
-  float* query_ = nullptr;    // max_points x 3
-  // Per query point, the grid cell it fell in at the last iteration and the cells found around it
-  // (27 per point; kNotLooked until looked up): the pose moves little between iterations, so the same
-  // cells are found again without probing the grid hash.
-  uint64_t* query_cell_ = nullptr;        // max_points
-  uint32_t* query_neighbours_ = nullptr;  // max_points x 27
-  uint32_t n_ = 0;
+  RefineLayerView map_{};
+  float* query_ = nullptr;  // max_points x 3
+  // Per query point, the grid cell it fell in at the last iteration and the point ranges of the cells
+  // around it (27 per point; begin kNotLooked until looked up): the pose moves little between
+  // iterations, so the same cells are found again without searching the layer.
+  uint64_t* query_cell_ = nullptr;   // max_points
+  uint32_t* query_begin_ = nullptr;  // max_points x 27
+  uint32_t* query_end_ = nullptr;    // max_points x 27
   bool bound_ = false;
 };
 

@@ -4,10 +4,12 @@
 // The map's compact semantic layer and the whole-scan verification of a pose hypothesis.
 //
 // Layer: a bird's-eye grid of `cell` metre cells grouped in square tiles of tile_cells x tile_cells,
-// only tiles the mapping drive saw are stored (sorted tile keys + dense cells). A cell is a class mask:
+// only tiles the mapping drive saw are stored (sorted tile keys + cells). A cell is a class mask:
 // bit c set when class c makes at least the builder's minimum share of the cell's ground voxels (for
 // ground classes) or of its above-ground voxels (other classes); bit 31 marks a cell the map observed.
-// 4 bytes a cell; 1 KiB a 16 x 16 tile.
+// Stored with a palette per tile (format v4): a tile lists its distinct masks once (a road tile has a
+// handful) and each cell is a 1-byte index into that list, so a 16 x 16 tile is 256 B + 4 B a mask
+// instead of 1 KiB; tile_cells is therefore at most 16 (at most 256 distinct masks a tile).
 //
 // Verification: every sampled voxel of the query scan (stuff included: terrain, vegetation, fences,
 // walls, not only instances) is moved by the hypothesis into the map and compared with its cell:
@@ -34,7 +36,7 @@ class VoxelLayer;
 constexpr uint32_t kCellObserved = 1u << 31;
 constexpr ClassMask kGroundClasses =
     class_bit(kRoad) | class_bit(kParking) | class_bit(kSidewalk) | class_bit(kOtherGround) | class_bit(kTerrain);
-constexpr uint32_t kMaxSemanticTileCells = 64;
+constexpr uint32_t kMaxSemanticTileCells = 16;  // tile_cells^2 <= 256: a cell's palette index is a byte
 
 // Tile key of integer tile coordinates; valid for |tx|, |ty| < 32768 (false otherwise).
 bool semantic_tile_key(int64_t tx, int64_t ty, uint32_t* key);
@@ -43,14 +45,18 @@ struct SemanticGridView {
   float cell = 0.0f;        // m
   uint32_t tile_cells = 0;  // cells per tile side
   uint32_t tile_count = 0;
-  const uint32_t* tile_keys = nullptr;  // tile_count, strictly increasing
-  const uint32_t* cells = nullptr;      // tile_count x tile_cells^2, row-major (y, then x) per tile
+  uint32_t palette_count = 0;                 // masks over all tiles' palettes
+  const uint32_t* tile_keys = nullptr;        // tile_count, strictly increasing
+  const uint32_t* palette_offsets = nullptr;  // tile_count + 1: tile t's masks are palette[off[t] .. off[t+1])
+  const uint32_t* palette = nullptr;          // palette_count class masks
+  const uint8_t* cells = nullptr;  // tile_count x tile_cells^2 indices into the tile's palette, row-major (y, x)
 
   bool empty() const { return tile_count == 0; }
   // Cell mask at (x, y) in the map frame; 0 outside stored tiles. *tile_hint caches the last tile index.
   uint32_t cell_at(float x, float y, uint32_t* tile_hint) const;
-  // Structural checks for untrusted arrays: parameters, keys strictly increasing, masks use only class
-  // bits below num_classes and the observed bit.
+  // Structural checks for untrusted arrays: parameters, keys strictly increasing, palette offsets
+  // monotone from 0 to palette_count with 1..256 masks a tile, every cell's index inside its tile's
+  // palette, masks use only class bits below num_classes and the observed bit.
   Status validate(uint32_t num_classes) const;
 };
 

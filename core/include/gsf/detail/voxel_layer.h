@@ -35,7 +35,9 @@ struct VoxelConfig {
   float voxel_size = 0.4f;  // m
   float min_range = 2.5f;   // m; drops returns from the ego vehicle
   float max_range = 80.0f;  // m
-  uint32_t max_voxels = 100000;
+  // 32k: the measured scans make 6k-14k voxels at 0.4 m (docs/memory.md); beyond it a scan's new voxels
+  // are dropped and counted, and localize() sets capacity_truncated.
+  uint32_t max_voxels = 32768;
   float column_size = 2.0f;      // m; cell of the 2-D gather index
   uint32_t max_columns = 16384;  // gather index cells (hash capacity)
 };

@@ -1,0 +1,121 @@
+#include "mapping/refine_layer_builder.h"
+
+#include <algorithm>
+#include <cmath>
+
+#include <Eigen/Eigenvalues>
+
+namespace gsf::mapping {
+namespace {
+
+struct Placed {
+  uint32_t key;    // tile key
+  int32_t cz;      // z cell
+  uint16_t local;  // y << 4 | x within the tile (z added once the tile's base is known)
+  uint8_t offset[3];
+  uint32_t input;  // input order, the tie-break inside a cell
+};
+
+}  // namespace
+
+Status build_refine_layer(const float* xyz, uint32_t n, float cell, std::vector<MapRefineTile>* tiles,
+                          std::vector<MapRefinePoint>* points) {
+  tiles->clear();
+  points->clear();
+  if (!(cell > 0.0f) || !std::isfinite(cell)) return Status::InvalidArgument;
+  const float inv = 1.0f / cell;  // the refiner's cell of a point (Refiner::cell_key)
+  std::vector<Placed> placed(n);
+  for (uint32_t i = 0; i < n; ++i) {
+    Placed& p = placed[i];
+    int32_t c[3];
+    for (int k = 0; k < 3; ++k) {
+      const float s = xyz[3 * i + k] * inv;
+      if (!std::isfinite(s) || std::fabs(s) >= float(1 << 19)) return Status::InvalidInput;
+      const float f = std::floor(s);
+      c[k] = static_cast<int32_t>(f);
+      p.offset[k] = quantize_cell_offset(s - f);
+    }
+    int32_t tx, ty;
+    if (!refine_tile_of(RefineCell{c[0], c[1], c[2]}, &tx, &ty, &p.key)) return Status::InvalidInput;
+    const int32_t t = static_cast<int32_t>(kRefineTileCells);
+    p.cz = c[2];
+    p.local = static_cast<uint16_t>((uint32_t(c[1] - ty * t) << 4) | uint32_t(c[0] - tx * t));
+    p.input = i;
+  }
+  std::sort(placed.begin(), placed.end(), [](const Placed& a, const Placed& b) {
+    if (a.key != b.key) return a.key < b.key;
+    if (a.cz != b.cz) return a.cz < b.cz;
+    if (a.local != b.local) return a.local < b.local;
+    return a.input < b.input;
+  });
+  // Tiles: z base = the lowest z cell of the tile (points are sorted by z within a tile).
+  points->resize(n);
+  for (uint32_t i = 0; i < n;) {
+    uint32_t j = i;
+    while (j < n && placed[j].key == placed[i].key) ++j;
+    const int32_t z_base = placed[i].cz;
+    if (placed[j - 1].cz - z_base >= kRefineTileZCells) return Status::InvalidInput;
+    tiles->push_back(MapRefineTile{placed[i].key, i, z_base});
+    for (uint32_t k = i; k < j; ++k) {
+      MapRefinePoint& out = (*points)[k];
+      out.cell = static_cast<uint16_t>((uint32_t(placed[k].cz - z_base) << 8) | placed[k].local);
+      for (int a = 0; a < 3; ++a) {
+        out.offset[a] = placed[k].offset[a];
+        out.normal[a] = 0;
+      }
+    }
+    i = j;
+  }
+  // Normals: PCA of the quantised points in the 27 cells around each point's cell (smallest
+  // eigenvector) when the neighbourhood is planar enough; otherwise none (zero).
+  RefineLayerView view;
+  view.cell = cell;
+  view.tile_count = static_cast<uint32_t>(tiles->size());
+  view.point_count = n;
+  view.tiles = tiles->data();
+  view.points = points->data();
+  std::vector<int8_t> normals(size_t(n) * 3, 0);
+  uint32_t hint = 0;
+  for (uint32_t t = 0; t < view.tile_count; ++t) {
+    const uint32_t last = t + 1 < view.tile_count ? (*tiles)[t + 1].first_point : n;
+    const int32_t tn = static_cast<int32_t>(kRefineTileCells);
+    const uint32_t key = (*tiles)[t].key;
+    for (uint32_t i = (*tiles)[t].first_point; i < last; ++i) {
+      const MapRefinePoint& p = (*points)[i];
+      const RefineCell own{(int32_t(key >> 16) - 32768) * tn + int32_t(p.cell & 0xF),
+                           (int32_t(key & 0xFFFF) - 32768) * tn + int32_t((p.cell >> 4) & 0xF),
+                           (*tiles)[t].z_base + int32_t(p.cell >> 8)};
+      Eigen::Vector3d mean = Eigen::Vector3d::Zero();
+      Eigen::Matrix3d cov = Eigen::Matrix3d::Zero();
+      uint32_t m = 0;
+      for (int dx = -1; dx <= 1; ++dx)
+        for (int dy = -1; dy <= 1; ++dy)
+          for (int dz = -1; dz <= 1; ++dz) {
+            const RefineCell c{own.x + dx, own.y + dy, own.z + dz};
+            uint32_t b, e;
+            view.find(c, &b, &e, &hint);
+            for (uint32_t k = b; k < e; ++k) {
+              float q[3];
+              view.position_in(c, (*points)[k], q);
+              const Eigen::Vector3d v(q[0], q[1], q[2]);
+              mean += v;
+              cov += v * v.transpose();
+              ++m;
+            }
+          }
+      if (m < 5) continue;
+      mean /= m;
+      cov = cov / m - mean * mean.transpose();
+      Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig(cov);
+      const Eigen::Vector3d ev = eig.eigenvalues();
+      if (!(ev(0) < 0.3 * ev(1))) continue;  // not planar: no normal, not used
+      const Eigen::Vector3d nrm = eig.eigenvectors().col(0);
+      for (int k = 0; k < 3; ++k) normals[3 * i + k] = quantize_normal_component(float(nrm[k]));
+    }
+  }
+  for (uint32_t i = 0; i < n; ++i)
+    for (int k = 0; k < 3; ++k) (*points)[i].normal[k] = normals[3 * i + k];
+  return Status::Ok;
+}
+
+}  // namespace gsf::mapping
