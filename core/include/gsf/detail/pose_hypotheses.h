@@ -31,9 +31,9 @@ struct HypothesisConfig {
   // slots among up to shift_headings headings; 96 left the true shift out in lattice zones (suite seeds
   // 1-5, lattice zone 86.5% at 96, 97.0% at 192; docs/results.md). Verification scores each coarsely.
   uint32_t max_hypotheses = 192;
-  uint32_t max_peeled = 8;       // of which from peeled maximum cliques; the rest from shift votes,
-                                 // shared evenly by the headings
-  uint32_t shift_headings = 4;   // distinct clique headings whose translations are voted on
+  uint32_t max_peeled = 8;      // of which from peeled maximum cliques; the rest from shift votes,
+                                // shared evenly by the headings
+  uint32_t shift_headings = 4;  // distinct clique headings whose translations are voted on
   // Heading-diverse cliques: after peeling, while fewer than shift_headings distinct headings were found,
   // up to this many more clique searches run with the consistency graph's edges at the found headings
   // removed (pair directions within heading_separation_deg), so each finds a clique at another heading.
