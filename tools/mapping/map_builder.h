@@ -11,7 +11,6 @@
 #include <cstdint>
 #include <functional>
 #include <string>
-#include <unordered_map>
 #include <vector>
 
 #include <Eigen/Geometry>
@@ -21,6 +20,7 @@
 #include "gsf/scan.h"
 #include "gsf/status.h"
 #include "mapping/semantic_layer.h"
+#include "mapping/tile_store.h"
 
 namespace gsf::mapping {
 
@@ -41,6 +41,7 @@ struct MapBuildStats {
   size_t bytes = 0;
   MapGeoreference georef = local_georeference();  // the map's origin and frame
   double seconds_accumulate = 0, seconds_cluster = 0, seconds_fields = 0, seconds_triangles = 0;
+  TileStoreStats tiles;  // the voxel accumulators' tiles: count, spills, reloads, peak resident
 };
 
 using Progress = std::function<void(const char* stage, uint64_t done, uint64_t total)>;
@@ -76,6 +77,16 @@ struct MapBuildConfig {
   bool origin_given = false;
   std::array<double, 3> origin = {0.0, 0.0, 0.0};
   std::string frame = "local";  // name of the poses' frame (1..31 printable ASCII), e.g. "utm-32N"
+  // Bounded memory (tile_store.h, tiled_stages.h): the voxel accumulators live in square tiles of
+  // tile_size m in the map-local x-y plane, at most max_resident_tiles of them in memory (the least
+  // recently used others spilled to a temporary file in spill_dir, or std::tmpfile() when empty), and
+  // build() runs the whole-map stages tile by tile with a halo. Peak memory is then the resident tiles
+  // plus one tile's stages and the map being built, whatever the length of the drive; the map is the
+  // same bytes as with tile_size = 0 (one tile, everything in memory). Revisits reload spilled tiles.
+  // A scan's 80 m range touches up to 16 tiles of 64 m: 24 resident tiles hold them without thrashing.
+  float tile_size = 64.0f;
+  uint32_t max_resident_tiles = 24;  // 0: no limit (nothing is spilled)
+  std::string spill_dir;
 };
 
 class MapBuilder {
@@ -91,11 +102,6 @@ class MapBuilder {
   Status build(std::vector<uint64_t>* blob, size_t* bytes, MapBuildStats* stats, const Progress& progress = nullptr);
 
  private:
-  struct Accum {
-    double sum[3] = {0, 0, 0};
-    double prob[kNumClasses] = {};
-    uint64_t count = 0;
-  };
   LocalizerConfig config_;  // options_.stages, with classes pointing at classes_
   ClassTable classes_;      // copy of the label set
   MapBuildConfig options_;
@@ -103,7 +109,7 @@ class MapBuilder {
   bool georef_valid_ = false;
   bool origin_fixed_ = false;
   MapBuildStats stats_;
-  std::unordered_map<uint64_t, Accum> voxels_;
+  TileStore store_;  // the map's voxel accumulators
   std::vector<uint8_t> scan_arena_;
 };
 
