@@ -80,11 +80,27 @@ Status MapBuilder::add_scan(const ScanView& scan, const Eigen::Isometry3d& frame
   s = layer.build(scan, nullptr);
   if (s != Status::Ok && s != Status::CapacityExceeded) return s;
   const double vs = config_.voxel.voxel_size;
-  for (uint32_t i = 0; i < layer.size(); ++i) {
+  const uint32_t n = layer.size();
+  scan_points_.resize(size_t(n) * 3);
+  scan_order_.resize(n);
+  for (uint32_t i = 0; i < n; ++i) {
     const Voxel& v = layer.voxel(i);
     const Eigen::Vector3d p = map_T_lidar * Eigen::Vector3d(v.centroid[0], v.centroid[1], v.centroid[2]);
-    VoxelAccum* a = store_.accumulator(voxel_key(p.x(), p.y(), p.z(), vs), &s);
-    if (!a) return s;
+    for (int k = 0; k < 3; ++k) scan_points_[3 * size_t(i) + k] = p[k];
+    scan_order_[i] = {voxel_key(p.x(), p.y(), p.z(), vs), i};
+  }
+  // Tile by tile, so a scan touches each tile once however small the resident budget. Stable: a map
+  // voxel still receives this scan's voxels in scan order, so its sums are those of a single-tile build.
+  if (store_.tile_voxels() > 0)
+    std::stable_sort(scan_order_.begin(), scan_order_.end(),
+                     [&](const std::pair<uint64_t, uint32_t>& a, const std::pair<uint64_t, uint32_t>& b) {
+                       return store_.tile_of(a.first) < store_.tile_of(b.first);
+                     });
+  for (const auto& [key, i] : scan_order_) {
+    const Voxel& v = layer.voxel(i);
+    const double* p = &scan_points_[3 * size_t(i)];
+    VoxelAccum* a = store_.accumulator(key, &s);
+    if (!a) return s;  // the spill file failed: this scan is partly added, the builder is unusable
     for (int k = 0; k < 3; ++k) a->sum[k] += p[k] * v.count;
     for (int c = 0; c < kNumClasses; ++c) a->prob[c] += double(v.prob[c]) * v.count;
     a->count += v.count;

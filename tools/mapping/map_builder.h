@@ -11,6 +11,7 @@
 #include <cstdint>
 #include <functional>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include <Eigen/Geometry>
@@ -94,10 +95,13 @@ class MapBuilder {
   explicit MapBuilder(const MapBuildConfig& config);
   // `frame_T_lidar`: the scan's pose in the map's frame (config.frame). InvalidArgument for a bad origin
   // or frame name in the config, InvalidInput for a non-finite pose or one beyond
-  // kMaxMapLocalCoordinate from the origin (the scan is then not added).
+  // kMaxMapLocalCoordinate from the origin (the scan is then not added), IoError when the tile spill
+  // file cannot be created or written (the builder is then unusable).
   Status add_scan(const ScanView& scan, const Eigen::Isometry3d& frame_T_lidar);
   // The map's georeference: final once the first scan was added (or at once when the origin was given).
   const MapGeoreference& georeference() const { return georef_; }
+  // The voxel accumulators' tiles so far (spills and reloads happen during add_scan too).
+  const TileStoreStats& tile_stats() const { return store_.stats(); }
   // Serialises the map into `blob` (16-byte aligned words); *bytes is the map's size.
   Status build(std::vector<uint64_t>* blob, size_t* bytes, MapBuildStats* stats, const Progress& progress = nullptr);
 
@@ -111,6 +115,8 @@ class MapBuilder {
   MapBuildStats stats_;
   TileStore store_;  // the map's voxel accumulators
   std::vector<uint8_t> scan_arena_;
+  std::vector<double> scan_points_;                        // per scan voxel: its centroid in the map frame
+  std::vector<std::pair<uint64_t, uint32_t>> scan_order_;  // per scan voxel: map voxel key, index
 };
 
 }  // namespace gsf::mapping

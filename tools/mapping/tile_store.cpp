@@ -74,13 +74,39 @@ Status TileStore::append_voxels(uint64_t id, int32_t x0, int32_t x1, int32_t y0,
   auto it = tiles_.find(id);
   if (it == tiles_.end()) return Status::Ok;
   Tile* tile = &it->second;
-  const Status s = make_resident(tile);
-  if (s != Status::Ok) return s;
-  tile->last_use = ++clock_;
   const bool all = config_.tile_voxels == 0;
-  for (const auto& kv : tile->voxels) {
-    const int32_t x = voxel_key_x(kv.first), y = voxel_key_y(kv.first);
-    if (all || (x >= x0 && x < x1 && y >= y0 && y < y1)) out->push_back(kv);
+  auto wanted = [&](uint64_t key) {
+    const int32_t x = voxel_key_x(key), y = voxel_key_y(key);
+    return all || (x >= x0 && x < x1 && y >= y0 && y < y1);
+  };
+  if (tile->resident) {
+    tile->last_use = ++clock_;
+    for (const auto& kv : tile->voxels)
+      if (wanted(kv.first)) out->push_back(kv);
+    return Status::Ok;
+  }
+  // Spilled: read the wanted records straight from the file (the tile stays out of memory, so loading
+  // a neighbourhood does not evict the tiles about to be read next).
+  return read_spilled(*tile, wanted, out);
+}
+
+template <typename Wanted>
+Status TileStore::read_spilled(const Tile& tile, const Wanted& wanted,
+                               std::vector<std::pair<uint64_t, VoxelAccum>>* out) {
+  if (std::fflush(spill_file_) != 0 || std::fseek(spill_file_, static_cast<long>(tile.spill_offset), SEEK_SET) != 0)
+    return Status::IoError;
+  std::vector<unsigned char> buf(kIoChunkRecords * kRecordBytes);
+  for (uint64_t done = 0; done < tile.spill_count;) {
+    const size_t n = static_cast<size_t>(std::min<uint64_t>(kIoChunkRecords, tile.spill_count - done));
+    if (std::fread(buf.data(), 1, n * kRecordBytes, spill_file_) != n * kRecordBytes) return Status::IoError;
+    for (size_t r = 0; r < n; ++r) {
+      std::pair<uint64_t, VoxelAccum> kv;
+      std::memcpy(&kv.first, buf.data() + r * kRecordBytes, sizeof kv.first);
+      if (!wanted(kv.first)) continue;
+      std::memcpy(&kv.second, buf.data() + r * kRecordBytes + sizeof kv.first, sizeof kv.second);
+      out->push_back(kv);
+    }
+    done += n;
   }
   return Status::Ok;
 }
@@ -171,22 +197,13 @@ Status TileStore::spill(Tile* tile) {
 }
 
 Status TileStore::reload(Tile* tile) {
-  if (std::fflush(spill_file_) != 0 || std::fseek(spill_file_, static_cast<long>(tile->spill_offset), SEEK_SET) != 0)
-    return Status::IoError;
   tile->voxels.reserve(tile->spill_count);
-  std::vector<unsigned char> buf(kIoChunkRecords * kRecordBytes);
-  for (uint64_t done = 0; done < tile->spill_count;) {
-    const size_t n = static_cast<size_t>(std::min<uint64_t>(kIoChunkRecords, tile->spill_count - done));
-    if (std::fread(buf.data(), 1, n * kRecordBytes, spill_file_) != n * kRecordBytes) return Status::IoError;
-    for (size_t r = 0; r < n; ++r) {
-      uint64_t key;
-      VoxelAccum a;
-      std::memcpy(&key, buf.data() + r * kRecordBytes, sizeof key);
-      std::memcpy(&a, buf.data() + r * kRecordBytes + sizeof key, sizeof a);
-      tile->voxels.emplace(key, a);
-    }
-    done += n;
-  }
+  std::vector<std::pair<uint64_t, VoxelAccum>> records;
+  records.reserve(tile->spill_count);
+  const Status s = read_spilled(
+      *tile, [](uint64_t) { return true; }, &records);
+  if (s != Status::Ok) return s;
+  for (const auto& kv : records) tile->voxels.emplace(kv.first, kv.second);
   tile->dirty = false;  // the spilled copy is still exact until the tile changes
   stats_.reloads++;
   return Status::Ok;

@@ -78,7 +78,7 @@ class TileStore {
   int32_t tile_voxels() const { return config_.tile_voxels; }
 
   // Appends the voxels of tile `id` whose voxel x, y lie in [x0, x1) x [y0, y1) (every voxel of a
-  // single-tile store) to *out, unsorted; the tile becomes resident.
+  // single-tile store) to *out, unsorted. A spilled tile is read from the file and stays spilled.
   Status append_voxels(uint64_t id, int32_t x0, int32_t x1, int32_t y0, int32_t y1,
                        std::vector<std::pair<uint64_t, VoxelAccum>>* out);
   uint64_t voxel_count() const;
@@ -100,6 +100,8 @@ class TileStore {
   Status evict_one(const Tile* keep);
   Status spill(Tile* tile);
   Status reload(Tile* tile);
+  template <typename Wanted>
+  Status read_spilled(const Tile& tile, const Wanted& wanted, std::vector<std::pair<uint64_t, VoxelAccum>>* out);
 
   TileStoreConfig config_;
   std::unordered_map<uint64_t, Tile> tiles_;
