@@ -117,9 +117,12 @@ Status MapBuilder::build(std::vector<uint64_t>* blob, size_t* bytes_out, MapBuil
   *bytes_out = 0;
   MapBuildStats st = stats_;
   st.georef = georef_;
-  // Instances, fields, refinement points and semantic layer, tile by tile (tiled_stages.h).
+  // Instances, fields, refinement points and semantic layer, tile by tile (tiled_stages.h). The map
+  // being built needs the memory of the resident tiles more: the halo loads read them from the file.
+  Status s = store_.spill_resident();
+  if (s != Status::Ok) return s;
   MapContent content;
-  Status s = build_map_content(store_, config_, classes_, options_, &content, &st, progress);
+  s = build_map_content(store_, config_, classes_, options_, &content, &st, progress);
   st.tiles = store_.stats();
   if (s != Status::Ok) return s;
   const uint32_t ni = static_cast<uint32_t>(content.instances.size());

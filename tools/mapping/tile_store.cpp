@@ -133,6 +133,15 @@ void TileStore::note_resident_voxels() {
   stats_.peak_resident_voxels = std::max(stats_.peak_resident_voxels, voxels);
 }
 
+Status TileStore::spill_resident() {
+  if (config_.max_resident_tiles == 0) return Status::Ok;
+  while (!resident_list_.empty()) {
+    const Status s = evict_one(nullptr);
+    if (s != Status::Ok) return s;
+  }
+  return Status::Ok;
+}
+
 Status TileStore::evict_one(const Tile* keep) {
   size_t victim_at = SIZE_MAX;
   for (size_t i = 0; i < resident_list_.size(); ++i)

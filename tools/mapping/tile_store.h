@@ -82,6 +82,9 @@ class TileStore {
   Status append_voxels(uint64_t id, int32_t x0, int32_t x1, int32_t y0, int32_t y1,
                        std::vector<std::pair<uint64_t, VoxelAccum>>* out);
   uint64_t voxel_count() const;
+  // Spills every resident tile (bounded stores only: max_resident_tiles > 0), so the memory goes to the
+  // next phase; append_voxels() reads them back from the file.
+  Status spill_resident();
   // Records the voxels now in memory for stats().peak_resident_voxels (the builder calls it per scan).
   void note_resident_voxels();
   const TileStoreStats& stats() const { return stats_; }
