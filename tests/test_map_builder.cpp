@@ -252,6 +252,13 @@ TEST_CASE("Whole-map capacities apply after the tiles, with the stages' ranking"
   CHECK(same_bytes(a, b));
 }
 
+TEST_CASE("The map's instance ceiling is the triangle builder's 21-bit ids, far beyond 65,535") {
+  const mapping::MapBuildConfig defaults;
+  CHECK(uint64_t(defaults.max_instances) + defaults.max_pole_instances <= mapping::kMaxMapInstances);
+  CHECK(defaults.max_instances > 1000000u);
+  CHECK(defaults.max_pole_instances > 1000000u);
+}
+
 TEST_CASE("A spill directory that cannot be written fails the scan with IoError") {
   mapping::MapBuildConfig c = tiled(32.0f, 1);
   c.spill_dir = "/nonexistent-gsf-spill-dir";

@@ -126,6 +126,7 @@ Status MapBuilder::build(std::vector<uint64_t>* blob, size_t* bytes_out, MapBuil
   st.tiles = store_.stats();
   if (s != Status::Ok) return s;
   const uint32_t ni = static_cast<uint32_t>(content.instances.size());
+  if (ni > kMaxMapInstances) return Status::CapacityExceeded;
   std::vector<MapInstance>& instances = content.instances;
   std::vector<float>& inputs = content.inputs;
   std::vector<float>& alpha = content.alpha;

@@ -1,11 +1,17 @@
 // Offline map building (host side; may use the heap). Scans with their poses are voxelised one by one
-// with the same VoxelLayer the localizer uses, and their voxels accumulate into one map-local voxel map
-// (class probabilities averaged, weighted by point counts). Poses come in the map's frame (e.g. UTM
-// metres); the builder moves them to the map-local frame by subtracting the map origin in double before
-// anything becomes float (georeference.h), so maps of GNSS-posed drives keep millimetres. build() then runs the
-// localizer's own stages over the whole map: instance clustering (an object seen from many scans is one instance), one
-// Gaussian semantic field per instance probed on its canonical grid, triangles and the hash index,
-// plus a downsampled point layer for refinement, and serialises the map blob (map_format.h).
+// with the same VoxelLayer the localizer uses, and their voxels accumulate into map-local voxels (class
+// probabilities averaged, weighted by point counts), kept per 64 m tile with at most
+// max_resident_tiles tiles in memory and the others spilled to a temporary file (tile_store.h), so
+// the builder's memory is set by its config, not by the length of the drive. Poses come in the map's
+// frame (e.g. UTM metres); the builder moves them to the map-local frame by subtracting the map origin
+// in double before anything becomes float (georeference.h), so maps of GNSS-posed drives keep
+// millimetres. build() then runs the localizer's own stages tile by tile with a halo (tiled_stages.h),
+// the same result as over the whole map at once: instance clustering (an object seen from many scans is
+// one instance), one Gaussian semantic field per instance probed on its canonical grid, a downsampled
+// point layer for refinement and the semantic layer; then triangles and the hash index over all
+// instances, and serialises the map blob (map_format.h). What still grows with the map is the map
+// itself: the instances' fields, refinement points, semantic layer and triangles, and the serialised
+// blob, both in memory while build() writes (docs/results.md, growth with map size).
 #pragma once
 #include <array>
 #include <cstdint>
@@ -52,6 +58,10 @@ using Progress = std::function<void(const char* stage, uint64_t done, uint64_t t
 // either side) and the semantic layer's tile keys (32768 tiles either side) reach well beyond it.
 constexpr double kMaxMapLocalCoordinate = 131072.0;
 
+// Instances a map can hold: TriangleBuilder packs three instance ids into one 63-bit key to find each
+// triangle once, 21 bits each. Map records and the builder's bookkeeping use 32-bit ids.
+constexpr uint32_t kMaxMapInstances = (1u << 21) - 1;
+
 // Everything the builder is configured by (one struct, no setters, no hidden constants).
 struct MapBuildConfig {
   // The localizer's stage settings and label set: the map is built with the same stages as the query, and
@@ -66,9 +76,10 @@ struct MapBuildConfig {
   float refine_voxel = 1.0f;  // m; cell of the refinement point layer (<= 0: no layer)
   // Capacities of the whole-map stages (no hidden constants; what they cut is counted in MapBuildStats).
   // Clustered instances kept, the largest by points first, and geometric poles / trunks kept, the best
-  // by score first: each at most 65535 (InstanceClustering's and PoleExtraction's limit, ClusterConfig).
-  uint32_t max_instances = 65535;
-  uint32_t max_pole_instances = 65535;
+  // by score first, both over the whole map. Together below kMaxMapInstances (build() refuses more
+  // with CapacityExceeded); the defaults split it (about 3,500 km of the demo world's road each).
+  uint32_t max_instances = kMaxMapInstances / 2 + 1;
+  uint32_t max_pole_instances = kMaxMapInstances / 2;
   // Semantic points gathered per map instance to fit its field (the localizer's match.max_field_points
   // is the query side's); beyond it the gather order (column by column) decides and the rest is counted.
   uint32_t max_field_points = 200000;
