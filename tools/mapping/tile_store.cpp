@@ -93,7 +93,7 @@ Status TileStore::append_voxels(uint64_t id, int32_t x0, int32_t x1, int32_t y0,
 template <typename Wanted>
 Status TileStore::read_spilled(const Tile& tile, const Wanted& wanted,
                                std::vector<std::pair<uint64_t, VoxelAccum>>* out) {
-  if (std::fflush(spill_file_) != 0 || std::fseek(spill_file_, static_cast<long>(tile.spill_offset), SEEK_SET) != 0)
+  if (std::fflush(spill_file_) != 0 || fseeko(spill_file_, static_cast<off_t>(tile.spill_offset), SEEK_SET) != 0)
     return Status::IoError;
   std::vector<unsigned char> buf(kIoChunkRecords * kRecordBytes);
   for (uint64_t done = 0; done < tile.spill_count;) {
@@ -180,9 +180,16 @@ Status TileStore::spill(Tile* tile) {
     }
     if (!spill_file_) return Status::IoError;
   }
-  // Append-only: a tile spilled again after a revisit gets a new copy (the old one is dead space,
-  // bounded by the revisits).
-  if (std::fseek(spill_file_, static_cast<long>(spill_end_), SEEK_SET) != 0) return Status::IoError;
+  // A tile spilled again (after a revisit) overwrites its old copy when that slot is big enough, else
+  // it gets a new slot at the end with a quarter of headroom for the next revisit's growth (the old
+  // slot is then dead space).
+  const uint64_t count = tile->voxels.size();
+  if (count > tile->spill_capacity) {
+    tile->spill_offset = spill_end_;
+    tile->spill_capacity = count + count / 4;
+    spill_end_ += tile->spill_capacity * kRecordBytes;
+  }
+  if (fseeko(spill_file_, static_cast<off_t>(tile->spill_offset), SEEK_SET) != 0) return Status::IoError;
   std::vector<unsigned char> buf;
   buf.reserve(kIoChunkRecords * kRecordBytes);
   for (const auto& kv : tile->voxels) {
@@ -196,9 +203,7 @@ Status TileStore::spill(Tile* tile) {
     }
   }
   if (!buf.empty() && std::fwrite(buf.data(), 1, buf.size(), spill_file_) != buf.size()) return Status::IoError;
-  tile->spill_offset = spill_end_;
-  tile->spill_count = tile->voxels.size();
-  spill_end_ += tile->spill_count * kRecordBytes;
+  tile->spill_count = count;
   tile->dirty = false;
   stats_.spills++;
   stats_.spill_bytes = spill_end_;

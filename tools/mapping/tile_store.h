@@ -49,7 +49,7 @@ struct TileStoreStats {
   uint32_t tiles = 0;
   uint64_t spills = 0;         // tiles written to the spill file (a dirty tile evicted)
   uint64_t reloads = 0;        // tiles read back from it
-  uint64_t spill_bytes = 0;    // size of the spill file
+  uint64_t spill_bytes = 0;    // size of the spill file (slots, with headroom for revisits)
   uint32_t peak_resident = 0;  // most tiles in memory at once
   uint64_t peak_resident_voxels = 0;
 };
@@ -95,8 +95,9 @@ class TileStore {
     bool resident = true;
     bool dirty = true;          // changed since its last spilled copy (or never spilled)
     uint64_t last_use = 0;      // LRU clock
-    uint64_t spill_offset = 0;  // latest spilled copy: byte offset and voxel count
+    uint64_t spill_offset = 0;  // latest spilled copy: byte offset, voxel count and slot size (voxels)
     uint64_t spill_count = 0;
+    uint64_t spill_capacity = 0;
     uint64_t voxel_count = 0;  // voxels, resident or not
   };
   Status make_resident(Tile* tile);
