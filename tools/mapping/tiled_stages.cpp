@@ -4,6 +4,7 @@
 #include <chrono>
 #include <cmath>
 #include <cstring>
+#include <deque>
 #include <unordered_map>
 #include <unordered_set>
 
@@ -34,7 +35,8 @@ struct Candidate {
   uint64_t key = 0;  // its lowest voxel key: the whole-map discovery order
   Instance in{};
   float score = 0.0f;  // poles: PoleInfo::score (the capacity ranks by it)
-  uint32_t row = 0;    // its rows in the field arrays
+  uint32_t chunk = 0;  // its field rows: the chunk of the tile that fitted it, and the row there
+  uint32_t row = 0;
   uint32_t inducing = 0;
   uint32_t field_points_dropped = 0;
   bool fit_ok = false;
@@ -46,31 +48,22 @@ struct RefineCandidate {
   float point[4];  // x, y, z, label
 };
 
-// Reorders rows of `a` in place so that row i becomes old row src[i] (src: a permutation of all rows),
-// then keeps the first `keep` rows. In place, so the field arrays are never held twice.
-void permute_rows(std::vector<float>* a, size_t row, const std::vector<uint32_t>& src, size_t keep) {
-  std::vector<bool> done(src.size(), false);
-  std::vector<float> tmp(row);
-  for (size_t start = 0; start < src.size(); ++start) {
-    if (done[start] || src[start] == start) {
-      done[start] = true;
-      continue;
-    }
-    std::copy_n(a->begin() + start * row, row, tmp.begin());
-    size_t j = start;
-    for (;;) {
-      done[j] = true;
-      const size_t k = src[j];
-      if (k == start) {
-        std::copy_n(tmp.begin(), row, a->begin() + j * row);
-        break;
-      }
-      std::copy_n(a->begin() + k * row, row, a->begin() + j * row);
-      j = k;
-    }
+// One tile's fitted fields, rows in the tile's candidate order. Fields grow per tile and are gathered
+// into exactly sized map-order arrays at the end, one array at a time, so the builder never holds a
+// doubled vector capacity or two whole copies of the fields.
+struct FieldChunk {
+  std::vector<float> inputs, alpha, mean, var;
+};
+
+// Map-order rows of one field array from the chunks (member `part`), freeing the chunks' rows as it goes.
+void gather_rows(std::vector<FieldChunk>* chunks, std::vector<float> FieldChunk::*part, size_t row,
+                 const std::vector<std::pair<uint32_t, uint32_t>>& rows, std::vector<float>* out) {
+  std::vector<float>(rows.size() * row).swap(*out);
+  for (size_t i = 0; i < rows.size(); ++i) {
+    const std::vector<float>& from = (*chunks)[rows[i].first].*part;
+    std::copy_n(from.begin() + size_t(rows[i].second) * row, row, out->begin() + i * row);
   }
-  a->resize(keep * row);
-  a->shrink_to_fit();
+  for (FieldChunk& c : *chunks) std::vector<float>().swap(c.*part);
 }
 
 }  // namespace
@@ -125,9 +118,12 @@ Status build_map_content(TileStore& store, const LocalizerConfig& config, const 
   make_probe_grid(fc, 0.0f, grid.data());
 
   std::vector<Candidate> clustered, poles;
-  std::vector<RefineCandidate> refine;
-  std::vector<std::pair<uint32_t, size_t>> semantic;  // tile key, offset in semantic_cells
-  std::vector<uint32_t> semantic_cells;
+  std::vector<FieldChunk> fields;  // per map tile with candidates
+  // Chunked (no doubled capacity, and consumed from the front when the refinement layer is made).
+  std::deque<RefineCandidate> refine;
+  // Per semantic tile: its key, and its cells in per-map-tile chunks (chunk, offset).
+  std::vector<std::pair<uint32_t, std::pair<uint32_t, size_t>>> semantic;
+  std::vector<std::vector<uint32_t>> semantic_chunks;
   const size_t semantic_tile_size = size_t(options.semantic_layer.tile_cells) * options.semantic_layer.tile_cells;
   uint64_t map_voxels = 0;
   double seconds_cluster = 0, seconds_fields = 0;
@@ -135,13 +131,15 @@ Status build_map_content(TileStore& store, const LocalizerConfig& config, const 
   // A candidate's field: the same per-instance fit as the localizer's query fields (gaussian_field.h),
   // into rows initialised as a whole-map build initialises them.
   auto fit_field = [&](const VoxelLayer& layer, Candidate* c) {
-    c->row = static_cast<uint32_t>(out->var.size() / G);
-    out->inputs.resize(out->inputs.size() + size_t(M) * 3, 0.0f);
-    out->alpha.resize(out->alpha.size() + size_t(M) * D, 0.0f);
-    out->mean.resize(out->mean.size() + size_t(G) * D, 0.0f);
-    out->var.resize(out->var.size() + G, fc.signal_variance);
-    float* in_i = out->inputs.data() + size_t(c->row) * M * 3;
-    float* al_i = out->alpha.data() + size_t(c->row) * M * D;
+    FieldChunk& chunk = fields.back();
+    c->chunk = static_cast<uint32_t>(fields.size() - 1);
+    c->row = static_cast<uint32_t>(chunk.var.size() / G);
+    chunk.inputs.resize(chunk.inputs.size() + size_t(M) * 3, 0.0f);
+    chunk.alpha.resize(chunk.alpha.size() + size_t(M) * D, 0.0f);
+    chunk.mean.resize(chunk.mean.size() + size_t(G) * D, 0.0f);
+    chunk.var.resize(chunk.var.size() + G, fc.signal_variance);
+    float* in_i = chunk.inputs.data() + size_t(c->row) * M * 3;
+    float* al_i = chunk.alpha.data() + size_t(c->row) * M * D;
     const FieldGather gather{max_pts, ids.data(), xyz.data(), targets.data(), gl.data()};
     uint32_t m = 0, got = 0, total = 0;
     const Status fit =
@@ -151,8 +149,8 @@ Status build_map_content(TileStore& store, const LocalizerConfig& config, const 
     if (c->fit_ok) {
       c->inducing = m;
       FieldView f{in_i, al_i, m};
-      solver.probe(f, chol.data(), grid.data(), G, out->mean.data() + size_t(c->row) * G * D,
-                   out->var.data() + size_t(c->row) * G, nullptr);
+      solver.probe(f, chol.data(), grid.data(), G, chunk.mean.data() + size_t(c->row) * G * D,
+                   chunk.var.data() + size_t(c->row) * G, nullptr);
     }
   };
 
@@ -263,6 +261,7 @@ Status build_map_content(TileStore& store, const LocalizerConfig& config, const 
     seconds_cluster += seconds_since(t_cluster);
 
     const auto t_fields = std::chrono::steady_clock::now();
+    if (clustered.size() > clustered_before || poles.size() > poles_before) fields.emplace_back();
     for (size_t k = clustered_before; k < clustered.size(); ++k) fit_field(layer, &clustered[k]);
     for (size_t k = poles_before; k < poles.size(); ++k) fit_field(layer, &poles[k]);
     seconds_fields += seconds_since(t_fields);
@@ -307,8 +306,8 @@ Status build_map_content(TileStore& store, const LocalizerConfig& config, const 
       std::vector<uint32_t> sem_keys, sem_cells;
       build_semantic_layer(layer, options.semantic_layer, &sem_keys, &sem_cells, keep);
       for (size_t k = 0; k < sem_keys.size(); ++k)
-        semantic.emplace_back(sem_keys[k], semantic_cells.size() + k * semantic_tile_size);
-      semantic_cells.insert(semantic_cells.end(), sem_cells.begin(), sem_cells.end());
+        semantic.push_back({sem_keys[k], {uint32_t(semantic_chunks.size()), k * semantic_tile_size}});
+      if (!sem_keys.empty()) semantic_chunks.push_back(std::move(sem_cells));
     }
     if (progress) progress("tiles", t + 1, tiles.size());
   }
@@ -343,20 +342,14 @@ Status build_map_content(TileStore& store, const LocalizerConfig& config, const 
   const uint32_t ni = static_cast<uint32_t>(found.size());
   st->instances = ni;
 
-  // Field rows into map order (rows of dropped instances go last and are cut).
-  const size_t rows = out->var.size() / G;
-  std::vector<uint32_t> src(rows);
-  std::vector<bool> used(rows, false);
-  for (uint32_t i = 0; i < ni; ++i) {
-    src[i] = found[i].row;
-    used[found[i].row] = true;
-  }
-  for (size_t r = 0, at = ni; r < rows; ++r)
-    if (!used[r]) src[at++] = static_cast<uint32_t>(r);
-  permute_rows(&out->inputs, size_t(M) * 3, src, ni);
-  permute_rows(&out->alpha, size_t(M) * D, src, ni);
-  permute_rows(&out->mean, size_t(G) * D, src, ni);
-  permute_rows(&out->var, G, src, ni);
+  // Field rows into map order (rows of dropped instances are left out).
+  std::vector<std::pair<uint32_t, uint32_t>> rows(ni);
+  for (uint32_t i = 0; i < ni; ++i) rows[i] = {found[i].chunk, found[i].row};
+  gather_rows(&fields, &FieldChunk::inputs, size_t(M) * 3, rows, &out->inputs);
+  gather_rows(&fields, &FieldChunk::alpha, size_t(M) * D, rows, &out->alpha);
+  gather_rows(&fields, &FieldChunk::mean, size_t(G) * D, rows, &out->mean);
+  gather_rows(&fields, &FieldChunk::var, G, rows, &out->var);
+  std::vector<FieldChunk>().swap(fields);
   out->instances.resize(ni);
   out->centroids.resize(size_t(ni) * 3);
   out->labels.resize(ni);
@@ -381,19 +374,24 @@ Status build_map_content(TileStore& store, const LocalizerConfig& config, const 
   std::sort(refine.begin(), refine.end(), [](const RefineCandidate& a, const RefineCandidate& b) {
     return a.cell != b.cell ? a.cell < b.cell : a.voxel < b.voxel;
   });
-  for (size_t k = 0; k < refine.size(); ++k)
-    if (k == 0 || refine[k].cell != refine[k - 1].cell)
-      out->refine.insert(out->refine.end(), refine[k].point, refine[k].point + 4);
-  std::vector<RefineCandidate>().swap(refine);
+  size_t cells = 0;
+  for (size_t k = 0; k < refine.size(); ++k) cells += k == 0 || refine[k].cell != refine[k - 1].cell;
+  out->refine.reserve(cells * 4);
+  for (uint64_t last = 0, first = 1; !refine.empty(); refine.pop_front(), first = 0) {
+    if (!first && refine.front().cell == last) continue;
+    last = refine.front().cell;
+    out->refine.insert(out->refine.end(), refine.front().point, refine.front().point + 4);
+  }
   st->refine_points = static_cast<uint32_t>(out->refine.size() / 4);
 
   std::sort(semantic.begin(), semantic.end());
   out->semantic_keys.reserve(semantic.size());
   out->semantic_cells.reserve(semantic.size() * semantic_tile_size);
-  for (const auto& [key, offset] : semantic) {
+  for (const auto& [key, at] : semantic) {
+    const std::vector<uint32_t>& chunk = semantic_chunks[at.first];
     out->semantic_keys.push_back(key);
-    out->semantic_cells.insert(out->semantic_cells.end(), semantic_cells.begin() + offset,
-                               semantic_cells.begin() + offset + semantic_tile_size);
+    out->semantic_cells.insert(out->semantic_cells.end(), chunk.begin() + at.second,
+                               chunk.begin() + at.second + semantic_tile_size);
   }
   st->semantic_tiles = static_cast<uint32_t>(out->semantic_keys.size());
   return Status::Ok;
