@@ -1,10 +1,11 @@
 #!/usr/bin/env bash
-# Cost growth with map size: the same kind of queries against maps of 1x, 2x, 4x and 16x the demo world's
-# road length (city blocks 4x3 = 3.5 km, 6x4 -> ~2x, 8x6 -> ~4x, 19x14 -> ~16x = 57 km). Per map: map bytes,
-# bytes/km, instances, triangles, the builder's peak RSS and time (build-map's summary: getrusage ru_maxrss
-# of the build-map process; the builder streams in tiles, MapBuildConfig / build-map --tile-size), and for
-# the first N queries (same roads in every world) the per-query time, candidates (triangle match
-# candidates, median), the median match-stage time, workspace and success of the instance-only and GSF rows.
+# Cost growth with map size: the same kind of queries against maps of 1x, 2x, 4x and 16x the demo
+# world's road length (city blocks 4x3 = 3.5 km, 6x4 -> ~2x, 8x6 -> ~4x, 19x14 -> ~16x = 57 km). Per map:
+# map bytes, bytes/km, instances, triangles, the builder's peak RSS (build-map's summary: getrusage
+# ru_maxrss of the build-map process; the builder streams in tiles, build-map --tile-size) and CPU time
+# (user + sys), and for the first N queries (same roads in every world) success, median and p95 time,
+# candidates per query (triangle match candidates, median), the median match-stage time and the
+# workspace of the instance-only and GSF rows.
 # Usage: bench/scale.sh [OUT_DIR] [N_QUERIES]
 # Environment: SCALES (default "1x 2x 4x"; any of 1x 2x 4x 16x), GSF (a gsf binary to use instead of
 # building build/release, e.g. a copy for a long background run), BUILD_MAP_ARGS (extra build-map options).
@@ -21,7 +22,7 @@ else
   gsf=$GSF
 fi
 mkdir -p "$out"
-printf "| scale | blocks | road km | map MB | MB/km | build peak RSS MB | build s | instances | triangles | mode | success | median ms | p95 ms | candidates/query | match ms | workspace MB |\n"
+printf "| scale | blocks | road km | map MB | MB/km | build peak RSS MB | build CPU s | instances | triangles | mode | success | median ms | p95 ms | candidates/query | match ms | workspace MB |\n"
 printf "| --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- |\n"
 for s in $scales; do
   case $s in
@@ -34,10 +35,11 @@ for s in $scales; do
   set -- $spec
   d="$out/$1"
   [ -f "$d/dataset/meta.json" ] || $gsf simulate --out "$d/dataset" --blocks-x "$2" --blocks-y "$3" --quiet >/dev/null
-  t0=$(date +%s.%N)
+  # CPU seconds (user + sys), not wall time: the run may share the machine.
   # shellcheck disable=SC2086
-  $gsf build-map --dataset "$d/dataset" --out "$d/map.gsfmap" --quiet ${BUILD_MAP_ARGS:-} > "$d/build-map.txt"
-  secs=$(echo "$(date +%s.%N) - $t0" | bc)
+  /usr/bin/time -f "%U %S" -o "$d/build-map.time" \
+    $gsf build-map --dataset "$d/dataset" --out "$d/map.gsfmap" --quiet ${BUILD_MAP_ARGS:-} > "$d/build-map.txt"
+  secs=$(awk '{print $1 + $2}' "$d/build-map.time")
   rss=$(sed -n 's/.*peak RSS \([0-9]*\) MB.*/\1/p' "$d/build-map.txt")
   $gsf evaluate --map "$d/map.gsfmap" --dataset "$d/dataset" --mode instance,gsf --limit "$nq" --quiet --json "$d/results.json" >/dev/null
   python3 - "$d/results.json" "$1" "$2x$3" "$rss" "$secs" <<'PY'
