@@ -18,6 +18,10 @@
 #include "gsf/map_format.h"
 #include "mapping/tiled_stages.h"
 
+#if defined(__GLIBC__)
+#include <malloc.h>
+#endif
+
 namespace gsf::mapping {
 namespace {
 
@@ -121,10 +125,18 @@ Status MapBuilder::build(std::vector<uint64_t>* blob, size_t* bytes_out, MapBuil
   // being built needs the memory of the resident tiles more: the halo loads read them from the file.
   Status s = store_.spill_resident();
   if (s != Status::Ok) return s;
+#if defined(__GLIBC__)
+  malloc_trim(0);  // the resident tiles were many small blocks: give their pages back
+#endif
   MapContent content;
   s = build_map_content(store_, config_, classes_, options_, &content, &st, progress);
   st.tiles = store_.stats();
   if (s != Status::Ok) return s;
+#if defined(__GLIBC__)
+  // The tile stages freed many small blocks (candidates, per-tile chunks) spread through the heap: hand
+  // their pages back before the triangles and the serialised map are allocated, or the peak counts them.
+  malloc_trim(0);
+#endif
   const uint32_t ni = static_cast<uint32_t>(content.instances.size());
   if (ni > kMaxMapInstances) return Status::CapacityExceeded;
   std::vector<MapInstance>& instances = content.instances;
