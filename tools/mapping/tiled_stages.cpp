@@ -4,7 +4,6 @@
 #include <chrono>
 #include <cmath>
 #include <cstring>
-#include <deque>
 #include <unordered_map>
 #include <unordered_set>
 
@@ -119,8 +118,27 @@ Status build_map_content(TileStore& store, const LocalizerConfig& config, const 
 
   std::vector<Candidate> clustered, poles;
   std::vector<FieldChunk> fields;  // per map tile with candidates
-  // Chunked (no doubled capacity, and consumed from the front when the refinement layer is made).
-  std::deque<RefineCandidate> refine;
+  // Refinement candidates not yet final, and the final points in cell order (chunks of 1 M floats, so
+  // the layer never sits in a doubled vector capacity).
+  std::vector<RefineCandidate> refine;
+  std::vector<std::vector<float>> refine_chunks(1);
+  size_t refine_floats = 0;
+  // Tiles come x-major: once a column of tiles is done, no later tile owns a voxel left of its right
+  // edge (less a voxel for rounding), so cells left of it are final: per cell the candidate with the
+  // lowest voxel key, emitted in cell order (keys are x-major too). Only a column's candidates wait.
+  auto flush_refine = [&](uint64_t limit) {
+    std::sort(refine.begin(), refine.end(), [](const RefineCandidate& a, const RefineCandidate& b) {
+      return a.cell != b.cell ? a.cell < b.cell : a.voxel < b.voxel;
+    });
+    size_t k = 0;
+    for (; k < refine.size() && refine[k].cell < limit; ++k) {
+      if (k > 0 && refine[k].cell == refine[k - 1].cell) continue;
+      if (refine_chunks.back().size() >= (1u << 20)) refine_chunks.emplace_back();
+      refine_chunks.back().insert(refine_chunks.back().end(), refine[k].point, refine[k].point + 4);
+      refine_floats += 4;
+    }
+    refine.erase(refine.begin(), refine.begin() + k);
+  };
   // Per semantic tile: its key, and its cells in per-map-tile chunks (chunk, offset).
   std::vector<std::pair<uint32_t, std::pair<uint32_t, size_t>>> semantic;
   std::vector<std::vector<uint32_t>> semantic_chunks;
@@ -309,8 +327,15 @@ Status build_map_content(TileStore& store, const LocalizerConfig& config, const 
         semantic.push_back({sem_keys[k], {uint32_t(semantic_chunks.size()), k * semantic_tile_size}});
       if (!sem_keys.empty()) semantic_chunks.push_back(std::move(sem_cells));
     }
+    if (tile > 0 && options.refine_voxel > 0.0f && t + 1 < tiles.size() && TileStore::tile_x(tiles[t + 1]) != tx) {
+      const double edge = (double(tx + 1) * tile - 1.0) * vs;  // m, a voxel inside the column's right edge
+      const int64_t cell_x = static_cast<int64_t>(std::floor(edge / options.refine_voxel)) + (1 << 20);
+      if (cell_x > 0 && cell_x < (1 << 21)) flush_refine(uint64_t(cell_x) << 42);
+    }
     if (progress) progress("tiles", t + 1, tiles.size());
   }
+  flush_refine(UINT64_MAX);
+  std::vector<RefineCandidate>().swap(refine);
   if (map_voxels == 0) return Status::InvalidInput;
   st->map_voxels = static_cast<uint32_t>(map_voxels);
 
@@ -370,17 +395,12 @@ Status build_map_content(TileStore& store, const LocalizerConfig& config, const 
   st->seconds_fields = seconds_fields;
   if (progress) progress("clustered instances", ni, ni);
 
-  // Refinement points: per cell the candidate with the lowest voxel key, in cell order.
-  std::sort(refine.begin(), refine.end(), [](const RefineCandidate& a, const RefineCandidate& b) {
-    return a.cell != b.cell ? a.cell < b.cell : a.voxel < b.voxel;
-  });
-  size_t cells = 0;
-  for (size_t k = 0; k < refine.size(); ++k) cells += k == 0 || refine[k].cell != refine[k - 1].cell;
-  out->refine.reserve(cells * 4);
-  for (uint64_t last = 0, first = 1; !refine.empty(); refine.pop_front(), first = 0) {
-    if (!first && refine.front().cell == last) continue;
-    last = refine.front().cell;
-    out->refine.insert(out->refine.end(), refine.front().point, refine.front().point + 4);
+  // Refinement points, already final and in cell order: into one exactly sized array.
+  std::vector<float>(refine_floats).swap(out->refine);
+  for (size_t k = 0, at = 0; k < refine_chunks.size(); ++k) {
+    std::copy(refine_chunks[k].begin(), refine_chunks[k].end(), out->refine.begin() + at);
+    at += refine_chunks[k].size();
+    std::vector<float>().swap(refine_chunks[k]);
   }
   st->refine_points = static_cast<uint32_t>(out->refine.size() / 4);
 
