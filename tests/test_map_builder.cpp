@@ -1,6 +1,8 @@
-// MapBuilder's georeferencing: the origin it picks (first pose rounded half up, or the one given), the
-// frame name and class table id it records, and that subtracting the origin in double makes a drive
-// posed in UTM-size coordinates give the same map as the same drive posed locally.
+// MapBuilder: streaming in tiles (a tiled build with a tiny budget, its spills and a loop back into
+// spilled tiles give the same map bytes as a single-tile build) and georeferencing: the origin it picks
+// (first pose rounded half up, or the one given), the frame name and class table id it records, and that
+// subtracting the origin in double makes a drive posed in UTM-size coordinates give the same map as the
+// same drive posed locally.
 #include <catch2/catch.hpp>
 
 #include <algorithm>
@@ -50,18 +52,24 @@ struct Built {
   const uint8_t* sections() const { return reinterpret_cast<const uint8_t*>(blob.data()) + 624; }
 };
 
-Built build(const mapping::MapBuildConfig& options, const Eigen::Vector3d& shift) {
+// Builds the drive's scans in `order` (default: each once, in drive order).
+Built build(const mapping::MapBuildConfig& options, const Eigen::Vector3d& shift,
+            const std::vector<uint32_t>& order = {}, mapping::TileStoreStats* after_scans = nullptr) {
   mapping::MapBuildConfig config = options;
   config.stages.max_scan_points = 262144;
   config.road_length_m = 120.0f;
   mapping::MapBuilder builder(config);
   Built b;
-  for (const auto& s : drive().scans) {
+  std::vector<uint32_t> frames = order;
+  for (uint32_t f = 0; frames.size() < drive().scans.size() && order.empty(); ++f) frames.push_back(f);
+  for (uint32_t f : frames) {
+    const auto& s = drive().scans[f];
     Eigen::Isometry3d pose = s.truth;
     pose.translation() += shift;
     b.add = builder.add_scan(s.view(), pose);
     if (b.add != Status::Ok) return b;
   }
+  if (after_scans) *after_scans = builder.tile_stats();
   b.build = builder.build(&b.blob, &b.bytes, &b.stats);
   if (b.build == Status::Ok) b.build = load_map(b.blob.data(), b.bytes, &b.map);
   return b;
@@ -163,4 +171,98 @@ TEST_CASE("The builder's capacities are options: what they cut is counted, the r
   for (uint32_t i = 0; i < full.map.counts.instances; ++i)
     larger_in_full += full.map.instances[i].point_count > smallest_kept;
   CHECK(larger_in_full <= 5);
+}
+
+namespace {
+
+// One tile for the whole map, everything in memory: the reference the streaming builds must equal.
+mapping::MapBuildConfig single_tile() {
+  mapping::MapBuildConfig c;
+  c.tile_size = 0.0f;
+  c.max_resident_tiles = 0;
+  return c;
+}
+
+mapping::MapBuildConfig tiled(float tile_size, uint32_t resident) {
+  mapping::MapBuildConfig c;
+  c.tile_size = tile_size;
+  c.max_resident_tiles = resident;
+  return c;
+}
+
+bool same_bytes(const Built& a, const Built& b) {
+  return a.bytes == b.bytes && std::memcmp(a.blob.data(), b.blob.data(), a.bytes) == 0;
+}
+
+}  // namespace
+
+TEST_CASE("A streaming build with tiny tiles and a two-tile budget spills and reloads, and gives the same map bytes") {
+  const Built whole = build(single_tile(), Eigen::Vector3d::Zero());
+  REQUIRE(whole.build == Status::Ok);
+  REQUIRE(whole.stats.instances > 10);
+  CHECK(whole.stats.tiles.tiles == 1);
+  CHECK(whole.stats.tiles.spills == 0);
+  // 10 m tiles: many cars and most field neighbourhoods cross tile borders; an instance is built by the
+  // tile of its lowest voxel with its neighbours loaded. A second size moves the borders.
+  for (float tile : {10.0f, 26.0f}) {
+    INFO("tile " << tile << " m");
+    const Built streamed = build(tiled(tile, 2), Eigen::Vector3d::Zero());
+    REQUIRE(streamed.build == Status::Ok);
+    CHECK(streamed.stats.tiles.tiles > 8);
+    CHECK(streamed.stats.tiles.peak_resident <= 2);
+    CHECK(streamed.stats.tiles.spills > 0);
+    CHECK(streamed.stats.tiles.reloads > 0);
+    CHECK(streamed.stats.map_voxels == whole.stats.map_voxels);
+    CHECK(streamed.stats.instances == whole.stats.instances);
+    CHECK(same_bytes(streamed, whole));
+  }
+}
+
+TEST_CASE("A loop back into spilled tiles continues their sums: the same bytes as in memory") {
+  // Out along the drive and back over its start: by then the start's tiles were spilled.
+  std::vector<uint32_t> loop;
+  for (uint32_t f = 0; f < drive().scans.size(); ++f) loop.push_back(f);
+  for (uint32_t f = 0; f < 4; ++f) loop.push_back(f);
+  const Built whole = build(single_tile(), Eigen::Vector3d::Zero(), loop);
+  mapping::TileStoreStats during;
+  const Built streamed = build(tiled(16.0f, 2), Eigen::Vector3d::Zero(), loop, &during);
+  REQUIRE(whole.build == Status::Ok);
+  REQUIRE(streamed.build == Status::Ok);
+  CHECK(during.spills > 0);
+  CHECK(during.reloads > 0);  // the revisit read spilled tiles back before build()
+  CHECK(same_bytes(streamed, whole));
+  // The revisit counts: its points are in the map (instances have more points than without the loop).
+  const Built once = build(single_tile(), Eigen::Vector3d::Zero());
+  REQUIRE(once.build == Status::Ok);
+  CHECK_FALSE(same_bytes(once, whole));
+}
+
+TEST_CASE("Whole-map capacities apply after the tiles, with the stages' ranking") {
+  mapping::MapBuildConfig whole = single_tile();
+  whole.max_instances = 7;
+  mapping::MapBuildConfig streamed = tiled(16.0f, 2);
+  streamed.max_instances = 7;
+  const Built a = build(whole, Eigen::Vector3d::Zero());
+  const Built b = build(streamed, Eigen::Vector3d::Zero());
+  REQUIRE(a.build == Status::Ok);
+  REQUIRE(b.build == Status::Ok);
+  CHECK(a.stats.instances == 7);
+  CHECK(b.stats.instances_dropped == a.stats.instances_dropped);
+  CHECK(b.stats.instances_dropped > 0);
+  CHECK(same_bytes(a, b));
+}
+
+TEST_CASE("The map's instance ceiling is the triangle builder's 21-bit ids, far beyond 65,535") {
+  const mapping::MapBuildConfig defaults;
+  CHECK(uint64_t(defaults.max_instances) + defaults.max_pole_instances <= mapping::kMaxMapInstances);
+  CHECK(defaults.max_instances > 1000000u);
+  CHECK(defaults.max_pole_instances > 1000000u);
+}
+
+TEST_CASE("A spill directory that cannot be written fails the scan with IoError") {
+  mapping::MapBuildConfig c = tiled(32.0f, 1);
+  c.spill_dir = "/nonexistent-gsf-spill-dir";
+  CHECK(build(c, Eigen::Vector3d::Zero()).add == Status::IoError);
+  c.spill_dir = "/tmp";
+  CHECK(build(c, Eigen::Vector3d::Zero()).build == Status::Ok);
 }

@@ -1,6 +1,7 @@
 // gsf build-map --dataset DIR --sequence 00 --out MAP [--logits synthetic|none] [--classes SET] [--origin X,Y[,Z]]
-// [--frame NAME]
+// [--frame NAME] [--tile-size M] [--resident-tiles N] [--spill-dir DIR]
 #include <cstdio>
+#include <cstdlib>
 
 #include "args.h"
 #include "commands.h"
@@ -25,6 +26,13 @@ int cmd_build_map(int argc, char** argv) {
        "(default: the first pose's translation rounded half up to a whole metre)",
        ""},
       {"frame", "name of the poses' frame recorded in the map, 1..31 printable ASCII (e.g. utm-32N)", "local"},
+      {"tile-size",
+       "bounded memory: voxel accumulators in square tiles of this side (m), the map built tile by tile; 0: "
+       "one tile (the whole map in memory). The map is the same either way",
+       "64"},
+      {"resident-tiles", "tiles held in memory at once; the others are spilled to a temporary file (0: no limit)",
+       "24"},
+      {"spill-dir", "directory of the spill file (default: the system's temporary directory)", ""},
       {"quiet", "no progress on stderr", "", true},
   };
   if (wants_help(argc, argv)) {
@@ -51,6 +59,18 @@ int cmd_build_map(int argc, char** argv) {
     options.origin = {o[0], o[1], o[2]};
   }
   options.frame = args.get("frame");
+  {
+    char* end = nullptr;
+    const std::string tile = args.get("tile-size"), resident = args.get("resident-tiles");
+    options.tile_size = std::strtof(tile.c_str(), &end);
+    if (end == tile.c_str() || *end != '\0' || !(options.tile_size >= 0.0f && options.tile_size <= 100000.0f))
+      return usage_error("build-map", "--tile-size must be a number of metres >= 0, got '" + tile + "'");
+    const long n = std::strtol(resident.c_str(), &end, 10);
+    if (end == resident.c_str() || *end != '\0' || n < 0 || n > 1000000)
+      return usage_error("build-map", "--resident-tiles must be a count >= 0, got '" + resident + "'");
+    options.max_resident_tiles = static_cast<uint32_t>(n);
+    options.spill_dir = args.get("spill-dir");
+  }
   MapGeoreference probe;
   if (!set_frame_name(&probe, options.frame.c_str()))
     return usage_error("build-map", "--frame must be 1..31 printable ASCII characters, got '" + options.frame + "'");
@@ -92,6 +112,14 @@ int cmd_build_map(int argc, char** argv) {
       args.get("out").c_str(), labels.name.c_str(), st.scans, st.map_voxels, st.instances, st.pole_instances,
       st.triangles, st.index_keys, st.refine_points, bytes, road > 0 ? bytes / 1e6 / (road / 1000.0) : 0.0, road,
       st.seconds_accumulate, st.seconds_cluster, st.seconds_fields, st.seconds_triangles, peak_rss_bytes() / 1e6);
+  if (st.tiles.tiles > 1)
+    std::printf(
+        "  tiles: %u of %.0f m, at most %u resident (peak %llu voxels), %llu spills, %llu reloads, %.0f MB "
+        "spill file\n",
+        st.tiles.tiles, options.tile_size, st.tiles.peak_resident,
+        static_cast<unsigned long long>(st.tiles.peak_resident_voxels),
+        static_cast<unsigned long long>(st.tiles.spills), static_cast<unsigned long long>(st.tiles.reloads),
+        st.tiles.spill_bytes / 1e6);
   std::printf("  origin %.3f, %.3f, %.3f m in frame '%s' (map coordinates are relative to it)\n", st.georef.origin[0],
               st.georef.origin[1], st.georef.origin[2], st.georef.frame);
   if (st.instances_dropped > 0 || st.field_points_dropped > 0)

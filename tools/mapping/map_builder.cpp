@@ -17,21 +17,17 @@
 #include "gsf/detail/voxel_layer.h"
 #include "gsf/map_format.h"
 #include "mapping/map_writer.h"
+#include "mapping/tiled_stages.h"
+
+#if defined(__GLIBC__)
+#include <malloc.h>
+#endif
 
 namespace gsf::mapping {
 namespace {
 
 double seconds_since(std::chrono::steady_clock::time_point t0) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-}
-
-// Key of the map-local voxel holding p: 21 bits per axis, so 2^20 voxels either side of the origin
-// (419 km at 0.4 m) before keys wrap; add_scan keeps poses within kMaxMapLocalCoordinate of it.
-uint64_t voxel_key(const Eigen::Vector3d& p, double size) {
-  const int64_t x = static_cast<int64_t>(std::floor(p.x() / size)) + (1 << 20);
-  const int64_t y = static_cast<int64_t>(std::floor(p.y() / size)) + (1 << 20);
-  const int64_t z = static_cast<int64_t>(std::floor(p.z() / size)) + (1 << 20);
-  return (uint64_t(x & 0x1FFFFF) << 42) | (uint64_t(y & 0x1FFFFF) << 21) | uint64_t(z & 0x1FFFFF);
 }
 
 // Per-scan voxel capacity of the builder (the localizer's default before the 16 MiB budget; 14 MB of
@@ -45,10 +41,23 @@ struct Workspace {
   explicit Workspace(size_t bytes) : memory(bytes / 8 + 2), arena(memory.data(), memory.size() * 8) {}
 };
 
+TileStoreConfig tile_store_config(const MapBuildConfig& config) {
+  TileStoreConfig t;
+  if (config.tile_size > 0.0f && config.stages.voxel.voxel_size > 0.0f)
+    t.tile_voxels = std::max(1, static_cast<int>(std::lround(config.tile_size / config.stages.voxel.voxel_size)));
+  t.max_resident_tiles = config.max_resident_tiles;
+  t.spill_dir = config.spill_dir;
+  return t;
+}
+
 }  // namespace
 
 MapBuilder::MapBuilder(const MapBuildConfig& config)
-    : config_(config.stages), classes_(label_set(config.stages)), options_(config), georef_(local_georeference()) {
+    : config_(config.stages),
+      classes_(label_set(config.stages)),
+      options_(config),
+      georef_(local_georeference()),
+      store_(tile_store_config(config)) {
   if (config_.classes) config_.classes = &classes_;
   // Map scans are voxelised on the host before accumulation: at least kMapScanMaxVoxels per scan, so the
   // on-board default (voxel.max_voxels 32k, sized for the 16 MiB workspace) never truncates a map scan.
@@ -83,14 +92,32 @@ Status MapBuilder::add_scan(const ScanView& scan, const Eigen::Isometry3d& frame
   s = layer.build(scan, nullptr);
   if (s != Status::Ok && s != Status::CapacityExceeded) return s;
   const double vs = config_.voxel.voxel_size;
-  for (uint32_t i = 0; i < layer.size(); ++i) {
+  const uint32_t n = layer.size();
+  scan_points_.resize(size_t(n) * 3);
+  scan_order_.resize(n);
+  for (uint32_t i = 0; i < n; ++i) {
     const Voxel& v = layer.voxel(i);
     const Eigen::Vector3d p = map_T_lidar * Eigen::Vector3d(v.centroid[0], v.centroid[1], v.centroid[2]);
-    Accum& a = voxels_[voxel_key(p, vs)];
-    for (int k = 0; k < 3; ++k) a.sum[k] += p[k] * v.count;
-    for (int c = 0; c < kNumClasses; ++c) a.prob[c] += double(v.prob[c]) * v.count;
-    a.count += v.count;
+    for (int k = 0; k < 3; ++k) scan_points_[3 * size_t(i) + k] = p[k];
+    scan_order_[i] = {voxel_key(p.x(), p.y(), p.z(), vs), i};
   }
+  // Tile by tile, so a scan touches each tile once however small the resident budget. Stable: a map
+  // voxel still receives this scan's voxels in scan order, so its sums are those of a single-tile build.
+  if (store_.tile_voxels() > 0)
+    std::stable_sort(scan_order_.begin(), scan_order_.end(),
+                     [&](const std::pair<uint64_t, uint32_t>& a, const std::pair<uint64_t, uint32_t>& b) {
+                       return store_.tile_of(a.first) < store_.tile_of(b.first);
+                     });
+  for (const auto& [key, i] : scan_order_) {
+    const Voxel& v = layer.voxel(i);
+    const double* p = &scan_points_[3 * size_t(i)];
+    VoxelAccum* a = store_.accumulator(key, &s);
+    if (!a) return s;  // the spill file failed: this scan is partly added, the builder is unusable
+    for (int k = 0; k < 3; ++k) a->sum[k] += p[k] * v.count;
+    for (int c = 0; c < kNumClasses; ++c) a->prob[c] += double(v.prob[c]) * v.count;
+    a->count += v.count;
+  }
+  store_.note_resident_voxels();
   stats_.scans++;
   stats_.points += scan.count;
   stats_.seconds_accumulate += seconds_since(t0);
@@ -102,126 +129,29 @@ Status MapBuilder::build(std::vector<uint64_t>* blob, size_t* bytes_out, MapBuil
   *bytes_out = 0;
   MapBuildStats st = stats_;
   st.georef = georef_;
-  // Deterministic voxel order (unordered_map iteration order is not).
-  std::vector<uint64_t> keys;
-  keys.reserve(voxels_.size());
-  for (const auto& kv : voxels_) keys.push_back(kv.first);
-  std::sort(keys.begin(), keys.end());
-  const uint32_t nv = static_cast<uint32_t>(keys.size());
-  st.map_voxels = nv;
-  if (nv == 0) return Status::InvalidInput;
-
-  // The map as one "scan" of voxel centroids with log-probabilities as logits: the same VoxelLayer then
-  // reproduces the accumulated voxels (same grid, one point each) and the localizer's stages apply.
-  std::vector<float> pts(size_t(nv) * 4), logits(size_t(nv) * kNumClasses);
-  std::vector<uint32_t> labels(nv);
-  for (uint32_t i = 0; i < nv; ++i) {
-    const Accum& a = voxels_[keys[i]];
-    int best = 0;
-    for (int k = 0; k < 3; ++k) pts[4 * i + k] = static_cast<float>(a.sum[k] / a.count);
-    pts[4 * i + 3] = 0.0f;
-    for (int c = 0; c < kNumClasses; ++c) {
-      const double p = a.prob[c] / a.count;
-      logits[size_t(i) * kNumClasses + c] = static_cast<float>(std::log(p + 1e-6));
-      if (a.prob[c] > a.prob[best]) best = c;
-    }
-    labels[i] = kitti_from_class(best);
-  }
-  VoxelConfig vc = config_.voxel;
-  vc.min_range = 0.0f;
-  vc.max_range = 1e7f;
-  vc.max_voxels = nv + 16;
-  vc.max_columns = nv + 16;
-  ClusterConfig cc = config_.cluster;
-  cc.max_instances = options_.max_instances;
-  cc.instance_classes = classes_.instance_classes();
-  if (!config_.classes) cc.instance_classes = config_.cluster.instance_classes;
-  PoleConfig pc = effective_pole_config(config_);
-  pc.max_instances = options_.max_pole_instances;
-  const bool poles_on = (pc.pole_hosts | pc.trunk_hosts) != 0;
-  const auto t_cluster = std::chrono::steady_clock::now();
-  Workspace ws(VoxelLayer::required_bytes(vc) + InstanceClustering::required_bytes(cc, vc.max_voxels) +
-               (poles_on ? PoleExtraction::required_bytes(pc, vc.max_voxels) : 0) + 4096);
-  VoxelLayer layer;  // reads the accumulated voxels' library classes as SemanticKITTI ids (below)
-  InstanceClustering clusters;
-  PoleExtraction poles;
-  if (layer.bind(ws.arena, vc) != Status::Ok || clusters.bind(ws.arena, cc, vc.max_voxels) != Status::Ok ||
-      (poles_on && poles.bind(ws.arena, pc, vc.max_voxels) != Status::Ok))
-    return Status::InvalidArgument;
-  clusters.set_classes(&classes_);
-  ScanView sv;
-  sv.points = pts.data();
-  sv.stride = 4;
-  sv.labels = labels.data();
-  sv.logits = logits.data();
-  sv.logit_dim = kNumClasses;
-  sv.count = nv;
-  Status s = layer.build(sv, nullptr);
+  // Instances, fields, refinement points and semantic layer, tile by tile (tiled_stages.h). The map
+  // being built needs the memory of the resident tiles more: the halo loads read them from the file.
+  Status s = store_.spill_resident();
   if (s != Status::Ok) return s;
-  ClusterStats cs;
-  s = clusters.build(layer, &cs);
-  if (s != Status::Ok && s != Status::CapacityExceeded) return s;
-  st.instances_dropped += cs.dropped_capacity;
-  // All map instances: the clustered ones, then the geometric poles / trunks in discovery order.
-  std::vector<Instance> found(clusters.instances(), clusters.instances() + clusters.size());
-  if (poles_on) {
-    PoleStats ps;
-    s = poles.build(layer, &ps);
-    if (s != Status::Ok && s != Status::CapacityExceeded) return s;
-    st.instances_dropped += ps.dropped_capacity;
-    found.insert(found.end(), poles.instances(), poles.instances() + poles.size());
-    st.pole_instances = poles.size();
-  }
-  const uint32_t ni = static_cast<uint32_t>(found.size());
-  st.instances = ni;
-  st.seconds_cluster = seconds_since(t_cluster);
-  if (progress) progress("clustered instances", ni, ni);
-
-  // Fields: fit each instance's GP on its neighbourhood, probe the canonical grid.
-  const auto t_fields = std::chrono::steady_clock::now();
-  const FieldConfig& fc = config_.field;
-  const uint32_t M = fc.inducing_points, G = grid_points(fc), D = kNumClasses;
-  const uint32_t max_pts = options_.max_field_points;
-  Workspace fws(FieldSolver::required_bytes(fc, max_pts) + 4096);
-  FieldSolver solver;
-  if (solver.bind(fws.arena, fc, max_pts) != Status::Ok) return Status::InvalidArgument;
-  std::vector<MapInstance> instances(ni);
-  // Each field's inducing inputs and weights are needed only to probe its grid (the map stores the grid).
-  std::vector<float> inputs(size_t(M) * 3), alpha(size_t(M) * D);
-  std::vector<float> mean(size_t(ni) * G * D, 0.0f), var(size_t(ni) * G, fc.signal_variance);
-  std::vector<uint32_t> ids(max_pts);
-  std::vector<float> xyz(size_t(max_pts) * 3), targets(size_t(max_pts) * D), chol(size_t(M) * M), grid(size_t(G) * 3);
-  std::vector<uint8_t> gl(max_pts);
-  std::vector<float> centroids(size_t(ni) * 3);
-  std::vector<uint8_t> inst_labels(ni);
-  make_probe_grid(fc, 0.0f, grid.data());
-  for (uint32_t i = 0; i < ni; ++i) {
-    const Instance& in = found[i];
-    MapInstance& mi = instances[i];
-    std::memset(&mi, 0, sizeof(mi));
-    for (int k = 0; k < 3; ++k) mi.centroid[k] = centroids[3 * i + k] = in.centroid[k];
-    mi.stability = in.stability;
-    mi.point_count = in.point_count;
-    mi.label = inst_labels[i] = in.label;
-    st.instances_by_class[in.label]++;
-    // The same per-instance fit as the localizer's query fields (gaussian_field.h).
-    const FieldGather gather{max_pts, ids.data(), xyz.data(), targets.data(), gl.data()};
-    uint32_t m = 0, got = 0, total = 0;
-    float* in_i = inputs.data();
-    float* al_i = alpha.data();
-    const Status fit =
-        fit_instance_field(solver, layer, in.centroid, gather, in_i, al_i, chol.data(), &m, &got, &total);
-    st.field_points_dropped += total - got;
-    if (fit == Status::Ok) {
-      FieldView f{in_i, al_i, m};
-      solver.probe(f, chol.data(), grid.data(), G, mean.data() + size_t(i) * G * D, var.data() + size_t(i) * G,
-                   nullptr);
-    } else {
-      st.fields_failed++;
-    }
-    if (progress && (i % 200 == 0 || i + 1 == ni)) progress("fields", i + 1, ni);
-  }
-  st.seconds_fields = seconds_since(t_fields);
+#if defined(__GLIBC__)
+  malloc_trim(0);  // the resident tiles were many small blocks: give their pages back
+#endif
+  MapContent content;
+  s = build_map_content(store_, config_, classes_, options_, &content, &st, progress);
+  st.tiles = store_.stats();
+  if (s != Status::Ok) return s;
+#if defined(__GLIBC__)
+  // The tile stages freed many small blocks (candidates, per-tile chunks) spread through the heap: hand
+  // their pages back before the triangles and the serialised map are allocated, or the peak counts them.
+  malloc_trim(0);
+#endif
+  const uint32_t ni = static_cast<uint32_t>(content.instances.size());
+  if (ni > kMaxMapInstances) return Status::CapacityExceeded;
+  std::vector<MapInstance>& instances = content.instances;
+  std::vector<float>& mean = content.mean;
+  std::vector<float>& var = content.var;
+  std::vector<float>& centroids = content.centroids;
+  std::vector<uint8_t>& inst_labels = content.labels;
 
   // Triangles and the hash index over all map instances.
   const auto t_tri = std::chrono::steady_clock::now();
@@ -248,34 +178,9 @@ Status MapBuilder::build(std::vector<uint64_t>* blob, size_t* bytes_out, MapBuil
   st.seconds_triangles = seconds_since(t_tri);
   if (progress) progress("triangles", nt, nt);
 
-  // Refinement layer: long-term structure downsampled to refine_voxel.
-  std::vector<float> refine;
-  if (options_.refine_voxel > 0.0f) {
-    std::unordered_map<uint64_t, std::pair<Eigen::Vector3d, uint32_t>> cells;
-    std::vector<uint64_t> order;
-    for (uint32_t i = 0; i < layer.size(); ++i) {
-      const Voxel& v = layer.voxel(i);
-      if (classes_.stability(v.label) < 1.0f) continue;
-      const Eigen::Vector3d p(v.centroid[0], v.centroid[1], v.centroid[2]);
-      const uint64_t k = voxel_key(p, options_.refine_voxel);
-      auto it = cells.find(k);
-      if (it == cells.end()) {
-        cells.emplace(k, std::make_pair(p, uint32_t(v.label)));
-        order.push_back(k);
-      }
-    }
-    std::sort(order.begin(), order.end());
-    for (uint64_t k : order) {
-      const auto& c = cells[k];
-      refine.insert(refine.end(), {float(c.first.x()), float(c.first.y()), float(c.first.z())});
-    }
-  }
-  st.refine_points = static_cast<uint32_t>(refine.size() / 3);
-
-  // Semantic layer for whole-scan verification of pose hypotheses.
-  std::vector<uint32_t> sem_keys, sem_cells;
-  if (options_.semantic_layer.cell > 0.0f) build_semantic_layer(layer, options_.semantic_layer, &sem_keys, &sem_cells);
-  st.semantic_tiles = static_cast<uint32_t>(sem_keys.size());
+  std::vector<float>& refine = content.refine;
+  std::vector<uint32_t>& sem_keys = content.semantic_keys;
+  std::vector<uint32_t>& sem_cells = content.semantic_cells;
 
   MapContents view;
   view.georef = georef_;

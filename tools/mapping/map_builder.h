@@ -1,17 +1,23 @@
 // Offline map building (host side; may use the heap). Scans with their poses are voxelised one by one
-// with the same VoxelLayer the localizer uses, and their voxels accumulate into one map-local voxel map
-// (class probabilities averaged, weighted by point counts). Poses come in the map's frame (e.g. UTM
-// metres); the builder moves them to the map-local frame by subtracting the map origin in double before
-// anything becomes float (georeference.h), so maps of GNSS-posed drives keep millimetres. build() then runs the
-// localizer's own stages over the whole map: instance clustering (an object seen from many scans is one instance), one
-// Gaussian semantic field per instance probed on its canonical grid, triangles and the hash index,
-// plus a downsampled point layer for refinement, and serialises the map blob (map_format.h).
+// with the same VoxelLayer the localizer uses, and their voxels accumulate into map-local voxels (class
+// probabilities averaged, weighted by point counts), kept per 64 m tile with at most
+// max_resident_tiles tiles in memory and the others spilled to a temporary file (tile_store.h), so
+// the builder's memory is set by its config, not by the length of the drive. Poses come in the map's
+// frame (e.g. UTM metres); the builder moves them to the map-local frame by subtracting the map origin
+// in double before anything becomes float (georeference.h), so maps of GNSS-posed drives keep
+// millimetres. build() then runs the localizer's own stages tile by tile with a halo (tiled_stages.h),
+// the same result as over the whole map at once: instance clustering (an object seen from many scans is
+// one instance), one Gaussian semantic field per instance probed on its canonical grid, a downsampled
+// point layer for refinement and the semantic layer; then triangles and the hash index over all
+// instances, and serialises the map blob (map_format.h). What still grows with the map is the map
+// itself: the instances' fields, refinement points, semantic layer and triangles, and the serialised
+// blob, both in memory while build() writes (docs/results.md, growth with map size).
 #pragma once
 #include <array>
 #include <cstdint>
 #include <functional>
 #include <string>
-#include <unordered_map>
+#include <utility>
 #include <vector>
 
 #include <Eigen/Geometry>
@@ -21,6 +27,7 @@
 #include "gsf/scan.h"
 #include "gsf/status.h"
 #include "mapping/semantic_layer.h"
+#include "mapping/tile_store.h"
 
 namespace gsf::mapping {
 
@@ -42,6 +49,7 @@ struct MapBuildStats {
   size_t bytes = 0;
   MapGeoreference georef = local_georeference();  // the map's origin and frame
   double seconds_accumulate = 0, seconds_cluster = 0, seconds_fields = 0, seconds_triangles = 0;
+  TileStoreStats tiles;  // the voxel accumulators' tiles: count, spills, reloads, peak resident
 };
 
 using Progress = std::function<void(const char* stage, uint64_t done, uint64_t total)>;
@@ -50,6 +58,10 @@ using Progress = std::function<void(const char* stage, uint64_t done, uint64_t t
 // steps there are 1/64 m, still far below the 0.4 m voxels, and the builder's voxel keys (2^20 voxels
 // either side) and the semantic layer's tile keys (32768 tiles either side) reach well beyond it.
 constexpr double kMaxMapLocalCoordinate = 131072.0;
+
+// Instances a map can hold: TriangleBuilder packs three instance ids into one 63-bit key to find each
+// triangle once, 21 bits each. Map records and the builder's bookkeeping use 32-bit ids.
+constexpr uint32_t kMaxMapInstances = (1u << 21) - 1;
 
 // Everything the builder is configured by (one struct, no setters, no hidden constants).
 struct MapBuildConfig {
@@ -67,9 +79,10 @@ struct MapBuildConfig {
   float refine_voxel = 1.0f;
   // Capacities of the whole-map stages (no hidden constants; what they cut is counted in MapBuildStats).
   // Clustered instances kept, the largest by points first, and geometric poles / trunks kept, the best
-  // by score first: each at most 65535 (InstanceClustering's and PoleExtraction's limit, ClusterConfig).
-  uint32_t max_instances = 65535;
-  uint32_t max_pole_instances = 65535;
+  // by score first, both over the whole map. Together below kMaxMapInstances (build() refuses more
+  // with CapacityExceeded); the defaults split it (about 3,500 km of the demo world's road each).
+  uint32_t max_instances = kMaxMapInstances / 2 + 1;
+  uint32_t max_pole_instances = kMaxMapInstances / 2;
   // Semantic points gathered per map instance to fit its field (the localizer's match.max_field_points
   // is the query side's); beyond it the gather order (column by column) decides and the rest is counted.
   uint32_t max_field_points = 200000;
@@ -79,6 +92,16 @@ struct MapBuildConfig {
   bool origin_given = false;
   std::array<double, 3> origin = {0.0, 0.0, 0.0};
   std::string frame = "local";  // name of the poses' frame (1..31 printable ASCII), e.g. "utm-32N"
+  // Bounded memory (tile_store.h, tiled_stages.h): the voxel accumulators live in square tiles of
+  // tile_size m in the map-local x-y plane, at most max_resident_tiles of them in memory (the least
+  // recently used others spilled to a temporary file in spill_dir, or std::tmpfile() when empty), and
+  // build() runs the whole-map stages tile by tile with a halo. Peak memory is then the resident tiles
+  // plus one tile's stages and the map being built, whatever the length of the drive; the map is the
+  // same bytes as with tile_size = 0 (one tile, everything in memory). Revisits reload spilled tiles.
+  // A scan's 80 m range touches up to 16 tiles of 64 m: 24 resident tiles hold them without thrashing.
+  float tile_size = 64.0f;
+  uint32_t max_resident_tiles = 24;  // 0: no limit (nothing is spilled)
+  std::string spill_dir;
 };
 
 class MapBuilder {
@@ -86,19 +109,17 @@ class MapBuilder {
   explicit MapBuilder(const MapBuildConfig& config);
   // `frame_T_lidar`: the scan's pose in the map's frame (config.frame). InvalidArgument for a bad origin
   // or frame name in the config, InvalidInput for a non-finite pose or one beyond
-  // kMaxMapLocalCoordinate from the origin (the scan is then not added).
+  // kMaxMapLocalCoordinate from the origin (the scan is then not added), IoError when the tile spill
+  // file cannot be created or written (the builder is then unusable).
   Status add_scan(const ScanView& scan, const Eigen::Isometry3d& frame_T_lidar);
   // The map's georeference: final once the first scan was added (or at once when the origin was given).
   const MapGeoreference& georeference() const { return georef_; }
+  // The voxel accumulators' tiles so far (spills and reloads happen during add_scan too).
+  const TileStoreStats& tile_stats() const { return store_.stats(); }
   // Serialises the map into `blob` (16-byte aligned words); *bytes is the map's size.
   Status build(std::vector<uint64_t>* blob, size_t* bytes, MapBuildStats* stats, const Progress& progress = nullptr);
 
  private:
-  struct Accum {
-    double sum[3] = {0, 0, 0};
-    double prob[kNumClasses] = {};
-    uint64_t count = 0;
-  };
   LocalizerConfig config_;  // options_.stages, with classes pointing at classes_
   ClassTable classes_;      // copy of the label set
   MapBuildConfig options_;
@@ -106,8 +127,10 @@ class MapBuilder {
   bool georef_valid_ = false;
   bool origin_fixed_ = false;
   MapBuildStats stats_;
-  std::unordered_map<uint64_t, Accum> voxels_;
+  TileStore store_;  // the map's voxel accumulators
   std::vector<uint8_t> scan_arena_;
+  std::vector<double> scan_points_;                        // per scan voxel: its centroid in the map frame
+  std::vector<std::pair<uint64_t, uint32_t>> scan_order_;  // per scan voxel: map voxel key, index
 };
 
 }  // namespace gsf::mapping

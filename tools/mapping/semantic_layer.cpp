@@ -10,7 +10,7 @@
 namespace gsf::mapping {
 
 uint32_t build_semantic_layer(const VoxelLayer& voxels, const SemanticLayerConfig& c, std::vector<uint32_t>* keys,
-                              std::vector<uint32_t>* cells) {
+                              std::vector<uint32_t>* cells, const std::function<bool(int64_t, int64_t)>& keep_tile) {
   keys->clear();
   cells->clear();
   const uint32_t T = c.tile_cells;
@@ -27,6 +27,7 @@ uint32_t build_semantic_layer(const VoxelLayer& voxels, const SemanticLayerConfi
       ++skipped;
       continue;
     }
+    if (keep_tile && !keep_tile(static_cast<int64_t>(fx), static_cast<int64_t>(fy))) continue;
     auto& t = tiles[key];
     if (t.empty()) t.assign(size_t(T) * T, std::array<uint32_t, kNumClasses>{});
     const int64_t cx = std::clamp<int64_t>(static_cast<int64_t>((v.centroid[0] - fx * tile) / c.cell), 0, T - 1);

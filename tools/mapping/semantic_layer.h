@@ -3,6 +3,7 @@
 // classes) or of its above-ground voxels (every other class). Host side; uses the heap.
 #pragma once
 #include <cstdint>
+#include <functional>
 #include <vector>
 
 #include "gsf/detail/voxel_layer.h"
@@ -17,9 +18,12 @@ struct SemanticLayerConfig {
 };
 
 // Writes sorted tile keys and their cells (tile_cells^2 masks each). Voxels outside the representable
-// tile range are skipped; returns how many.
+// tile range are skipped; returns how many. keep_tile (if given) picks the tiles (x, y tile coordinates)
+// to build; voxels of the others are ignored (the tiled map builder builds each tile once, from the
+// map tile that owns it).
 uint32_t build_semantic_layer(const VoxelLayer& voxels, const SemanticLayerConfig& config, std::vector<uint32_t>* keys,
-                              std::vector<uint32_t>* cells);
+                              std::vector<uint32_t>* cells,
+                              const std::function<bool(int64_t, int64_t)>& keep_tile = nullptr);
 
 // The stored form (semantic_grid.h, format v4): per tile its distinct masks in order of first appearance
 // (row-major) and each cell's index into them. `cells` is tile_count x tile_cells^2 dense masks.

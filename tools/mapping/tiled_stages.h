@@ -1,0 +1,53 @@
+// The map builder's whole-map stages run tile by tile, so their memory is one tile and its halo, not
+// the world. Per tile of the TileStore, the voxels of the tile and of its neighbours within the halo
+// are loaded (sorted by key, as the whole map would be) into one VoxelLayer; the localizer's stages run
+// on it (instance clustering, geometric poles, per-instance fields, refinement points, semantic layer)
+// and the tile keeps what it owns:
+//  - an instance (cluster or pole chain) belongs to the tile holding its lowest voxel key (the voxel the
+//    whole-map stages discover it from), so an instance spanning a tile border is built once, from the
+//    same voxels in the same order as in a whole-map build;
+//  - a refinement cell takes its first voxel in key order, chosen among the tiles' owned voxels (cells
+//    are final, and emitted, once the column of tiles left of them is done: tiles come x-major);
+//  - a semantic-layer tile belongs to the first existing map tile (in id order) it overlaps.
+// The halo (tile_halo_m) covers what those read around an owned voxel: an instance's extent plus the
+// larger of its clustering tolerance and the field radius, a semantic tile, and a pole chain's reach.
+// So the result equals a single-tile (unbounded) build byte for byte, as long as no rejected cluster or
+// pole chain is larger than the halo while a truncated part of it would pass (a cluster is rejected for
+// extent above max_extent, and the halo is wider than that).
+// Capacities (max_instances, max_pole_instances) are applied over the whole map after the tiles, with the
+// stages' own rules (largest by points; poles best by score), so capped maps match too.
+#pragma once
+#include <cstdint>
+#include <vector>
+
+#include "gsf/class_table.h"
+#include "gsf/config.h"
+#include "gsf/map_format.h"
+#include "mapping/map_builder.h"
+#include "mapping/tile_store.h"
+
+namespace gsf::mapping {
+
+// What the map is made of before triangles and serialisation, in map order: the clustered instances
+// (by their lowest voxel key), then the geometric poles / trunks (likewise), each with its field rows;
+// the refinement points (by refinement cell key) and the semantic layer's tiles (by key).
+struct MapContent {
+  std::vector<MapInstance> instances;
+  std::vector<float> centroids;  // 3 per instance
+  std::vector<uint8_t> labels;   // per instance
+  std::vector<float> mean, var;  // per instance G x D, G: the probed field grid
+  std::vector<float> refine;     // x, y, z per point
+  std::vector<uint32_t> semantic_keys, semantic_cells;
+};
+
+// Halo (m) around a map tile that the tile's stages read beyond it (see above).
+double tile_halo_m(const LocalizerConfig& config, const ClassTable& classes, const MapBuildConfig& options);
+
+// Builds the content from the store's voxels; fills map_voxels, instances, pole_instances,
+// instances_dropped, field_points_dropped, fields_failed, instances_by_class, refine_points,
+// semantic_tiles and the cluster and field times of *stats. InvalidInput for an empty store.
+Status build_map_content(TileStore& store, const LocalizerConfig& config, const ClassTable& classes,
+                         const MapBuildConfig& options, MapContent* out, MapBuildStats* stats,
+                         const Progress& progress);
+
+}  // namespace gsf::mapping
