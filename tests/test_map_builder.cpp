@@ -266,3 +266,17 @@ TEST_CASE("A spill directory that cannot be written fails the scan with IoError"
   c.spill_dir = "/tmp";
   CHECK(build(c, Eigen::Vector3d::Zero()).build == Status::Ok);
 }
+
+TEST_CASE("Map scans are voxelised with at least scan_max_voxels; what a smaller capacity drops is counted") {
+  mapping::MapBuildConfig full;
+  full.stages.voxel.max_voxels = 500;  // an on-board setting far below a scan's voxels
+  const Built b = build(full, Eigen::Vector3d::Zero());
+  REQUIRE(b.build == Status::Ok);
+  CHECK(b.stats.scan_points_dropped == 0);  // raised to scan_max_voxels (100k) for map scans
+  mapping::MapBuildConfig small = full;
+  small.scan_max_voxels = 500;
+  const Built s = build(small, Eigen::Vector3d::Zero());
+  REQUIRE(s.build == Status::Ok);
+  CHECK(s.stats.scan_points_dropped > 0);
+  CHECK(s.stats.map_voxels < b.stats.map_voxels);
+}

@@ -122,11 +122,12 @@ int cmd_build_map(int argc, char** argv) {
         st.tiles.spill_bytes / 1e6);
   std::printf("  origin %.3f, %.3f, %.3f m in frame '%s' (map coordinates are relative to it)\n", st.georef.origin[0],
               st.georef.origin[1], st.georef.origin[2], st.georef.frame);
-  if (st.instances_dropped > 0 || st.field_points_dropped > 0)
+  if (st.instances_dropped > 0 || st.field_points_dropped > 0 || st.scan_points_dropped > 0)
     std::printf(
-        "  capacity: %u instances and %llu field points beyond the builder's capacities were left out "
-        "(MapBuildConfig)\n",
-        st.instances_dropped, static_cast<unsigned long long>(st.field_points_dropped));
+        "  capacity: %u instances, %llu field points and %llu scan points (beyond scan_max_voxels) were left "
+        "out (MapBuildConfig)\n",
+        st.instances_dropped, static_cast<unsigned long long>(st.field_points_dropped),
+        static_cast<unsigned long long>(st.scan_points_dropped));
   return 0;
 }
 

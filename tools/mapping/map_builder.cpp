@@ -30,10 +30,6 @@ double seconds_since(std::chrono::steady_clock::time_point t0) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
 }
 
-// Per-scan voxel capacity of the builder (the localizer's default before the 16 MiB budget; 14 MB of
-// host memory).
-constexpr uint32_t kMapScanMaxVoxels = 100000;
-
 // Arena-backed stage objects sized for a whole map.
 struct Workspace {
   std::vector<uint64_t> memory;
@@ -59,9 +55,8 @@ MapBuilder::MapBuilder(const MapBuildConfig& config)
       georef_(local_georeference()),
       store_(tile_store_config(config)) {
   if (config_.classes) config_.classes = &classes_;
-  // Map scans are voxelised on the host before accumulation: at least kMapScanMaxVoxels per scan, so the
-  // on-board default (voxel.max_voxels 32k, sized for the 16 MiB workspace) never truncates a map scan.
-  config_.voxel.max_voxels = std::max(config_.voxel.max_voxels, kMapScanMaxVoxels);
+  // Map scans are voxelised on the host: at least scan_max_voxels per scan (MapBuildConfig).
+  config_.voxel.max_voxels = std::max(config_.voxel.max_voxels, config.scan_max_voxels);
   scan_arena_.resize(VoxelLayer::required_bytes(config_.voxel) + 64);
   georef_valid_ = set_frame_name(&georef_, options_.frame.c_str());
   for (int k = 0; k < 3; ++k) georef_.origin[k] = options_.origin[k];
@@ -89,8 +84,10 @@ Status MapBuilder::add_scan(const ScanView& scan, const Eigen::Isometry3d& frame
   Status s = layer.bind(arena, config_.voxel);
   if (s != Status::Ok) return s;
   layer.set_classes(config_.classes);
-  s = layer.build(scan, nullptr);
+  VoxelStats vst;
+  s = layer.build(scan, &vst);
   if (s != Status::Ok && s != Status::CapacityExceeded) return s;
+  stats_.scan_points_dropped += vst.dropped_points;
   const double vs = config_.voxel.voxel_size;
   const uint32_t n = layer.size();
   scan_points_.resize(size_t(n) * 3);

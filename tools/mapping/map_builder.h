@@ -39,6 +39,7 @@ struct MapBuildStats {
   uint32_t pole_instances = 0;        // of which geometric poles / trunks (pole_extraction.h)
   uint32_t instances_dropped = 0;     // clustered instances and poles beyond the config's capacities
   uint64_t field_points_dropped = 0;  // semantic points beyond max_field_points, over all instances
+  uint64_t scan_points_dropped = 0;   // scan points in voxels beyond scan_max_voxels, over all scans
   uint32_t instances_by_class[kNumClasses] = {};
   uint32_t triangles = 0;
   uint32_t index_keys = 0;
@@ -86,6 +87,10 @@ struct MapBuildConfig {
   // Semantic points gathered per map instance to fit its field (the localizer's match.max_field_points
   // is the query side's); beyond it the gather order (column by column) decides and the rest is counted.
   uint32_t max_field_points = 200000;
+  // Voxels per mapping scan: each scan is voxelised with the localizer's VoxelLayer before accumulation,
+  // with at least this capacity, so the on-board default (stages.voxel.max_voxels, sized for the 16 MiB
+  // workspace) never truncates a map scan (100k: 14 MB of host memory; truncation is counted).
+  uint32_t scan_max_voxels = 100000;
   // The map origin in the frame of the poses. Not given: the first scan's pose translation rounded (half
   // up) to a whole metre. A whole-metre origin keeps the subtraction exact for poses posed to float
   // precision, so the same drive shifted by whole metres gets the same map-local frame and the same map.
