@@ -17,11 +17,11 @@
 #include "field_ablation.h"
 #include "gsf/detail/gaussian_field.h"
 #include "gsf/detail/instance_clustering.h"
+#include "gsf/detail/map_quantization.h"
 #include "gsf/detail/sparsify.h"
 #include "gsf/detail/voxel_layer.h"
 #include "gsf/detail/wasserstein.h"
 #include "gsf/map_format.h"
-#include "gsf/map_quantization.h"
 #include "tiny_world.h"
 
 using namespace gsf;

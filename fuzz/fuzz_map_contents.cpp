@@ -9,8 +9,8 @@
 
 #include "fuzz_seed_map.h"
 #include "gsf/detail/crc32.h"
+#include "gsf/detail/map_quantization.h"
 #include "gsf/map_format.h"
-#include "gsf/map_quantization.h"
 
 namespace {
 

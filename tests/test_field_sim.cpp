@@ -7,9 +7,9 @@
 #include "arena_buffer.h"
 #include "field_ablation.h"
 #include "gsf/detail/instance_clustering.h"
+#include "gsf/detail/map_quantization.h"
 #include "gsf/detail/voxel_layer.h"
 #include "gsf/detail/wasserstein.h"
-#include "gsf/map_quantization.h"
 #include "tiny_world.h"
 
 using namespace gsf;

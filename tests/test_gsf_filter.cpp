@@ -9,8 +9,8 @@
 #include "arena_buffer.h"
 #include "gsf/detail/gaussian_field.h"
 #include "gsf/detail/gsf_filter.h"
+#include "gsf/detail/map_quantization.h"
 #include "gsf/map_format.h"
-#include "gsf/map_quantization.h"
 
 using namespace gsf;
 

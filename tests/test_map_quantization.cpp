@@ -7,9 +7,9 @@
 #include <cstdint>
 #include <vector>
 
+#include "gsf/detail/map_quantization.h"
 #include "gsf/detail/refine_layer.h"
 #include "gsf/map_format.h"
-#include "gsf/map_quantization.h"
 #include "gsf/semantic_classes.h"
 #include "mapping/refine_layer_builder.h"
 

@@ -2,8 +2,8 @@
 
 #include <cmath>
 
+#include "gsf/detail/map_quantization.h"
 #include "gsf/detail/wasserstein.h"
-#include "gsf/map_quantization.h"
 
 namespace gsf {
 namespace {

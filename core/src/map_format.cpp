@@ -4,7 +4,7 @@
 #include <cstring>
 
 #include "gsf/detail/crc32.h"
-#include "gsf/map_quantization.h"
+#include "gsf/detail/map_quantization.h"
 #include "gsf/semantic_classes.h"
 
 namespace gsf {

@@ -1,6 +1,6 @@
 #include "mapping/map_writer.h"
 
-#include "gsf/map_quantization.h"
+#include "gsf/detail/map_quantization.h"
 #include "mapping/refine_layer_builder.h"
 #include "mapping/semantic_layer.h"
 
