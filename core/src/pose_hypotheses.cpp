@@ -118,8 +118,11 @@ Status PoseHypotheses::generate(const float* a, const float* b, const float* w, 
   // 1. Peeled maximum cliques (the first is the paper's answer).
   graph_.build(a, b, n, c.consistency_eps, c.consistency_z_weight);
   const uint32_t words = (n + 63) / 64;
-  for (uint32_t i = 0; i < words; ++i) allowed_[i] = 0;
-  for (uint32_t i = 0; i < n; ++i) allowed_[i >> 6] |= uint64_t(1) << (i & 63);
+  auto allow_all = [&]() {
+    for (uint32_t i = 0; i < words; ++i) allowed_[i] = 0;
+    for (uint32_t i = 0; i < n; ++i) allowed_[i >> 6] |= uint64_t(1) << (i & 63);
+  };
+  allow_all();
   const uint32_t peel = c.max_peeled < K ? c.max_peeled : K;
   // Each search removes at least one correspondence of its clique, so 2K searches bound the loop.
   for (uint32_t attempt = 0; attempt < 2 * K && count_ < peel; ++attempt) {
@@ -162,23 +165,24 @@ Status PoseHypotheses::generate(const float* a, const float* b, const float* w, 
   // 1b. Heading-diverse cliques (HypothesisConfig::heading_cliques): the edges that make cliques at the
   // headings found so far leave the graph, and the search runs again on every correspondence.
   auto yaw_of = [](const Eigen::Isometry3d& T) { return std::atan2(T.linear()(1, 0), T.linear()(0, 0)); };
+  // Hypothesis hp's heading differs from every earlier hypothesis' by at least same_pose_deg.
+  auto new_heading = [&](uint32_t hp) {
+    for (uint32_t e = 0; e < hp; ++e)
+      if (Eigen::AngleAxisd(hyps_[e].map_T_scan.linear().transpose() * hyps_[hp].map_T_scan.linear()).angle() <
+          same_rad)
+        return false;
+    return true;
+  };
   auto distinct_headings = [&]() {
     uint32_t d = 0;
-    for (uint32_t hp = 0; hp < count_; ++hp) {
-      bool fresh = true;
-      for (uint32_t e = 0; e < hp && fresh; ++e)
-        fresh = Eigen::AngleAxisd(hyps_[e].map_T_scan.linear().transpose() * hyps_[hp].map_T_scan.linear()).angle() >=
-                same_rad;
-      d += fresh;
-    }
+    for (uint32_t hp = 0; hp < count_; ++hp) d += new_heading(hp);
     return d;
   };
   if (c.heading_cliques > 0 && count_ > 0 && count_ < K && distinct_headings() < c.shift_headings) {
     const double separation = double(c.heading_separation_deg) * 3.14159265358979323846 / 180.0;
     const float min_pair = c.tls_threshold;  // shorter pairs cannot tell a heading to within the separation
     uint32_t cleared = 0;                    // hypotheses whose heading's edges are gone
-    for (uint32_t i = 0; i < words; ++i) allowed_[i] = 0;
-    for (uint32_t i = 0; i < n; ++i) allowed_[i >> 6] |= uint64_t(1) << (i & 63);
+    allow_all();
     for (uint32_t extra = 0; extra < c.heading_cliques && count_ < K; ++extra) {
       for (; cleared < count_; ++cleared)
         graph_.remove_edges_at_heading(a, b, yaw_of(hyps_[cleared].map_T_scan), separation, min_pair);
@@ -194,7 +198,7 @@ Status PoseHypotheses::generate(const float* a, const float* b, const float* w, 
       if (solve_tls(sub_a_, sub_b_, sub_w_, q, c.tls_threshold, c.max_iterations, &tls, mask_, tls_w_) != Status::Ok ||
           tls.inliers < c.min_inliers || !record(tls, q, q)) {
         // No hypothesis from it: its members leave, so the next search differs.
-        for (uint32_t i = 0; i < q; ++i) allowed_[clique_[i] >> 6] &= ~(uint64_t(1) << (clique_[i] & 63));
+        for (uint32_t i = 0; i < q; ++i) disallow(clique_[i]);
         continue;
       }
       ++st.heading_cliques;
@@ -207,13 +211,6 @@ Status PoseHypotheses::generate(const float* a, const float* b, const float* w, 
   // correspondence votes for the translation b - R a (bins of shift_bin metres); the best-supported
   // bins (ranked by summed weight, ties by bin key) become hypotheses until K are found.
   const uint32_t peeled = count_;
-  auto new_heading = [&](uint32_t hp) {
-    for (uint32_t e = 0; e < hp; ++e)
-      if (Eigen::AngleAxisd(hyps_[e].map_T_scan.linear().transpose() * hyps_[hp].map_T_scan.linear()).angle() <
-          same_rad)
-        return false;
-    return true;
-  };
   uint32_t total_headings = 0;
   for (uint32_t hp = 0; hp < peeled && total_headings < c.shift_headings; ++hp) total_headings += new_heading(hp);
   uint32_t headings = 0;
@@ -227,9 +224,8 @@ Status PoseHypotheses::generate(const float* a, const float* b, const float* w, 
     // Upright at the clique's heading: any clique of this heading may carry degrees of roll or pitch
     // (mid-height centroids constrain them poorly), and the bird's-eye verification cannot see tilt,
     // so a vote hypothesis must not inherit it.
-    const Eigen::Matrix3d Rc = hyps_[hp].map_T_scan.linear();
     const Eigen::Matrix3d R =
-        Eigen::AngleAxisd(std::atan2(Rc(1, 0), Rc(0, 0)), Eigen::Vector3d::UnitZ()).toRotationMatrix();
+        Eigen::AngleAxisd(yaw_of(hyps_[hp].map_T_scan), Eigen::Vector3d::UnitZ()).toRotationMatrix();
     for (uint32_t i = 0; i < n; ++i) {
       const Eigen::Vector3d t = point(b, i) - R * point(a, i);
       const int64_t kx = static_cast<int64_t>(std::floor(t.x() / c.shift_bin)) + (1 << 20);
