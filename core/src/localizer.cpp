@@ -398,7 +398,7 @@ Status Localizer::localize(const ScanView& scan, LocalizeResult* out_ptr) {
   if (!initialized_) return out.status = Status::NotInitialized;
   Impl& im = *impl_;
   const LocalizerConfig& cfg = config_;
-  im.correspondences.clear();
+  im.correspondences.forget_selection();  // match_and_filter clears the candidates
   im.answer.forget();
   im.instance_count = 0;
   const uint64_t t_start = now(clock_);

@@ -30,6 +30,8 @@ class CorrespondenceSet {
   Status bind(Arena& arena, uint32_t candidate_capacity, uint32_t max_selected);
 
   void clear();
+  // Forgets the last selection only (selected() = 0), O(1): what a new scan needs before it matches.
+  void forget_selection() { selected_ = 0; }
   // Adds one vote for (query, map) with similarity omega. False (nothing stored) when the pair is new
   // and the candidate capacity is full; the caller counts it.
   bool add(uint32_t query, uint32_t map, float omega);
