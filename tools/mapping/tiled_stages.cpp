@@ -10,6 +10,7 @@
 #include "gsf/detail/arena.h"
 #include "gsf/detail/gaussian_field.h"
 #include "gsf/detail/instance_clustering.h"
+#include "gsf/detail/map_quantization.h"
 #include "gsf/detail/pole_extraction.h"
 #include "gsf/detail/voxel_layer.h"
 
@@ -37,6 +38,7 @@ struct Candidate {
   uint32_t chunk = 0;  // its field rows: the chunk of the tile that fitted it, and the row there
   uint32_t row = 0;
   uint32_t inducing = 0;
+  MapInstance scales{};  // the quantisation scales of its grid rows (mean_min ... var_step)
   uint32_t field_points_dropped = 0;
   bool fit_ok = false;
 };
@@ -47,22 +49,25 @@ struct RefineCandidate {
   float point[3];  // x, y, z
 };
 
-// One tile's fitted fields, rows in the tile's candidate order. Fields grow per tile and are gathered
-// into exactly sized map-order arrays at the end, one array at a time, so the builder never holds a
-// doubled vector capacity or two whole copies of the fields.
+// One tile's fitted fields, rows in the tile's candidate order, quantised as they are fitted (the
+// quantisation is per instance, so it is the same whenever it runs). Fields grow per tile and are
+// gathered into exactly sized map-order arrays at the end, one array at a time, so the builder never
+// holds a doubled vector capacity, two whole copies of the fields, or their float form.
 struct FieldChunk {
-  std::vector<float> mean, var;  // the probed grid (the map stores no inducing inputs or weights)
+  std::vector<uint8_t> mean;  // the probed grid (the map stores no inducing inputs or weights)
+  std::vector<uint16_t> var;
 };
 
 // Map-order rows of one field array from the chunks (member `part`), freeing the chunks' rows as it goes.
-void gather_rows(std::vector<FieldChunk>* chunks, std::vector<float> FieldChunk::*part, size_t row,
-                 const std::vector<std::pair<uint32_t, uint32_t>>& rows, std::vector<float>* out) {
-  std::vector<float>(rows.size() * row).swap(*out);
+template <typename T>
+void gather_rows(std::vector<FieldChunk>* chunks, std::vector<T> FieldChunk::*part, size_t row,
+                 const std::vector<std::pair<uint32_t, uint32_t>>& rows, std::vector<T>* out) {
+  std::vector<T>(rows.size() * row).swap(*out);
   for (size_t i = 0; i < rows.size(); ++i) {
-    const std::vector<float>& from = (*chunks)[rows[i].first].*part;
+    const std::vector<T>& from = (*chunks)[rows[i].first].*part;
     std::copy_n(from.begin() + size_t(rows[i].second) * row, row, out->begin() + i * row);
   }
-  for (FieldChunk& c : *chunks) std::vector<float>().swap(c.*part);
+  for (FieldChunk& c : *chunks) std::vector<T>().swap(c.*part);
 }
 
 }  // namespace
@@ -114,6 +119,7 @@ Status build_map_content(TileStore& store, const LocalizerConfig& config, const 
   std::vector<uint32_t> ids(max_pts);
   std::vector<float> xyz(size_t(max_pts) * 3), targets(size_t(max_pts) * D), chol(size_t(M) * M), grid(size_t(G) * 3);
   std::vector<float> field_inputs(size_t(M) * 3), field_alpha(size_t(M) * D);
+  std::vector<float> row_mean(size_t(G) * D), row_var(G);  // one instance's grid before quantisation
   std::vector<uint8_t> gl(max_pts);
   make_probe_grid(fc, 0.0f, grid.data());
 
@@ -148,13 +154,13 @@ Status build_map_content(TileStore& store, const LocalizerConfig& config, const 
   double seconds_cluster = 0, seconds_fields = 0;
 
   // A candidate's field: the same per-instance fit as the localizer's query fields (gaussian_field.h),
-  // into rows initialised as a whole-map build initialises them.
+  // into rows initialised as a whole-map build initialises them, then quantised (map_quantization.h).
   auto fit_field = [&](const VoxelLayer& layer, Candidate* c) {
     FieldChunk& chunk = fields.back();
     c->chunk = static_cast<uint32_t>(fields.size() - 1);
     c->row = static_cast<uint32_t>(chunk.var.size() / G);
-    chunk.mean.resize(chunk.mean.size() + size_t(G) * D, 0.0f);
-    chunk.var.resize(chunk.var.size() + G, fc.signal_variance);
+    std::fill(row_mean.begin(), row_mean.end(), 0.0f);
+    std::fill(row_var.begin(), row_var.end(), fc.signal_variance);
     float* in_i = field_inputs.data();  // needed only to probe the grid
     float* al_i = field_alpha.data();
     const FieldGather gather{max_pts, ids.data(), xyz.data(), targets.data(), gl.data()};
@@ -166,9 +172,12 @@ Status build_map_content(TileStore& store, const LocalizerConfig& config, const 
     if (c->fit_ok) {
       c->inducing = m;
       FieldView f{in_i, al_i, m};
-      solver.probe(f, chol.data(), grid.data(), G, chunk.mean.data() + size_t(c->row) * G * D,
-                   chunk.var.data() + size_t(c->row) * G, nullptr);
+      solver.probe(f, chol.data(), grid.data(), G, row_mean.data(), row_var.data(), nullptr);
     }
+    chunk.mean.resize(chunk.mean.size() + size_t(G) * D);
+    chunk.var.resize(chunk.var.size() + G);
+    quantize_instance_grid(row_mean.data(), row_var.data(), G, D, &c->scales,
+                           chunk.mean.data() + size_t(c->row) * G * D, chunk.var.data() + size_t(c->row) * G);
   };
 
   const std::vector<uint64_t> tiles = store.tile_ids();
@@ -382,6 +391,10 @@ Status build_map_content(TileStore& store, const LocalizerConfig& config, const 
     for (int k = 0; k < 3; ++k) mi.centroid[k] = out->centroids[3 * i + k] = c.in.centroid[k];
     mi.stability = c.in.stability;
     mi.point_count = c.in.point_count;
+    mi.mean_min = c.scales.mean_min;
+    mi.mean_step = c.scales.mean_step;
+    mi.var_min = c.scales.var_min;
+    mi.var_step = c.scales.var_step;
     mi.label = out->labels[i] = c.in.label;
     st->instances_by_class[c.in.label]++;
     st->field_points_dropped += c.field_points_dropped;
@@ -400,15 +413,26 @@ Status build_map_content(TileStore& store, const LocalizerConfig& config, const 
   }
   st->refine_points = static_cast<uint32_t>(out->refine.size() / 3);
 
+  // The semantic layer in key order, paletted tile by tile (a tile's palette depends on it alone).
   std::sort(semantic.begin(), semantic.end());
   out->semantic_keys.reserve(semantic.size());
   out->semantic_cells.reserve(semantic.size() * semantic_tile_size);
+  if (!semantic.empty()) out->semantic_palette_offsets.reserve(semantic.size() + 1);
+  std::vector<uint32_t> dense, offsets, palette;
+  std::vector<uint8_t> indices;
   for (const auto& [key, at] : semantic) {
     const std::vector<uint32_t>& chunk = semantic_chunks[at.first];
+    dense.assign(chunk.begin() + at.second, chunk.begin() + at.second + semantic_tile_size);
+    const Status s = palette_semantic_layer(dense, 1, options.semantic_layer.tile_cells, &offsets, &palette, &indices);
+    if (s != Status::Ok) return s;
+    if (out->semantic_palette_offsets.empty()) out->semantic_palette_offsets.push_back(0);
     out->semantic_keys.push_back(key);
-    out->semantic_cells.insert(out->semantic_cells.end(), chunk.begin() + at.second,
-                               chunk.begin() + at.second + semantic_tile_size);
+    out->semantic_palette.insert(out->semantic_palette.end(), palette.begin(), palette.end());
+    out->semantic_palette_offsets.push_back(static_cast<uint32_t>(out->semantic_palette.size()));
+    out->semantic_cells.insert(out->semantic_cells.end(), indices.begin(), indices.end());
   }
+  std::vector<std::vector<uint32_t>>().swap(semantic_chunks);
+  out->semantic_palette.shrink_to_fit();
   st->semantic_tiles = static_cast<uint32_t>(out->semantic_keys.size());
   return Status::Ok;
 }
