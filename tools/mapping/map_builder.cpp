@@ -228,10 +228,10 @@ Status MapBuilder::build(MapSink& sink, size_t* bytes_out, MapBuildStats* stats_
     std::vector<MapRefineTile> tiles;
     std::vector<MapRefinePoint> points;
     if (st.refine_points > 0) {
-      s = build_refine_layer(content.refine.data(), st.refine_points, config_.refine.cell, &tiles, &points);
+      s = build_refine_layer(&content.refine, config_.refine.cell, &tiles, &points);  // frees the chunks
       if (s != Status::Ok) return s;
     }
-    std::vector<float>().swap(content.refine);
+    std::vector<std::vector<float>>().swap(content.refine);
     header.counts.refine_points = static_cast<uint32_t>(points.size());
     header.counts.refine_tiles = static_cast<uint32_t>(tiles.size());
     st.refine_tiles = header.counts.refine_tiles;

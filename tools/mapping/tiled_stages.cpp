@@ -7,6 +7,10 @@
 #include <unordered_map>
 #include <unordered_set>
 
+#if defined(__GLIBC__)
+#include <malloc.h>
+#endif
+
 #include "gsf/detail/arena.h"
 #include "gsf/detail/gaussian_field.h"
 #include "gsf/detail/instance_clustering.h"
@@ -125,10 +129,11 @@ Status build_map_content(TileStore& store, const LocalizerConfig& config, const 
 
   std::vector<Candidate> clustered, poles;
   std::vector<FieldChunk> fields;  // per map tile with candidates
-  // Refinement candidates not yet final, and the final points in cell order (chunks of 1 M floats, so
-  // the layer never sits in a doubled vector capacity).
+  // Refinement candidates not yet final, and the final points in cell order (chunks of a fixed capacity,
+  // so the layer never sits in a doubled vector capacity; handed to the map as chunks).
   std::vector<RefineCandidate> refine;
-  std::vector<std::vector<float>> refine_chunks(1);
+  constexpr size_t kRefineChunkFloats = size_t(3) << 18;  // 3 MB
+  std::vector<std::vector<float>>& refine_chunks = out->refine;
   size_t refine_floats = 0;
   // Tiles come x-major: once a column of tiles is done, no later tile owns a voxel left of its right
   // edge (less a voxel for rounding), so cells left of it are final: per cell the candidate with the
@@ -140,15 +145,23 @@ Status build_map_content(TileStore& store, const LocalizerConfig& config, const 
     size_t k = 0;
     for (; k < refine.size() && refine[k].cell < limit; ++k) {
       if (k > 0 && refine[k].cell == refine[k - 1].cell) continue;
-      if (refine_chunks.back().size() >= (1u << 20)) refine_chunks.emplace_back();
+      if (refine_chunks.empty() || refine_chunks.back().size() + 3 > kRefineChunkFloats) {
+        refine_chunks.emplace_back();
+        refine_chunks.back().reserve(kRefineChunkFloats);
+      }
       refine_chunks.back().insert(refine_chunks.back().end(), refine[k].point, refine[k].point + 3);
       refine_floats += 3;
     }
     refine.erase(refine.begin(), refine.begin() + k);
   };
-  // Per semantic tile: its key, and its cells in per-map-tile chunks (chunk, offset).
-  std::vector<std::pair<uint32_t, std::pair<uint32_t, size_t>>> semantic;
-  std::vector<std::vector<uint32_t>> semantic_chunks;
+  // Per semantic tile: its key, and its place in the per-map-tile chunks (chunk, tile in the chunk).
+  // Each chunk is paletted when built (palette_semantic_layer: a tile's palette depends on it alone).
+  struct SemanticChunk {
+    std::vector<uint32_t> offsets, palette;
+    std::vector<uint8_t> cells;
+  };
+  std::vector<std::pair<uint32_t, std::pair<uint32_t, uint32_t>>> semantic;
+  std::vector<SemanticChunk> semantic_chunks;
   const size_t semantic_tile_size = size_t(options.semantic_layer.tile_cells) * options.semantic_layer.tile_cells;
   uint64_t map_voxels = 0;
   double seconds_cluster = 0, seconds_fields = 0;
@@ -331,9 +344,17 @@ Status build_map_content(TileStore& store, const LocalizerConfig& config, const 
       };
       std::vector<uint32_t> sem_keys, sem_cells;
       build_semantic_layer(layer, options.semantic_layer, &sem_keys, &sem_cells, keep);
-      for (size_t k = 0; k < sem_keys.size(); ++k)
-        semantic.push_back({sem_keys[k], {uint32_t(semantic_chunks.size()), k * semantic_tile_size}});
-      if (!sem_keys.empty()) semantic_chunks.push_back(std::move(sem_cells));
+      if (!sem_keys.empty()) {
+        for (size_t k = 0; k < sem_keys.size(); ++k)
+          semantic.push_back({sem_keys[k], {uint32_t(semantic_chunks.size()), uint32_t(k)}});
+        SemanticChunk chunk;
+        const Status ps =
+            palette_semantic_layer(sem_cells, uint32_t(sem_keys.size()), options.semantic_layer.tile_cells,
+                                   &chunk.offsets, &chunk.palette, &chunk.cells);
+        if (ps != Status::Ok) return ps;
+        chunk.palette.shrink_to_fit();
+        semantic_chunks.push_back(std::move(chunk));
+      }
     }
     if (tile > 0 && options.refine_voxel > 0.0f && t + 1 < tiles.size() && TileStore::tile_x(tiles[t + 1]) != tx) {
       const double edge = (double(tx + 1) * tile - 1.0) * vs;  // m, a voxel inside the column's right edge
@@ -341,6 +362,11 @@ Status build_map_content(TileStore& store, const LocalizerConfig& config, const 
       if (cell_x > 0 && cell_x < (1 << 21)) flush_refine(uint64_t(cell_x) << 42);
     }
     if (progress) progress("tiles", t + 1, tiles.size());
+#if defined(__GLIBC__)
+    // The tile's temporaries (tens of MB) were freed between the map's growing arrays: hand their pages
+    // back, or the heap's high-water mark grows with the map by the fragments.
+    malloc_trim(0);
+#endif
   }
   flush_refine(UINT64_MAX);
   std::vector<RefineCandidate>().swap(refine);
@@ -404,34 +430,26 @@ Status build_map_content(TileStore& store, const LocalizerConfig& config, const 
   st->seconds_fields = seconds_fields;
   if (progress) progress("clustered instances", ni, ni);
 
-  // Refinement points, already final and in cell order: into one exactly sized array.
-  std::vector<float>(refine_floats).swap(out->refine);
-  for (size_t k = 0, at = 0; k < refine_chunks.size(); ++k) {
-    std::copy(refine_chunks[k].begin(), refine_chunks[k].end(), out->refine.begin() + at);
-    at += refine_chunks[k].size();
-    std::vector<float>().swap(refine_chunks[k]);
-  }
-  st->refine_points = static_cast<uint32_t>(out->refine.size() / 3);
+  // Refinement points: already final, in cell order, in out->refine's chunks.
+  st->refine_points = static_cast<uint32_t>(refine_floats / 3);
 
   // The semantic layer in key order, paletted tile by tile (a tile's palette depends on it alone).
   std::sort(semantic.begin(), semantic.end());
   out->semantic_keys.reserve(semantic.size());
   out->semantic_cells.reserve(semantic.size() * semantic_tile_size);
   if (!semantic.empty()) out->semantic_palette_offsets.reserve(semantic.size() + 1);
-  std::vector<uint32_t> dense, offsets, palette;
-  std::vector<uint8_t> indices;
   for (const auto& [key, at] : semantic) {
-    const std::vector<uint32_t>& chunk = semantic_chunks[at.first];
-    dense.assign(chunk.begin() + at.second, chunk.begin() + at.second + semantic_tile_size);
-    const Status s = palette_semantic_layer(dense, 1, options.semantic_layer.tile_cells, &offsets, &palette, &indices);
-    if (s != Status::Ok) return s;
+    const SemanticChunk& chunk = semantic_chunks[at.first];
+    const uint32_t k = at.second;
     if (out->semantic_palette_offsets.empty()) out->semantic_palette_offsets.push_back(0);
     out->semantic_keys.push_back(key);
-    out->semantic_palette.insert(out->semantic_palette.end(), palette.begin(), palette.end());
+    out->semantic_palette.insert(out->semantic_palette.end(), chunk.palette.begin() + chunk.offsets[k],
+                                 chunk.palette.begin() + chunk.offsets[k + 1]);
     out->semantic_palette_offsets.push_back(static_cast<uint32_t>(out->semantic_palette.size()));
-    out->semantic_cells.insert(out->semantic_cells.end(), indices.begin(), indices.end());
+    out->semantic_cells.insert(out->semantic_cells.end(), chunk.cells.begin() + size_t(k) * semantic_tile_size,
+                               chunk.cells.begin() + size_t(k + 1) * semantic_tile_size);
   }
-  std::vector<std::vector<uint32_t>>().swap(semantic_chunks);
+  std::vector<SemanticChunk>().swap(semantic_chunks);
   out->semantic_palette.shrink_to_fit();
   st->semantic_tiles = static_cast<uint32_t>(out->semantic_keys.size());
   return Status::Ok;
