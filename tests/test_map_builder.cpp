@@ -7,13 +7,19 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <cstring>
+#include <fstream>
+#include <iterator>
 #include <string>
 #include <vector>
+
+#include <unistd.h>
 
 #include "gsf/class_table.h"
 #include "gsf/map_format.h"
 #include "mapping/map_builder.h"
+#include "mapping/map_writer.h"
 #include "tiny_world.h"
 
 using namespace gsf;
@@ -52,9 +58,21 @@ struct Built {
   const uint8_t* sections() const { return reinterpret_cast<const uint8_t*>(blob.data()) + 624; }
 };
 
-// Builds the drive's scans in `order` (default: each once, in drive order).
+// The bytes of a file as 16-byte aligned words (empty when it cannot be read).
+std::vector<uint64_t> read_words(const std::string& path, size_t* bytes) {
+  std::ifstream f(path, std::ios::binary);
+  const std::vector<char> data((std::istreambuf_iterator<char>(f)), std::istreambuf_iterator<char>());
+  *bytes = data.size();
+  std::vector<uint64_t> words(data.size() / 8 + 2, 0);
+  if (!data.empty()) std::memcpy(words.data(), data.data(), data.size());
+  return words;
+}
+
+// Builds the drive's scans in `order` (default: each once, in drive order); with `file`, through a
+// FileMapSink to that file, read back into the blob.
 Built build(const mapping::MapBuildConfig& options, const Eigen::Vector3d& shift,
-            const std::vector<uint32_t>& order = {}, mapping::TileStoreStats* after_scans = nullptr) {
+            const std::vector<uint32_t>& order = {}, mapping::TileStoreStats* after_scans = nullptr,
+            const std::string& file = "") {
   mapping::MapBuildConfig config = options;
   config.stages.max_scan_points = 262144;
   config.road_length_m = 120.0f;
@@ -70,7 +88,15 @@ Built build(const mapping::MapBuildConfig& options, const Eigen::Vector3d& shift
     if (b.add != Status::Ok) return b;
   }
   if (after_scans) *after_scans = builder.tile_stats();
-  b.build = builder.build(&b.blob, &b.bytes, &b.stats);
+  if (file.empty()) {
+    b.build = builder.build(&b.blob, &b.bytes, &b.stats);
+  } else {
+    mapping::FileMapSink sink(file);
+    size_t bytes = 0;
+    b.build = builder.build(sink, &bytes, &b.stats);
+    if (b.build == Status::Ok) b.blob = read_words(file, &b.bytes);
+    if (b.build == Status::Ok && b.bytes != bytes) b.build = Status::IoError;
+  }
   if (b.build == Status::Ok) b.build = load_map(b.blob.data(), b.bytes, &b.map);
   return b;
 }
@@ -279,4 +305,69 @@ TEST_CASE("Map scans are voxelised with at least scan_max_voxels; what a smaller
   REQUIRE(s.build == Status::Ok);
   CHECK(s.stats.scan_points_dropped > 0);
   CHECK(s.stats.map_voxels < b.stats.map_voxels);
+}
+
+TEST_CASE("A map built straight to a file is the in-memory build's bytes, and write_map's of its sections") {
+  const std::string path = "/tmp/gsf-test-map-builder-" + std::to_string(::getpid()) + ".gsfmap";
+  for (const mapping::MapBuildConfig& config : {mapping::MapBuildConfig(), tiled(16.0f, 2)}) {
+    const Built memory = build(config, Eigen::Vector3d::Zero());
+    const Built file = build(config, Eigen::Vector3d::Zero(), {}, nullptr, path);
+    REQUIRE(memory.build == Status::Ok);
+    REQUIRE(file.build == Status::Ok);
+    CHECK(memory.map.counts.refine_points > 0);  // every section is exercised
+    CHECK(memory.map.counts.semantic_tiles > 0);
+    CHECK(memory.stats.bytes == memory.bytes);
+    REQUIRE(file.bytes == memory.bytes);
+    CHECK(std::memcmp(file.blob.data(), memory.blob.data(), memory.bytes) == 0);
+    CHECK(std::memcmp(&file.stats.tiles, &memory.stats.tiles, sizeof(mapping::TileStoreStats)) == 0);
+    // The library's in-memory serialiser over the loaded view writes the same bytes.
+    std::vector<uint64_t> again(memory.bytes / 8 + 2, 0);
+    size_t written = 0;
+    REQUIRE(write_map(memory.map, again.data(), again.size() * 8, &written) == Status::Ok);
+    REQUIRE(written == memory.bytes);
+    CHECK(std::memcmp(again.data(), memory.blob.data(), memory.bytes) == 0);
+    CHECK(std::ifstream(path + ".partial").fail());  // renamed into place
+  }
+  std::remove(path.c_str());
+}
+
+TEST_CASE("A map sink takes the sections in id order, checks them against the header and reports write errors") {
+  const Built b = build(mapping::MapBuildConfig(), Eigen::Vector3d::Zero());
+  REQUIRE(b.build == Status::Ok);
+  const MapView& m = b.map;
+  const auto* base = reinterpret_cast<const uint8_t*>(b.blob.data());
+  MapSectionLayout layout[kMapSectionCount];
+  size_t total = 0;
+  REQUIRE(map_layout(m, layout, &total) == Status::Ok);
+  CHECK(total == b.bytes);
+  // Each section in pieces of 1000 bytes: the same blob.
+  std::vector<uint64_t> blob;
+  mapping::MemoryMapSink sink(&blob);
+  for (uint32_t i = 0; i < kMapSectionCount; ++i) {
+    REQUIRE(sink.begin_section(MapSection(layout[i].id)) == Status::Ok);
+    for (uint64_t at = 0; at < layout[i].bytes; at += 1000)
+      REQUIRE(sink.append(base + layout[i].offset + at, std::min<uint64_t>(1000, layout[i].bytes - at)) == Status::Ok);
+    REQUIRE(sink.end_section() == Status::Ok);
+  }
+  size_t bytes = 0;
+  REQUIRE(sink.finish(m, &bytes) == Status::Ok);
+  REQUIRE(bytes == b.bytes);
+  CHECK(std::memcmp(blob.data(), b.blob.data(), bytes) == 0);
+  // Out of order, twice, or counts that disagree with what was written.
+  std::vector<uint64_t> other;
+  mapping::MemoryMapSink bad(&other);
+  CHECK(bad.section(MapSection::GridMean, base, 1) == Status::InvalidArgument);
+  CHECK(bad.section(MapSection::Instances, base + layout[0].offset, layout[0].bytes) == Status::Ok);
+  CHECK(bad.section(MapSection::Instances, base, 1) == Status::InvalidArgument);
+  for (uint32_t i = 1; i < kMapSectionCount; ++i)
+    REQUIRE(bad.section(MapSection(layout[i].id), base + layout[i].offset, layout[i].bytes) == Status::Ok);
+  MapView wrong = m;
+  wrong.counts.triangles += 1;
+  CHECK(bad.finish(wrong, &bytes) == Status::InvalidArgument);
+  CHECK(bytes == 0);
+  // A file that cannot be created: IoError from the first section on, and nothing is left behind.
+  mapping::FileMapSink nowhere("/nonexistent-gsf-dir/map.gsfmap");
+  CHECK_FALSE(nowhere.is_open());
+  CHECK(nowhere.section(MapSection::Instances, base + layout[0].offset, layout[0].bytes) == Status::IoError);
+  CHECK(nowhere.finish(m, &bytes) == Status::IoError);
 }

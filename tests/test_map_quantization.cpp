@@ -3,8 +3,10 @@
 // normals (refine_layer.h) - and the bounds are not vacuous (the worst error seen is a sizeable part).
 #include <catch2/catch.hpp>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <cstring>
 #include <vector>
 
 #include "gsf/detail/map_quantization.h"
@@ -87,6 +89,19 @@ TEST_CASE("Refinement positions dequantise within cell / 512 per axis, inside th
     std::vector<MapRefinePoint> points;
     REQUIRE(mapping::build_refine_layer(xyz.data(), n, cell, &tiles, &points) == Status::Ok);
     REQUIRE(points.size() == n);
+    {  // the same layer from the points in uneven chunks (as the map builder hands them over), chunks freed
+      std::vector<std::vector<float>> chunks;
+      for (size_t at = 0, len = 3; at < xyz.size(); at += len, len = len * 2 + 3)
+        chunks.emplace_back(xyz.begin() + at, xyz.begin() + std::min(xyz.size(), at + len));
+      std::vector<MapRefineTile> chunked_tiles;
+      std::vector<MapRefinePoint> chunked_points;
+      REQUIRE(mapping::build_refine_layer(&chunks, cell, &chunked_tiles, &chunked_points) == Status::Ok);
+      CHECK(chunks.empty());
+      REQUIRE(chunked_tiles.size() == tiles.size());
+      REQUIRE(chunked_points.size() == points.size());
+      CHECK(std::memcmp(chunked_tiles.data(), tiles.data(), tiles.size() * sizeof(MapRefineTile)) == 0);
+      CHECK(std::memcmp(chunked_points.data(), points.data(), points.size() * sizeof(MapRefinePoint)) == 0);
+    }
     RefineLayerView layer;
     layer.cell = cell;
     layer.tile_count = uint32_t(tiles.size());

@@ -145,23 +145,31 @@ size_t map_serialized_size(const MapView& contents) {
   return static_cast<size_t>(off);
 }
 
-Status write_map(const MapView& m, void* out, size_t out_bytes, size_t* written) {
-  if (written) *written = 0;
-  if (!host_is_little_endian()) return Status::Unsupported;
-  if (out == nullptr || (reinterpret_cast<uintptr_t>(out) % kAlign) != 0) return Status::InvalidArgument;
-  Status ps = check_params(m.params);
-  if (ps != Status::Ok || !valid_georeference(m.georef)) return Status::InvalidArgument;
+size_t map_header_bytes() { return static_cast<size_t>(table_end()); }
+
+Status map_layout(const MapView& m, MapSectionLayout* sections, size_t* total) {
+  if (total) *total = 0;
+  if (check_params(m.params) != Status::Ok || !valid_georeference(m.georef)) return Status::InvalidArgument;
   SectionSpec s[kMapSectionCount];
   if (!section_specs(m, s)) return Status::InvalidArgument;
-  for (const SectionSpec& sp : s)
-    if (sp.count > 0 && sp.data == nullptr && sp.id != MapSection::IndexOffsets) return Status::InvalidArgument;
-  if (m.index_offsets == nullptr) return Status::InvalidArgument;
-  const size_t total = map_serialized_size(m);
-  if (total == 0) return Status::InvalidArgument;
-  if (out_bytes < total) return Status::BufferTooSmall;
+  uint64_t off = align_up(table_end());
+  for (uint32_t i = 0; i < kMapSectionCount; ++i) {
+    const uint64_t bytes = s[i].count * s[i].elem_bytes;
+    if (sections) sections[i] = {static_cast<uint32_t>(s[i].id), s[i].elem_bytes, off, bytes};
+    off = align_up(off + bytes);
+  }
+  if (total) *total = static_cast<size_t>(off);
+  return Status::Ok;
+}
 
+Status write_map_header(const MapView& m, const uint32_t* section_crcs, void* out, size_t out_bytes) {
+  if (out == nullptr || section_crcs == nullptr) return Status::InvalidArgument;
+  if (out_bytes < table_end()) return Status::BufferTooSmall;
+  MapSectionLayout layout[kMapSectionCount];
+  size_t total = 0;
+  const Status ls = map_layout(m, layout, &total);
+  if (ls != Status::Ok) return ls;
   uint8_t* base = static_cast<uint8_t*>(out);
-  std::memset(base, 0, total);
   MapHeader h;
   std::memset(&h, 0, sizeof(h));
   std::memcpy(h.magic, kMapMagic, sizeof(kMapMagic));
@@ -174,21 +182,45 @@ Status write_map(const MapView& m, void* out, size_t out_bytes, size_t* written)
   h.counts = m.counts;
   SectionEntry table[kMapSectionCount];
   std::memset(table, 0, sizeof(table));
-  uint64_t off = align_up(table_end());
   for (uint32_t i = 0; i < kMapSectionCount; ++i) {
-    const uint64_t bytes = s[i].count * s[i].elem_bytes;
-    table[i].id = static_cast<uint32_t>(s[i].id);
-    table[i].elem_bytes = s[i].elem_bytes;
-    table[i].offset = off;
-    table[i].bytes = bytes;
-    if (bytes) std::memcpy(base + off, s[i].data, bytes);
-    table[i].crc = crc32(base + off, bytes);
-    off = align_up(off + bytes);
+    table[i].id = layout[i].id;
+    table[i].elem_bytes = layout[i].elem_bytes;
+    table[i].offset = layout[i].offset;
+    table[i].bytes = layout[i].bytes;
+    table[i].crc = section_crcs[i];
   }
   std::memcpy(base + sizeof(MapHeader), table, sizeof(table));
   std::memcpy(base, &h, sizeof(h));
-  uint32_t crc = crc32(base, table_end());
+  const uint32_t crc = crc32(base, table_end());
   std::memcpy(base + offsetof(MapHeader, header_crc), &crc, sizeof(crc));
+  return Status::Ok;
+}
+
+Status write_map(const MapView& m, void* out, size_t out_bytes, size_t* written) {
+  if (written) *written = 0;
+  if (!host_is_little_endian()) return Status::Unsupported;
+  if (out == nullptr || (reinterpret_cast<uintptr_t>(out) % kAlign) != 0) return Status::InvalidArgument;
+  Status ps = check_params(m.params);
+  if (ps != Status::Ok || !valid_georeference(m.georef)) return Status::InvalidArgument;
+  SectionSpec s[kMapSectionCount];
+  if (!section_specs(m, s)) return Status::InvalidArgument;
+  for (const SectionSpec& sp : s)
+    if (sp.count > 0 && sp.data == nullptr && sp.id != MapSection::IndexOffsets) return Status::InvalidArgument;
+  if (m.index_offsets == nullptr) return Status::InvalidArgument;
+  MapSectionLayout layout[kMapSectionCount];
+  size_t total = 0;
+  if (map_layout(m, layout, &total) != Status::Ok || total == 0) return Status::InvalidArgument;
+  if (out_bytes < total) return Status::BufferTooSmall;
+
+  uint8_t* base = static_cast<uint8_t*>(out);
+  std::memset(base, 0, total);
+  uint32_t crcs[kMapSectionCount];
+  for (uint32_t i = 0; i < kMapSectionCount; ++i) {
+    if (layout[i].bytes) std::memcpy(base + layout[i].offset, s[i].data, layout[i].bytes);
+    crcs[i] = crc32(base + layout[i].offset, layout[i].bytes);
+  }
+  const Status hs = write_map_header(m, crcs, base, total);
+  if (hs != Status::Ok) return hs;
   if (written) *written = total;
   return Status::Ok;
 }

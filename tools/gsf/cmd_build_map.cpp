@@ -84,24 +84,28 @@ int cmd_build_map(int argc, char** argv) {
   const Meta meta = read_meta(args.get("dataset"));
   const float road =
       meta.present && meta.road_length_m > 0 ? meta.road_length_m : static_cast<float>(path_length(*src));
-  std::vector<uint64_t> blob;
   size_t bytes = 0;
   mapping::MapBuildStats st;
   uint32_t failed_scan = UINT32_MAX;
   options.stages = cfg;
   options.road_length_m = road;
-  s = build_map(*src, options, logits, &blob, &bytes, &st, !args.flag("quiet"), &failed_scan);
+  // Straight to the file, section by section (the map is never whole in memory; written to OUT.partial
+  // and renamed, so a failed build leaves no map behind).
+  mapping::FileMapSink sink(args.get("out"));
+  if (!sink.is_open()) {
+    std::fprintf(stderr, "gsf build-map: cannot create '%s.partial'\n", args.get("out").c_str());
+    return 1;
+  }
+  s = build_map(*src, options, logits, sink, &bytes, &st, !args.flag("quiet"), &failed_scan);
   if (s != Status::Ok) {
     if (failed_scan != UINT32_MAX && s == Status::InvalidInput)
       std::fprintf(stderr,
                    "gsf build-map: failed: %s at scan %u (file %u): its pose is more than %.0f m from the map "
                    "origin (give an --origin near the drive) or not finite, or its points are unusable\n",
                    to_string(s), failed_scan, src->frame_id(failed_scan), mapping::kMaxMapLocalCoordinate);
+    else if (s == Status::IoError)
+      std::fprintf(stderr, "gsf build-map: failed: cannot write '%s'\n", args.get("out").c_str());
     else std::fprintf(stderr, "gsf build-map: failed: %s\n", to_string(s));
-    return 1;
-  }
-  if (!write_file(args.get("out"), blob.data(), bytes, &err)) {
-    std::fprintf(stderr, "gsf build-map: %s\n", err.c_str());
     return 1;
   }
   std::printf(

@@ -57,20 +57,20 @@ int cmd_demo(int argc, char** argv) {
   std::printf("[2/3] building the map from sequence 00\n");
   auto src = open_source(dataset, "00", &s);
   if (s != Status::Ok) return 1;
-  std::vector<uint64_t> blob;
   size_t bytes = 0;
   mapping::MapBuildStats st;
   mapping::MapBuildConfig build_config;
   build_config.stages = default_config();
   build_config.road_length_m = sum.road_length_m;
-  s = build_map(*src, build_config, LogitMode::Synthetic, &blob, &bytes, &st, !quiet);
-  if (s != Status::Ok) {
-    std::fprintf(stderr, "gsf demo: map build failed: %s\n", to_string(s));
+  const std::string map_path = out + "/map.gsfmap";
+  mapping::FileMapSink sink(map_path);
+  if (!sink.is_open()) {
+    std::fprintf(stderr, "gsf demo: cannot create '%s.partial'\n", map_path.c_str());
     return 1;
   }
-  const std::string map_path = out + "/map.gsfmap";
-  if (!write_file(map_path, blob.data(), bytes, &err)) {
-    std::fprintf(stderr, "gsf demo: %s\n", err.c_str());
+  s = build_map(*src, build_config, LogitMode::Synthetic, sink, &bytes, &st, !quiet);
+  if (s != Status::Ok) {
+    std::fprintf(stderr, "gsf demo: map build failed: %s\n", to_string(s));
     return 1;
   }
   std::printf("      %u instances, %u triangles, %zu bytes (%.2f MB/km)  [%.0f s]\n", st.instances, st.triangles, bytes,

@@ -220,9 +220,8 @@ double path_length(port::ScanSource& src) {
   return len;
 }
 
-Status build_map(port::ScanSource& src, const mapping::MapBuildConfig& config, LogitMode logits,
-                 std::vector<uint64_t>* blob, size_t* bytes, mapping::MapBuildStats* stats, bool progress,
-                 uint32_t* failed_scan) {
+Status build_map(port::ScanSource& src, const mapping::MapBuildConfig& config, LogitMode logits, mapping::MapSink& sink,
+                 size_t* bytes, mapping::MapBuildStats* stats, bool progress, uint32_t* failed_scan) {
   if (failed_scan) *failed_scan = UINT32_MAX;
   mapping::MapBuilder builder(config);
   port::OwnedScanBuffer buf(kMaxScanPoints, true);
@@ -248,7 +247,7 @@ Status build_map(port::ScanSource& src, const mapping::MapBuildConfig& config, L
       std::fprintf(stderr, "\r  build-map: %s %llu / %llu", stage, (unsigned long long)done, (unsigned long long)total);
       if (done == total) std::fprintf(stderr, "\n");
     };
-  return builder.build(blob, bytes, stats, cb);
+  return builder.build(sink, bytes, stats, cb);
 }
 
 }  // namespace gsf::cli

@@ -61,10 +61,10 @@ double path_length(port::ScanSource& src);
 
 // config.classes is the label set of src's labels.
 // Builds the map of every scan of `src`. On failure *failed_scan is the index of the scan add_scan
-// refused (UINT32_MAX when the failure came later, at build()).
-Status build_map(port::ScanSource& src, const mapping::MapBuildConfig& config, LogitMode logits,
-                 std::vector<uint64_t>* blob, size_t* bytes, mapping::MapBuildStats* stats, bool progress,
-                 uint32_t* failed_scan = nullptr);
+// refused (UINT32_MAX when the failure came later, at build()). The map goes to `sink` section by
+// section (mapping/map_writer.h; a FileMapSink writes the file without holding the map).
+Status build_map(port::ScanSource& src, const mapping::MapBuildConfig& config, LogitMode logits, mapping::MapSink& sink,
+                 size_t* bytes, mapping::MapBuildStats* stats, bool progress, uint32_t* failed_scan = nullptr);
 
 constexpr uint32_t kMaxScanPoints = 262144;
 

@@ -17,6 +17,7 @@
 #include "gsf/detail/voxel_layer.h"
 #include "gsf/map_format.h"
 #include "mapping/map_writer.h"
+#include "mapping/refine_layer_builder.h"
 #include "mapping/tiled_stages.h"
 
 #if defined(__GLIBC__)
@@ -121,8 +122,12 @@ Status MapBuilder::add_scan(const ScanView& scan, const Eigen::Isometry3d& frame
   return Status::Ok;
 }
 
-Status MapBuilder::build(std::vector<uint64_t>* blob, size_t* bytes_out, MapBuildStats* stats_out,
-                         const Progress& progress) {
+Status MapBuilder::build(std::vector<uint64_t>* blob, size_t* bytes, MapBuildStats* stats, const Progress& progress) {
+  MemoryMapSink sink(blob);
+  return build(sink, bytes, stats, progress);
+}
+
+Status MapBuilder::build(MapSink& sink, size_t* bytes_out, MapBuildStats* stats_out, const Progress& progress) {
   *bytes_out = 0;
   MapBuildStats st = stats_;
   st.georef = georef_;
@@ -139,83 +144,114 @@ Status MapBuilder::build(std::vector<uint64_t>* blob, size_t* bytes_out, MapBuil
   if (s != Status::Ok) return s;
 #if defined(__GLIBC__)
   // The tile stages freed many small blocks (candidates, per-tile chunks) spread through the heap: hand
-  // their pages back before the triangles and the serialised map are allocated, or the peak counts them.
+  // their pages back before the triangles and the refinement layer are allocated, or the peak counts them.
   malloc_trim(0);
 #endif
   const uint32_t ni = static_cast<uint32_t>(content.instances.size());
   if (ni > kMaxMapInstances) return Status::CapacityExceeded;
-  std::vector<MapInstance>& instances = content.instances;
-  std::vector<float>& mean = content.mean;
-  std::vector<float>& var = content.var;
-  std::vector<float>& centroids = content.centroids;
-  std::vector<uint8_t>& inst_labels = content.labels;
 
-  // Triangles and the hash index over all map instances.
-  const auto t_tri = std::chrono::steady_clock::now();
-  TriangleConfig tc = config_.triangle;
-  tc.neighbours = tc.map_k();  // the map's K (TriangleConfig::map_neighbours)
-  tc.map_neighbours = 0;
-  const uint64_t tri_cap = std::min<uint64_t>(uint64_t(ni) * tc.neighbours * (tc.neighbours - 1) / 2 + 16, 1u << 30);
-  tc.max_triangles = static_cast<uint32_t>(tri_cap);
-  Workspace tws(TriangleBuilder::required_bytes(tc, ni + 1) + size_t(tri_cap) * sizeof(Triangle) + 4096);
-  TriangleBuilder tb;
-  FixedVector<Triangle> tris;
-  if (tb.bind(tws.arena, tc, ni + 1) != Status::Ok || !tris.bind(tws.arena, tc.max_triangles))
-    return Status::InvalidArgument;
-  s = tb.build(centroids.data(), 3, inst_labels.data(), ni, tris);
-  if (s != Status::Ok) return s;
-  const uint32_t nt = tris.size();
-  std::vector<uint64_t> ikeys(nt + 1), scratch(nt + 1);
-  std::vector<uint32_t> offsets(nt + 2), entries(nt + 1);
-  uint32_t key_count = 0;
-  build_triangle_index(tris.data(), nt, tc.side_bin, ikeys.data(), offsets.data(), entries.data(), &key_count,
-                       scratch.data());
-  st.triangles = nt;
-  st.index_keys = key_count;
-  st.seconds_triangles = seconds_since(t_tri);
-  if (progress) progress("triangles", nt, nt);
-
-  std::vector<float>& refine = content.refine;
-  std::vector<uint32_t>& sem_keys = content.semantic_keys;
-  std::vector<uint32_t>& sem_cells = content.semantic_cells;
-
-  MapContents view;
-  view.georef = georef_;
-  view.params = map_params_from(config_);
-  view.counts.instances = ni;
-  view.counts.triangles = nt;
-  view.counts.index_keys = key_count;
-  view.counts.road_length_m = options_.road_length_m;
-  view.counts.semantic_tiles = st.semantic_tiles;
+  // The header's contents; counts of later sections are filled in as they are built. Each section goes
+  // to the sink as soon as it is final and is freed there: the map is never whole in memory.
+  MapView header;
+  header.georef = georef_;
+  header.params = map_params_from(config_);
+  header.counts.instances = ni;
+  header.counts.road_length_m = options_.road_length_m;
+  header.counts.semantic_tiles = st.semantic_tiles;
+  header.counts.semantic_palette = static_cast<uint32_t>(content.semantic_palette.size());
   if (st.semantic_tiles > 0) {
-    view.params.semantic_cell = options_.semantic_layer.cell;
-    view.params.semantic_tile_cells = options_.semantic_layer.tile_cells;
+    header.params.semantic_cell = options_.semantic_layer.cell;
+    header.params.semantic_tile_cells = options_.semantic_layer.tile_cells;
   }
-  view.semantic_tile_keys = sem_keys.empty() ? nullptr : sem_keys.data();
-  view.semantic_cells = sem_cells.empty() ? nullptr : sem_cells.data();
+  header.params.refine_cell = st.refine_points > 0 ? config_.refine.cell : 0.0f;
   for (int k = 0; k < 3; ++k) {
-    view.counts.bounds_min[k] = 1e30f;
-    view.counts.bounds_max[k] = -1e30f;
+    header.counts.bounds_min[k] = 1e30f;
+    header.counts.bounds_max[k] = -1e30f;
   }
   for (uint32_t i = 0; i < ni; ++i)
     for (int k = 0; k < 3; ++k) {
-      view.counts.bounds_min[k] = std::min(view.counts.bounds_min[k], instances[i].centroid[k]);
-      view.counts.bounds_max[k] = std::max(view.counts.bounds_max[k], instances[i].centroid[k]);
+      header.counts.bounds_min[k] = std::min(header.counts.bounds_min[k], content.instances[i].centroid[k]);
+      header.counts.bounds_max[k] = std::max(header.counts.bounds_max[k], content.instances[i].centroid[k]);
     }
   if (ni == 0)
-    for (int k = 0; k < 3; ++k) view.counts.bounds_min[k] = view.counts.bounds_max[k] = 0.0f;
-  view.instances = instances.data();
-  view.grid_mean = mean.data();
-  view.grid_var = var.data();
-  view.triangles = tris.data();
-  view.index_keys = ikeys.data();
-  view.index_offsets = offsets.data();
-  view.index_entries = entries.data();
-  view.refine_xyz = refine.empty() ? nullptr : refine.data();
-  view.refine_points = st.refine_points;
-  view.refine_cell = config_.refine.cell;
+    for (int k = 0; k < 3; ++k) header.counts.bounds_min[k] = header.counts.bounds_max[k] = 0.0f;
+  auto write = [&](MapSection id, const void* data, size_t elems, size_t elem_bytes) {
+    return s == Status::Ok ? (s = sink.section(id, data, elems * elem_bytes)) : s;
+  };
+  // Instances and their grids (quantised by the tile stages).
+  write(MapSection::Instances, content.instances.data(), ni, sizeof(MapInstance));
+  write(MapSection::GridMean, content.mean.data(), content.mean.size(), sizeof(uint8_t));
+  write(MapSection::GridVar, content.var.data(), content.var.size(), sizeof(uint16_t));
+  if (s != Status::Ok) return s;
+  std::vector<MapInstance>().swap(content.instances);
+  std::vector<uint8_t>().swap(content.mean);
+  std::vector<uint16_t>().swap(content.var);
+
+  // Triangles and the hash index over all map instances.
+  {
+    const auto t_tri = std::chrono::steady_clock::now();
+    TriangleConfig tc = config_.triangle;
+    tc.neighbours = tc.map_k();  // the map's K (TriangleConfig::map_neighbours)
+    tc.map_neighbours = 0;
+    const uint64_t tri_cap = std::min<uint64_t>(uint64_t(ni) * tc.neighbours * (tc.neighbours - 1) / 2 + 16, 1u << 30);
+    tc.max_triangles = static_cast<uint32_t>(tri_cap);
+    Workspace tws(TriangleBuilder::required_bytes(tc, ni + 1) + size_t(tri_cap) * sizeof(Triangle) + 4096);
+    TriangleBuilder tb;
+    FixedVector<Triangle> tris;
+    if (tb.bind(tws.arena, tc, ni + 1) != Status::Ok || !tris.bind(tws.arena, tc.max_triangles))
+      return Status::InvalidArgument;
+    s = tb.build(content.centroids.data(), 3, content.labels.data(), ni, tris);
+    if (s != Status::Ok) return s;
+    const uint32_t nt = tris.size();
+    std::vector<uint64_t> ikeys(nt + 1), scratch(nt + 1);
+    std::vector<uint32_t> offsets(nt + 2), entries(nt + 1);
+    uint32_t key_count = 0;
+    build_triangle_index(tris.data(), nt, tc.side_bin, ikeys.data(), offsets.data(), entries.data(), &key_count,
+                         scratch.data());
+    st.triangles = nt;
+    st.index_keys = key_count;
+    header.counts.triangles = nt;
+    header.counts.index_keys = key_count;
+    write(MapSection::Triangles, tris.data(), nt, sizeof(MapTriangle));
+    write(MapSection::IndexKeys, ikeys.data(), key_count, sizeof(uint64_t));
+    write(MapSection::IndexOffsets, offsets.data(), size_t(key_count) + 1, sizeof(uint32_t));
+    write(MapSection::IndexEntries, entries.data(), nt, sizeof(uint32_t));
+    if (s != Status::Ok) return s;
+    st.seconds_triangles = seconds_since(t_tri);
+    if (progress) progress("triangles", nt, nt);
+  }
+  std::vector<float>().swap(content.centroids);
+  std::vector<uint8_t>().swap(content.labels);
+
+  // The refinement layer, sorted into its grid with normals (refine_layer_builder.h).
+  {
+    std::vector<MapRefineTile> tiles;
+    std::vector<MapRefinePoint> points;
+    if (st.refine_points > 0) {
+      s = build_refine_layer(&content.refine, config_.refine.cell, &tiles, &points);  // frees the chunks
+      if (s != Status::Ok) return s;
+    }
+    std::vector<std::vector<float>>().swap(content.refine);
+    header.counts.refine_points = static_cast<uint32_t>(points.size());
+    header.counts.refine_tiles = static_cast<uint32_t>(tiles.size());
+    st.refine_tiles = header.counts.refine_tiles;
+    write(MapSection::RefineTiles, tiles.data(), tiles.size(), sizeof(MapRefineTile));
+    write(MapSection::RefinePoints, points.data(), points.size(), sizeof(MapRefinePoint));
+    if (s != Status::Ok) return s;
+  }
+
+  // The semantic layer (paletted by the tile stages).
+  write(MapSection::SemanticTileKeys, content.semantic_keys.data(), content.semantic_keys.size(), sizeof(uint32_t));
+  write(MapSection::SemanticPaletteOffsets, content.semantic_palette_offsets.data(),
+        content.semantic_palette_offsets.size(), sizeof(uint32_t));
+  write(MapSection::SemanticPalette, content.semantic_palette.data(), content.semantic_palette.size(),
+        sizeof(uint32_t));
+  write(MapSection::SemanticCells, content.semantic_cells.data(), content.semantic_cells.size(), sizeof(uint8_t));
+  if (s != Status::Ok) return s;
+  content = MapContent();
+
   size_t written = 0;
-  s = write_compact_map(view, blob, &written, &st.refine_tiles);
+  s = sink.finish(header, &written);
   if (s != Status::Ok) return s;
   *bytes_out = written;
   st.bytes = written;

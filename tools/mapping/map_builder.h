@@ -9,9 +9,11 @@
 // the same result as over the whole map at once: instance clustering (an object seen from many scans is
 // one instance), one Gaussian semantic field per instance probed on its canonical grid, a downsampled
 // point layer for refinement and the semantic layer; then triangles and the hash index over all
-// instances, and serialises the map blob (map_format.h). What still grows with the map is the map
-// itself: the instances' fields, refinement points, semantic layer and triangles, and the serialised
-// blob, both in memory while build() writes (docs/results.md, growth with map size).
+// instances, and writes the map (map_format.h) section by section to a MapSink (map_writer.h), freeing
+// each section once written: with a FileMapSink the map never exists as a whole in memory. What still
+// grows with the map is its compact parts held until their section is written (the quantised grids,
+// the refinement points, the paletted semantic layer, the triangles and index; docs/results.md, growth
+// with map size).
 #pragma once
 #include <array>
 #include <cstdint>
@@ -26,6 +28,7 @@
 #include "gsf/georeference.h"
 #include "gsf/scan.h"
 #include "gsf/status.h"
+#include "mapping/map_writer.h"
 #include "mapping/semantic_layer.h"
 #include "mapping/tile_store.h"
 
@@ -121,7 +124,10 @@ class MapBuilder {
   const MapGeoreference& georeference() const { return georef_; }
   // The voxel accumulators' tiles so far (spills and reloads happen during add_scan too).
   const TileStoreStats& tile_stats() const { return store_.stats(); }
-  // Serialises the map into `blob` (16-byte aligned words); *bytes is the map's size.
+  // Writes the map to `sink` (e.g. a FileMapSink: straight to a file); *bytes is the map's size. The
+  // sink's errors (IoError) are returned.
+  Status build(MapSink& sink, size_t* bytes, MapBuildStats* stats, const Progress& progress = nullptr);
+  // The same map in memory: `blob` (16-byte aligned words) through a MemoryMapSink.
   Status build(std::vector<uint64_t>* blob, size_t* bytes, MapBuildStats* stats, const Progress& progress = nullptr);
 
  private:

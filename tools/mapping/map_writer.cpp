@@ -1,68 +1,142 @@
 #include "mapping/map_writer.h"
 
-#include "gsf/detail/map_quantization.h"
-#include "mapping/refine_layer_builder.h"
-#include "mapping/semantic_layer.h"
+#include <algorithm>
+#include <cstring>
+
+#include "gsf/detail/crc32.h"
 
 namespace gsf::mapping {
+namespace {
 
-Status write_compact_map(const MapContents& c, std::vector<uint64_t>* blob, size_t* bytes, uint32_t* refine_tiles) {
-  if (refine_tiles) *refine_tiles = 0;
-  MapView view;
-  view.georef = c.georef;
-  view.params = c.params;
-  view.counts = c.counts;
-  const uint32_t n = c.counts.instances;
-  const uint64_t g = view.grid_points(), gd = g * c.params.num_classes;
-  // Grids: one affine scale per instance and grid (mean, variance).
-  std::vector<MapInstance> instances(c.instances, c.instances + n);
-  std::vector<uint8_t> mean(n * gd);
-  std::vector<uint16_t> var(n * g);
-  for (uint32_t i = 0; i < n; ++i)
-    quantize_instance_grid(c.grid_mean + i * gd, c.grid_var + i * g, g, c.params.num_classes, &instances[i],
-                           mean.data() + i * gd, var.data() + i * g);
-  std::vector<MapRefineTile> tiles;
-  std::vector<MapRefinePoint> points;
-  if (c.refine_points > 0) {
-    const Status s = build_refine_layer(c.refine_xyz, c.refine_points, c.refine_cell, &tiles, &points);
-    if (s != Status::Ok) return s;
-    view.params.refine_cell = c.refine_cell;
-  } else {
-    view.params.refine_cell = 0.0f;
+uint64_t align16(uint64_t v) { return (v + 15) & ~uint64_t(15); }
+
+}  // namespace
+
+Status MapSink::pad_to(uint64_t offset) {
+  static const uint8_t zeros[64] = {};
+  while (at_ < offset) {
+    const size_t n = static_cast<size_t>(std::min<uint64_t>(offset - at_, sizeof(zeros)));
+    const Status s = write(zeros, n);
+    if (s != Status::Ok) {
+      failed_ = true;
+      return s;
+    }
+    at_ += n;
   }
-  view.counts.refine_points = static_cast<uint32_t>(points.size());
-  view.counts.refine_tiles = static_cast<uint32_t>(tiles.size());
-  view.instances = instances.data();
-  view.grid_mean = mean.data();
-  view.grid_var = var.data();
-  view.triangles = c.triangles;
-  view.index_keys = c.index_keys;
-  view.index_offsets = c.index_offsets;
-  view.index_entries = c.index_entries;
-  view.refine_tiles = tiles.empty() ? nullptr : tiles.data();
-  view.refine_points = points.empty() ? nullptr : points.data();
-  std::vector<uint32_t> palette_offsets, palette;
-  std::vector<uint8_t> palette_cells;
-  if (c.counts.semantic_tiles > 0) {
-    const uint32_t tc = c.params.semantic_tile_cells;
-    const std::vector<uint32_t> dense(c.semantic_cells, c.semantic_cells + size_t(c.counts.semantic_tiles) * tc * tc);
-    const Status s =
-        palette_semantic_layer(dense, c.counts.semantic_tiles, tc, &palette_offsets, &palette, &palette_cells);
-    if (s != Status::Ok) return s;
-  }
-  view.counts.semantic_palette = static_cast<uint32_t>(palette.size());
-  view.semantic_tile_keys = c.semantic_tile_keys;
-  view.semantic_palette_offsets = palette_offsets.empty() ? nullptr : palette_offsets.data();
-  view.semantic_palette = palette.empty() ? nullptr : palette.data();
-  view.semantic_cells = palette_cells.empty() ? nullptr : palette_cells.data();
-  const size_t size = map_serialized_size(view);
-  if (size == 0) return Status::InvalidArgument;
-  blob->assign(size / 8 + 2, 0);
-  size_t written = 0;
-  const Status s = write_map(view, blob->data(), blob->size() * 8, &written);
+  return Status::Ok;
+}
+
+Status MapSink::begin_section(MapSection id) {
+  if (failed_) return Status::IoError;
+  if (open_ || next_ >= kMapSectionCount || static_cast<uint32_t>(id) != next_ + 1) return Status::InvalidArgument;
+  // The header and table are written at finish(); sections start 16-aligned after them.
+  const Status s = pad_to(align16(next_ == 0 ? map_header_bytes() : at_));
   if (s != Status::Ok) return s;
-  *bytes = written;
-  if (refine_tiles) *refine_tiles = view.counts.refine_tiles;
+  offset_[next_] = at_;
+  bytes_[next_] = 0;
+  crc_[next_] = 0;
+  open_ = true;
+  return Status::Ok;
+}
+
+Status MapSink::append(const void* data, size_t bytes) {
+  if (failed_) return Status::IoError;
+  if (!open_ || (bytes > 0 && data == nullptr)) return Status::InvalidArgument;
+  if (bytes == 0) return Status::Ok;
+  const Status s = write(data, bytes);
+  if (s != Status::Ok) {
+    failed_ = true;
+    return s;
+  }
+  crc_[next_] = crc32_update(crc_[next_], data, bytes);
+  bytes_[next_] += bytes;
+  at_ += bytes;
+  return Status::Ok;
+}
+
+Status MapSink::end_section() {
+  if (failed_) return Status::IoError;
+  if (!open_) return Status::InvalidArgument;
+  open_ = false;
+  ++next_;
+  return Status::Ok;
+}
+
+Status MapSink::section(MapSection id, const void* data, size_t bytes) {
+  Status s = begin_section(id);
+  if (s == Status::Ok) s = append(data, bytes);
+  if (s == Status::Ok) s = end_section();
+  return s;
+}
+
+Status MapSink::finish(const MapView& contents, size_t* bytes) {
+  if (bytes) *bytes = 0;
+  if (failed_) return Status::IoError;
+  if (open_ || next_ != kMapSectionCount) return Status::InvalidArgument;
+  MapSectionLayout layout[kMapSectionCount];
+  size_t total = 0;
+  Status s = map_layout(contents, layout, &total);
+  if (s != Status::Ok) return s;
+  for (uint32_t i = 0; i < kMapSectionCount; ++i)
+    if (layout[i].offset != offset_[i] || layout[i].bytes != bytes_[i]) return Status::InvalidArgument;
+  s = pad_to(total);
+  if (s != Status::Ok) return s;
+  std::vector<uint8_t> header(map_header_bytes());
+  s = write_map_header(contents, crc_, header.data(), header.size());
+  if (s != Status::Ok) return s;
+  s = write_header(header.data(), header.size());
+  if (s == Status::Ok) s = commit();
+  if (s != Status::Ok) {
+    failed_ = true;
+    return s;
+  }
+  if (bytes) *bytes = total;
+  return Status::Ok;
+}
+
+MemoryMapSink::MemoryMapSink(std::vector<uint64_t>* blob) : blob_(blob) { blob_->clear(); }
+
+Status MemoryMapSink::write(const void* data, size_t bytes) {
+  // Words up to the end, plus two words of zero tail (as the map's blobs always had).
+  blob_->resize((size_ + bytes) / 8 + 2, 0);
+  std::memcpy(reinterpret_cast<uint8_t*>(blob_->data()) + size_, data, bytes);
+  size_ += bytes;
+  return Status::Ok;
+}
+
+Status MemoryMapSink::write_header(const void* data, size_t bytes) {
+  if (bytes > size_) return Status::InvalidArgument;
+  std::memcpy(blob_->data(), data, bytes);
+  return Status::Ok;
+}
+
+FileMapSink::FileMapSink(const std::string& path) : path_(path), partial_(path + ".partial") {
+  file_ = std::fopen(partial_.c_str(), "wb");
+}
+
+FileMapSink::~FileMapSink() {
+  if (file_) std::fclose(file_);
+  if (!done_) std::remove(partial_.c_str());
+}
+
+Status FileMapSink::write(const void* data, size_t bytes) {
+  if (!file_ || std::fwrite(data, 1, bytes, file_) != bytes) return Status::IoError;
+  return Status::Ok;
+}
+
+Status FileMapSink::write_header(const void* data, size_t bytes) {
+  if (!file_ || std::fseek(file_, 0, SEEK_SET) != 0 || std::fwrite(data, 1, bytes, file_) != bytes)
+    return Status::IoError;
+  return Status::Ok;
+}
+
+Status FileMapSink::commit() {
+  if (!file_) return Status::IoError;
+  const bool ok = std::fflush(file_) == 0 && !std::ferror(file_);
+  const bool closed = std::fclose(file_) == 0;
+  file_ = nullptr;
+  if (!ok || !closed || std::rename(partial_.c_str(), path_.c_str()) != 0) return Status::IoError;
+  done_ = true;
   return Status::Ok;
 }
 

@@ -1,38 +1,83 @@
-// Offline (host, may use the heap): serialise what the map builder computed at full precision into the
-// compact on-board format (map_format.h, version 4): grids quantised per instance (map_quantization.h),
-// the refinement layer sorted into its grid with normals (refine_layer_builder.h), the semantic layer
-// with a palette per tile (semantic_layer.h). Only what the
-// localizer reads is written (the fields' inducing inputs and weights are not: the localizer reads the
-// probed grids).
+// Offline (host, may use the heap): writes a map (map_format.h) section by section, so the map never
+// has to exist as a whole in memory. The builder hands each section over in id order as soon as it is
+// computed and frees it; the sink computes each section's CRC-32 as the bytes pass, zero-pads to the
+// next 16-byte offset and, at finish(), writes the header and section table that write_map would write
+// (map_layout / write_map_header: the format's own code, so the bytes are write_map's) in front of them.
+// MemoryMapSink builds the blob in memory (tests, in-process callers); FileMapSink writes a file and
+// seeks back for the header, holding nothing but the header.
 #pragma once
 #include <cstddef>
 #include <cstdint>
+#include <cstdio>
+#include <string>
 #include <vector>
 
 #include "gsf/map_format.h"
 
 namespace gsf::mapping {
 
-struct MapContents {
-  MapGeoreference georef = local_georeference();
-  MapParams params{};                      // refine_cell is set by the writer (0 without refinement points)
-  MapCounts counts{};                      // instances, triangles, index_keys, road length, bounds, semantic_tiles
-  const MapInstance* instances = nullptr;  // centroid, stability, point_count, label (scales are set here)
-  const float* grid_mean = nullptr;        // instances x G x D
-  const float* grid_var = nullptr;         // instances x G
-  const MapTriangle* triangles = nullptr;
-  const uint64_t* index_keys = nullptr;
-  const uint32_t* index_offsets = nullptr;
-  const uint32_t* index_entries = nullptr;
-  const float* refine_xyz = nullptr;  // refine_points x 3, map-local
-  uint32_t refine_points = 0;
-  float refine_cell = 1.0f;  // m, the localizer's refine.cell
-  const uint32_t* semantic_tile_keys = nullptr;
-  const uint32_t* semantic_cells = nullptr;  // semantic_tiles x tile_cells^2 masks (the writer palettes them)
+class MapSink {
+ public:
+  virtual ~MapSink() = default;
+  // The next section (sections come in id order, each once): whole, or in pieces between
+  // begin_section and end_section. InvalidArgument for a section out of order.
+  Status section(MapSection id, const void* data, size_t bytes);
+  Status begin_section(MapSection id);
+  Status append(const void* data, size_t bytes);
+  Status end_section();
+  // After the last section: checks that what was written is the layout `contents` (params, counts,
+  // georeference) implies (InvalidArgument otherwise), then writes the header and section table.
+  // *bytes: the map's size.
+  Status finish(const MapView& contents, size_t* bytes);
+
+ protected:
+  // Bytes at the end of what was written so far; the header at offset 0 (at finish); then commit.
+  virtual Status write(const void* data, size_t bytes) = 0;
+  virtual Status write_header(const void* data, size_t bytes) = 0;
+  virtual Status commit() { return Status::Ok; }
+
+ private:
+  Status pad_to(uint64_t offset);
+  uint64_t at_ = 0;      // bytes written (the header counted from the start)
+  uint32_t next_ = 0;    // index of the next section
+  bool open_ = false;    // inside begin_section / end_section
+  bool failed_ = false;  // a write failed: every later call fails
+  uint64_t offset_[kMapSectionCount] = {}, bytes_[kMapSectionCount] = {};
+  uint32_t crc_[kMapSectionCount] = {};
 };
 
-// Quantises and serialises `c` into `blob` (16-byte aligned words); *bytes is the map's size,
-// *refine_tiles (optional) the refinement layer's tile count.
-Status write_compact_map(const MapContents& c, std::vector<uint64_t>* blob, size_t* bytes, uint32_t* refine_tiles);
+// The map in memory as 16-byte aligned words (blob->size() * 8 >= *bytes, the tail zero).
+class MemoryMapSink : public MapSink {
+ public:
+  explicit MemoryMapSink(std::vector<uint64_t>* blob);
+
+ protected:
+  Status write(const void* data, size_t bytes) override;
+  Status write_header(const void* data, size_t bytes) override;
+
+ private:
+  std::vector<uint64_t>* blob_;
+  size_t size_ = 0;
+};
+
+// The map written to `path`, through a temporary file next to it (path + ".partial") renamed over
+// `path` at finish(), so a failed build never leaves a partial map under the final name. IoError
+// (from the first section on) when the file cannot be created, written or renamed.
+class FileMapSink : public MapSink {
+ public:
+  explicit FileMapSink(const std::string& path);
+  ~FileMapSink() override;                           // closes and removes the temporary file unless finish() succeeded
+  bool is_open() const { return file_ != nullptr; }  // the temporary file could be created
+
+ protected:
+  Status write(const void* data, size_t bytes) override;
+  Status write_header(const void* data, size_t bytes) override;
+  Status commit() override;
+
+ private:
+  std::string path_, partial_;
+  std::FILE* file_ = nullptr;
+  bool done_ = false;
+};
 
 }  // namespace gsf::mapping

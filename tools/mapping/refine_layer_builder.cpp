@@ -16,55 +16,56 @@ struct Placed {
   uint32_t input;  // input order, the tie-break inside a cell
 };
 
-}  // namespace
-
-Status build_refine_layer(const float* xyz, uint32_t n, float cell, std::vector<MapRefineTile>* tiles,
-                          std::vector<MapRefinePoint>* points) {
-  tiles->clear();
-  points->clear();
-  if (!(cell > 0.0f) || !std::isfinite(cell)) return Status::InvalidArgument;
-  const float inv = 1.0f / cell;  // the refiner's cell of a point (Refiner::cell_key)
-  std::vector<Placed> placed(n);
-  for (uint32_t i = 0; i < n; ++i) {
-    Placed& p = placed[i];
-    int32_t c[3];
-    for (int k = 0; k < 3; ++k) {
-      const float s = xyz[3 * i + k] * inv;
-      if (!std::isfinite(s) || std::fabs(s) >= float(1 << 19)) return Status::InvalidInput;
-      const float f = std::floor(s);
-      c[k] = static_cast<int32_t>(f);
-      p.offset[k] = quantize_cell_offset(s - f);
-    }
-    int32_t tx, ty;
-    if (!refine_tile_of(RefineCell{c[0], c[1], c[2]}, &tx, &ty, &p.key)) return Status::InvalidInput;
-    const int32_t t = static_cast<int32_t>(kRefineTileCells);
-    p.cz = c[2];
-    p.local = static_cast<uint16_t>((uint32_t(c[1] - ty * t) << 4) | uint32_t(c[0] - tx * t));
-    p.input = i;
+// Point i of the layer at map-local xyz; false for a non-finite point or one beyond the tile key range.
+bool place(const float* xyz, float inv, uint32_t i, Placed* p) {
+  int32_t c[3];
+  for (int k = 0; k < 3; ++k) {
+    const float s = xyz[k] * inv;
+    if (!std::isfinite(s) || std::fabs(s) >= float(1 << 19)) return false;
+    const float f = std::floor(s);
+    c[k] = static_cast<int32_t>(f);
+    p->offset[k] = quantize_cell_offset(s - f);
   }
-  std::sort(placed.begin(), placed.end(), [](const Placed& a, const Placed& b) {
-    if (a.key != b.key) return a.key < b.key;
-    if (a.cz != b.cz) return a.cz < b.cz;
-    if (a.local != b.local) return a.local < b.local;
-    return a.input < b.input;
-  });
-  // Tiles: z base = the lowest z cell of the tile (points are sorted by z within a tile).
-  points->resize(n);
-  for (uint32_t i = 0; i < n;) {
-    uint32_t j = i;
-    while (j < n && placed[j].key == placed[i].key) ++j;
-    const int32_t z_base = placed[i].cz;
-    if (placed[j - 1].cz - z_base >= kRefineTileZCells) return Status::InvalidInput;
-    tiles->push_back(MapRefineTile{placed[i].key, i, z_base});
-    for (uint32_t k = i; k < j; ++k) {
-      MapRefinePoint& out = (*points)[k];
-      out.cell = static_cast<uint16_t>((uint32_t(placed[k].cz - z_base) << 8) | placed[k].local);
-      for (int a = 0; a < 3; ++a) {
-        out.offset[a] = placed[k].offset[a];
-        out.normal[a] = 0;
+  int32_t tx, ty;
+  if (!refine_tile_of(RefineCell{c[0], c[1], c[2]}, &tx, &ty, &p->key)) return false;
+  const int32_t t = static_cast<int32_t>(kRefineTileCells);
+  p->cz = c[2];
+  p->local = static_cast<uint16_t>((uint32_t(c[1] - ty * t) << 4) | uint32_t(c[0] - tx * t));
+  p->input = i;
+  return true;
+}
+
+// The layer from the placed points (consumed: freed before the normals, 20 bytes a point, the most here).
+Status build_from_placed(std::vector<Placed>* placed_in, float cell, std::vector<MapRefineTile>* tiles,
+                         std::vector<MapRefinePoint>* points) {
+  const uint32_t n = static_cast<uint32_t>(placed_in->size());
+  {
+    std::vector<Placed> placed;
+    placed.swap(*placed_in);
+    std::sort(placed.begin(), placed.end(), [](const Placed& a, const Placed& b) {
+      if (a.key != b.key) return a.key < b.key;
+      if (a.cz != b.cz) return a.cz < b.cz;
+      if (a.local != b.local) return a.local < b.local;
+      return a.input < b.input;
+    });
+    // Tiles: z base = the lowest z cell of the tile (points are sorted by z within a tile).
+    points->resize(n);
+    for (uint32_t i = 0; i < n;) {
+      uint32_t j = i;
+      while (j < n && placed[j].key == placed[i].key) ++j;
+      const int32_t z_base = placed[i].cz;
+      if (placed[j - 1].cz - z_base >= kRefineTileZCells) return Status::InvalidInput;
+      tiles->push_back(MapRefineTile{placed[i].key, i, z_base});
+      for (uint32_t k = i; k < j; ++k) {
+        MapRefinePoint& out = (*points)[k];
+        out.cell = static_cast<uint16_t>((uint32_t(placed[k].cz - z_base) << 8) | placed[k].local);
+        for (int a = 0; a < 3; ++a) {
+          out.offset[a] = placed[k].offset[a];
+          out.normal[a] = 0;
+        }
       }
+      i = j;
     }
-    i = j;
   }
   // Normals: PCA of the quantised points in the 27 cells around each point's cell (smallest
   // eigenvector) when the neighbourhood is planar enough; otherwise none (zero).
@@ -74,7 +75,6 @@ Status build_refine_layer(const float* xyz, uint32_t n, float cell, std::vector<
   view.point_count = n;
   view.tiles = tiles->data();
   view.points = points->data();
-  std::vector<int8_t> normals(size_t(n) * 3, 0);
   uint32_t hint = 0;
   for (uint32_t t = 0; t < view.tile_count; ++t) {
     const uint32_t last = t + 1 < view.tile_count ? (*tiles)[t + 1].first_point : n;
@@ -110,12 +110,45 @@ Status build_refine_layer(const float* xyz, uint32_t n, float cell, std::vector<
       const Eigen::Vector3d ev = eig.eigenvalues();
       if (!(ev(0) < 0.3 * ev(1))) continue;  // not planar: no normal, not used
       const Eigen::Vector3d nrm = eig.eigenvectors().col(0);
-      for (int k = 0; k < 3; ++k) normals[3 * i + k] = quantize_normal_component(float(nrm[k]));
+      // In place: the neighbourhoods read positions only (cell and offset), never normals.
+      for (int k = 0; k < 3; ++k) (*points)[i].normal[k] = quantize_normal_component(float(nrm[k]));
     }
   }
-  for (uint32_t i = 0; i < n; ++i)
-    for (int k = 0; k < 3; ++k) (*points)[i].normal[k] = normals[3 * i + k];
   return Status::Ok;
+}
+
+}  // namespace
+
+Status build_refine_layer(const float* xyz, uint32_t n, float cell, std::vector<MapRefineTile>* tiles,
+                          std::vector<MapRefinePoint>* points) {
+  tiles->clear();
+  points->clear();
+  if (!(cell > 0.0f) || !std::isfinite(cell)) return Status::InvalidArgument;
+  const float inv = 1.0f / cell;  // the refiner's cell of a point (Refiner::cell_key)
+  std::vector<Placed> placed(n);
+  for (uint32_t i = 0; i < n; ++i)
+    if (!place(xyz + 3 * size_t(i), inv, i, &placed[i])) return Status::InvalidInput;
+  return build_from_placed(&placed, cell, tiles, points);
+}
+
+Status build_refine_layer(std::vector<std::vector<float>>* chunks, float cell, std::vector<MapRefineTile>* tiles,
+                          std::vector<MapRefinePoint>* points) {
+  tiles->clear();
+  points->clear();
+  if (!(cell > 0.0f) || !std::isfinite(cell)) return Status::InvalidArgument;
+  const float inv = 1.0f / cell;
+  size_t n = 0;
+  for (const std::vector<float>& c : *chunks) n += c.size() / 3;
+  if (n > UINT32_MAX) return Status::InvalidInput;
+  std::vector<Placed> placed(n);
+  uint32_t i = 0;
+  for (std::vector<float>& c : *chunks) {
+    for (size_t j = 0; j + 3 <= c.size(); j += 3, ++i)
+      if (!place(c.data() + j, inv, i, &placed[i])) return Status::InvalidInput;
+    std::vector<float>().swap(c);
+  }
+  chunks->clear();
+  return build_from_placed(&placed, cell, tiles, points);
 }
 
 }  // namespace gsf::mapping

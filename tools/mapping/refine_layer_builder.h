@@ -15,5 +15,10 @@ namespace gsf::mapping {
 // (+-2^19 cells from the origin) or a tile whose points span 256 or more cells in z.
 Status build_refine_layer(const float* xyz, uint32_t n, float cell, std::vector<MapRefineTile>* tiles,
                           std::vector<MapRefinePoint>* points);
+// The same from the points in chunks (x, y, z each; the chunks in order), each chunk freed as soon as
+// its points are placed, so the float points and the layer are not held whole at once. *chunks is
+// empty afterwards.
+Status build_refine_layer(std::vector<std::vector<float>>* chunks, float cell, std::vector<MapRefineTile>* tiles,
+                          std::vector<MapRefinePoint>* points);
 
 }  // namespace gsf::mapping

@@ -7,9 +7,14 @@
 #include <unordered_map>
 #include <unordered_set>
 
+#if defined(__GLIBC__)
+#include <malloc.h>
+#endif
+
 #include "gsf/detail/arena.h"
 #include "gsf/detail/gaussian_field.h"
 #include "gsf/detail/instance_clustering.h"
+#include "gsf/detail/map_quantization.h"
 #include "gsf/detail/pole_extraction.h"
 #include "gsf/detail/voxel_layer.h"
 
@@ -37,6 +42,7 @@ struct Candidate {
   uint32_t chunk = 0;  // its field rows: the chunk of the tile that fitted it, and the row there
   uint32_t row = 0;
   uint32_t inducing = 0;
+  MapInstance scales{};  // the quantisation scales of its grid rows (mean_min ... var_step)
   uint32_t field_points_dropped = 0;
   bool fit_ok = false;
 };
@@ -47,22 +53,25 @@ struct RefineCandidate {
   float point[3];  // x, y, z
 };
 
-// One tile's fitted fields, rows in the tile's candidate order. Fields grow per tile and are gathered
-// into exactly sized map-order arrays at the end, one array at a time, so the builder never holds a
-// doubled vector capacity or two whole copies of the fields.
+// One tile's fitted fields, rows in the tile's candidate order, quantised as they are fitted (the
+// quantisation is per instance, so it is the same whenever it runs). Fields grow per tile and are
+// gathered into exactly sized map-order arrays at the end, one array at a time, so the builder never
+// holds a doubled vector capacity, two whole copies of the fields, or their float form.
 struct FieldChunk {
-  std::vector<float> mean, var;  // the probed grid (the map stores no inducing inputs or weights)
+  std::vector<uint8_t> mean;  // the probed grid (the map stores no inducing inputs or weights)
+  std::vector<uint16_t> var;
 };
 
 // Map-order rows of one field array from the chunks (member `part`), freeing the chunks' rows as it goes.
-void gather_rows(std::vector<FieldChunk>* chunks, std::vector<float> FieldChunk::*part, size_t row,
-                 const std::vector<std::pair<uint32_t, uint32_t>>& rows, std::vector<float>* out) {
-  std::vector<float>(rows.size() * row).swap(*out);
+template <typename T>
+void gather_rows(std::vector<FieldChunk>* chunks, std::vector<T> FieldChunk::*part, size_t row,
+                 const std::vector<std::pair<uint32_t, uint32_t>>& rows, std::vector<T>* out) {
+  std::vector<T>(rows.size() * row).swap(*out);
   for (size_t i = 0; i < rows.size(); ++i) {
-    const std::vector<float>& from = (*chunks)[rows[i].first].*part;
+    const std::vector<T>& from = (*chunks)[rows[i].first].*part;
     std::copy_n(from.begin() + size_t(rows[i].second) * row, row, out->begin() + i * row);
   }
-  for (FieldChunk& c : *chunks) std::vector<float>().swap(c.*part);
+  for (FieldChunk& c : *chunks) std::vector<T>().swap(c.*part);
 }
 
 }  // namespace
@@ -114,15 +123,17 @@ Status build_map_content(TileStore& store, const LocalizerConfig& config, const 
   std::vector<uint32_t> ids(max_pts);
   std::vector<float> xyz(size_t(max_pts) * 3), targets(size_t(max_pts) * D), chol(size_t(M) * M), grid(size_t(G) * 3);
   std::vector<float> field_inputs(size_t(M) * 3), field_alpha(size_t(M) * D);
+  std::vector<float> row_mean(size_t(G) * D), row_var(G);  // one instance's grid before quantisation
   std::vector<uint8_t> gl(max_pts);
   make_probe_grid(fc, 0.0f, grid.data());
 
   std::vector<Candidate> clustered, poles;
   std::vector<FieldChunk> fields;  // per map tile with candidates
-  // Refinement candidates not yet final, and the final points in cell order (chunks of 1 M floats, so
-  // the layer never sits in a doubled vector capacity).
+  // Refinement candidates not yet final, and the final points in cell order (chunks of a fixed capacity,
+  // so the layer never sits in a doubled vector capacity; handed to the map as chunks).
   std::vector<RefineCandidate> refine;
-  std::vector<std::vector<float>> refine_chunks(1);
+  constexpr size_t kRefineChunkFloats = size_t(3) << 18;  // 3 MB
+  std::vector<std::vector<float>>& refine_chunks = out->refine;
   size_t refine_floats = 0;
   // Tiles come x-major: once a column of tiles is done, no later tile owns a voxel left of its right
   // edge (less a voxel for rounding), so cells left of it are final: per cell the candidate with the
@@ -134,27 +145,35 @@ Status build_map_content(TileStore& store, const LocalizerConfig& config, const 
     size_t k = 0;
     for (; k < refine.size() && refine[k].cell < limit; ++k) {
       if (k > 0 && refine[k].cell == refine[k - 1].cell) continue;
-      if (refine_chunks.back().size() >= (1u << 20)) refine_chunks.emplace_back();
+      if (refine_chunks.empty() || refine_chunks.back().size() + 3 > kRefineChunkFloats) {
+        refine_chunks.emplace_back();
+        refine_chunks.back().reserve(kRefineChunkFloats);
+      }
       refine_chunks.back().insert(refine_chunks.back().end(), refine[k].point, refine[k].point + 3);
       refine_floats += 3;
     }
     refine.erase(refine.begin(), refine.begin() + k);
   };
-  // Per semantic tile: its key, and its cells in per-map-tile chunks (chunk, offset).
-  std::vector<std::pair<uint32_t, std::pair<uint32_t, size_t>>> semantic;
-  std::vector<std::vector<uint32_t>> semantic_chunks;
+  // Per semantic tile: its key, and its place in the per-map-tile chunks (chunk, tile in the chunk).
+  // Each chunk is paletted when built (palette_semantic_layer: a tile's palette depends on it alone).
+  struct SemanticChunk {
+    std::vector<uint32_t> offsets, palette;
+    std::vector<uint8_t> cells;
+  };
+  std::vector<std::pair<uint32_t, std::pair<uint32_t, uint32_t>>> semantic;
+  std::vector<SemanticChunk> semantic_chunks;
   const size_t semantic_tile_size = size_t(options.semantic_layer.tile_cells) * options.semantic_layer.tile_cells;
   uint64_t map_voxels = 0;
   double seconds_cluster = 0, seconds_fields = 0;
 
   // A candidate's field: the same per-instance fit as the localizer's query fields (gaussian_field.h),
-  // into rows initialised as a whole-map build initialises them.
+  // into rows initialised as a whole-map build initialises them, then quantised (map_quantization.h).
   auto fit_field = [&](const VoxelLayer& layer, Candidate* c) {
     FieldChunk& chunk = fields.back();
     c->chunk = static_cast<uint32_t>(fields.size() - 1);
     c->row = static_cast<uint32_t>(chunk.var.size() / G);
-    chunk.mean.resize(chunk.mean.size() + size_t(G) * D, 0.0f);
-    chunk.var.resize(chunk.var.size() + G, fc.signal_variance);
+    std::fill(row_mean.begin(), row_mean.end(), 0.0f);
+    std::fill(row_var.begin(), row_var.end(), fc.signal_variance);
     float* in_i = field_inputs.data();  // needed only to probe the grid
     float* al_i = field_alpha.data();
     const FieldGather gather{max_pts, ids.data(), xyz.data(), targets.data(), gl.data()};
@@ -166,9 +185,12 @@ Status build_map_content(TileStore& store, const LocalizerConfig& config, const 
     if (c->fit_ok) {
       c->inducing = m;
       FieldView f{in_i, al_i, m};
-      solver.probe(f, chol.data(), grid.data(), G, chunk.mean.data() + size_t(c->row) * G * D,
-                   chunk.var.data() + size_t(c->row) * G, nullptr);
+      solver.probe(f, chol.data(), grid.data(), G, row_mean.data(), row_var.data(), nullptr);
     }
+    chunk.mean.resize(chunk.mean.size() + size_t(G) * D);
+    chunk.var.resize(chunk.var.size() + G);
+    quantize_instance_grid(row_mean.data(), row_var.data(), G, D, &c->scales,
+                           chunk.mean.data() + size_t(c->row) * G * D, chunk.var.data() + size_t(c->row) * G);
   };
 
   const std::vector<uint64_t> tiles = store.tile_ids();
@@ -322,9 +344,17 @@ Status build_map_content(TileStore& store, const LocalizerConfig& config, const 
       };
       std::vector<uint32_t> sem_keys, sem_cells;
       build_semantic_layer(layer, options.semantic_layer, &sem_keys, &sem_cells, keep);
-      for (size_t k = 0; k < sem_keys.size(); ++k)
-        semantic.push_back({sem_keys[k], {uint32_t(semantic_chunks.size()), k * semantic_tile_size}});
-      if (!sem_keys.empty()) semantic_chunks.push_back(std::move(sem_cells));
+      if (!sem_keys.empty()) {
+        for (size_t k = 0; k < sem_keys.size(); ++k)
+          semantic.push_back({sem_keys[k], {uint32_t(semantic_chunks.size()), uint32_t(k)}});
+        SemanticChunk chunk;
+        const Status ps =
+            palette_semantic_layer(sem_cells, uint32_t(sem_keys.size()), options.semantic_layer.tile_cells,
+                                   &chunk.offsets, &chunk.palette, &chunk.cells);
+        if (ps != Status::Ok) return ps;
+        chunk.palette.shrink_to_fit();
+        semantic_chunks.push_back(std::move(chunk));
+      }
     }
     if (tile > 0 && options.refine_voxel > 0.0f && t + 1 < tiles.size() && TileStore::tile_x(tiles[t + 1]) != tx) {
       const double edge = (double(tx + 1) * tile - 1.0) * vs;  // m, a voxel inside the column's right edge
@@ -332,6 +362,11 @@ Status build_map_content(TileStore& store, const LocalizerConfig& config, const 
       if (cell_x > 0 && cell_x < (1 << 21)) flush_refine(uint64_t(cell_x) << 42);
     }
     if (progress) progress("tiles", t + 1, tiles.size());
+#if defined(__GLIBC__)
+    // The tile's temporaries (tens of MB) were freed between the map's growing arrays: hand their pages
+    // back, or the heap's high-water mark grows with the map by the fragments.
+    malloc_trim(0);
+#endif
   }
   flush_refine(UINT64_MAX);
   std::vector<RefineCandidate>().swap(refine);
@@ -382,6 +417,10 @@ Status build_map_content(TileStore& store, const LocalizerConfig& config, const 
     for (int k = 0; k < 3; ++k) mi.centroid[k] = out->centroids[3 * i + k] = c.in.centroid[k];
     mi.stability = c.in.stability;
     mi.point_count = c.in.point_count;
+    mi.mean_min = c.scales.mean_min;
+    mi.mean_step = c.scales.mean_step;
+    mi.var_min = c.scales.var_min;
+    mi.var_step = c.scales.var_step;
     mi.label = out->labels[i] = c.in.label;
     st->instances_by_class[c.in.label]++;
     st->field_points_dropped += c.field_points_dropped;
@@ -391,24 +430,27 @@ Status build_map_content(TileStore& store, const LocalizerConfig& config, const 
   st->seconds_fields = seconds_fields;
   if (progress) progress("clustered instances", ni, ni);
 
-  // Refinement points, already final and in cell order: into one exactly sized array.
-  std::vector<float>(refine_floats).swap(out->refine);
-  for (size_t k = 0, at = 0; k < refine_chunks.size(); ++k) {
-    std::copy(refine_chunks[k].begin(), refine_chunks[k].end(), out->refine.begin() + at);
-    at += refine_chunks[k].size();
-    std::vector<float>().swap(refine_chunks[k]);
-  }
-  st->refine_points = static_cast<uint32_t>(out->refine.size() / 3);
+  // Refinement points: already final, in cell order, in out->refine's chunks.
+  st->refine_points = static_cast<uint32_t>(refine_floats / 3);
 
+  // The semantic layer in key order, paletted tile by tile (a tile's palette depends on it alone).
   std::sort(semantic.begin(), semantic.end());
   out->semantic_keys.reserve(semantic.size());
   out->semantic_cells.reserve(semantic.size() * semantic_tile_size);
+  if (!semantic.empty()) out->semantic_palette_offsets.reserve(semantic.size() + 1);
   for (const auto& [key, at] : semantic) {
-    const std::vector<uint32_t>& chunk = semantic_chunks[at.first];
+    const SemanticChunk& chunk = semantic_chunks[at.first];
+    const uint32_t k = at.second;
+    if (out->semantic_palette_offsets.empty()) out->semantic_palette_offsets.push_back(0);
     out->semantic_keys.push_back(key);
-    out->semantic_cells.insert(out->semantic_cells.end(), chunk.begin() + at.second,
-                               chunk.begin() + at.second + semantic_tile_size);
+    out->semantic_palette.insert(out->semantic_palette.end(), chunk.palette.begin() + chunk.offsets[k],
+                                 chunk.palette.begin() + chunk.offsets[k + 1]);
+    out->semantic_palette_offsets.push_back(static_cast<uint32_t>(out->semantic_palette.size()));
+    out->semantic_cells.insert(out->semantic_cells.end(), chunk.cells.begin() + size_t(k) * semantic_tile_size,
+                               chunk.cells.begin() + size_t(k + 1) * semantic_tile_size);
   }
+  std::vector<SemanticChunk>().swap(semantic_chunks);
+  out->semantic_palette.shrink_to_fit();
   st->semantic_tiles = static_cast<uint32_t>(out->semantic_keys.size());
   return Status::Ok;
 }

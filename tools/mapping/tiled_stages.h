@@ -30,14 +30,18 @@ namespace gsf::mapping {
 
 // What the map is made of before triangles and serialisation, in map order: the clustered instances
 // (by their lowest voxel key), then the geometric poles / trunks (likewise), each with its field rows;
-// the refinement points (by refinement cell key) and the semantic layer's tiles (by key).
+// the refinement points (by refinement cell key) and the semantic layer's tiles (by key). Grids and
+// the semantic layer are already in their stored form (quantised per instance as each field is fitted,
+// paletted per tile), so the builder never holds them as floats or dense masks for the whole map.
 struct MapContent {
-  std::vector<MapInstance> instances;
-  std::vector<float> centroids;  // 3 per instance
-  std::vector<uint8_t> labels;   // per instance
-  std::vector<float> mean, var;  // per instance G x D, G: the probed field grid
-  std::vector<float> refine;     // x, y, z per point
-  std::vector<uint32_t> semantic_keys, semantic_cells;
+  std::vector<MapInstance> instances;      // with their grids' quantisation scales (map_quantization.h)
+  std::vector<float> centroids;            // 3 per instance
+  std::vector<uint8_t> labels;             // per instance
+  std::vector<uint8_t> mean;               // per instance G x D, G: the probed field grid (quantised)
+  std::vector<uint16_t> var;               // per instance G (quantised)
+  std::vector<std::vector<float>> refine;  // x, y, z per point, in chunks (refine_layer_builder.h)
+  std::vector<uint32_t> semantic_keys, semantic_palette_offsets, semantic_palette;  // semantic_grid.h
+  std::vector<uint8_t> semantic_cells;                                              // palette indices
 };
 
 // Halo (m) around a map tile that the tile's stages read beyond it (see above).

@@ -169,6 +169,22 @@ size_t map_serialized_size(const MapView& contents);
 // Serialise into `out` (16-byte aligned, >= map_serialized_size bytes). Padding is zeroed so the
 // same contents give the same bytes.
 Status write_map(const MapView& contents, void* out, size_t out_bytes, size_t* written);
+// For writers that stream the sections (e.g. the offline builder writing straight to a file): the
+// layout write_map uses and the header + section table it writes, from the params, counts and
+// georeference alone (the data pointers are not read). Sections follow the table in id order, each at
+// its offset, zero padding between them.
+struct MapSectionLayout {
+  uint32_t id;
+  uint32_t elem_bytes;
+  uint64_t offset;
+  uint64_t bytes;
+};
+// Bytes of the header and section table (the first section starts at the next multiple of 16).
+size_t map_header_bytes();
+// sections[kMapSectionCount] and *total (the blob size); InvalidArgument for invalid params or georeference.
+Status map_layout(const MapView& contents, MapSectionLayout* sections, size_t* total);
+// The first map_header_bytes() bytes write_map writes for these contents, given each section's CRC-32.
+Status write_map_header(const MapView& contents, const uint32_t* section_crcs, void* out, size_t out_bytes);
 // Validate `data` completely and return a view into it. Never reads outside [data, data + bytes).
 Status load_map(const void* data, size_t bytes, MapView* out);
 
