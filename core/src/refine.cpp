@@ -93,12 +93,17 @@ Status Refiner::refine(const VoxelLayer& layer, const Eigen::Isometry3d& initial
       const float inv = 1.0f / config_.cell;
       uint64_t part[3][3];  // [axis][d + 1]: the axis' field of the key, in place
       int32_t coord[3][3];  // [axis][d + 1]: the cell coordinate the field decodes to (cell_of_key)
-      for (int k = 0; k < 3; ++k)
+      bool regular = true;  // every axis' neighbours are own - 1 and own + 1, no field at its range's edge
+      for (int k = 0; k < 3; ++k) {
+        int64_t raw[3];
         for (int d = -1; d <= 1; ++d) {
           const int64_t c = static_cast<int64_t>(std::floor((pf[k] + d * config_.cell) * inv)) + (1 << 20);
+          raw[d + 1] = c;
           part[k][d + 1] = uint64_t(c & 0x1FFFFF) << (42 - 21 * k);
           coord[k][d + 1] = int32_t(c & 0x1FFFFF) - (1 << 20);
         }
+        regular = regular && raw[0] + 1 == raw[1] && raw[2] - 1 == raw[1] && raw[0] > 0 && raw[2] < 0x1FFFFF;
+      }
       const uint64_t own = part[0][1] | part[1][1] | part[2][1];
       uint32_t* known_begin = query_begin_ + size_t(i) * 27;  // point ranges of the cells around `own`
       uint32_t* known_end = query_end_ + size_t(i) * 27;
@@ -121,30 +126,22 @@ Status Refiner::refine(const VoxelLayer& layer, const Eigen::Isometry3d& initial
       }
       // The nearest map point: the first strictly nearest in the order (dx, dy, dz) = (-1, -1, -1),
       // (-1, -1, 0), ... (cell j = 9 (dx + 1) + 3 (dy + 1) + dz + 1, then point order). The cells are
-      // visited nearest first (own cell, faces, edges, corners: kVisitOrder), so the cells farther than
-      // the best so far are skipped sooner; a tie (equal d2) goes to the lower j, which keeps the answer
-      // the j-order search's.
+      // visited nearer first, so the cells farther than the best so far are skipped sooner; a tie (equal
+      // d2) goes to the lower j, which keeps the answer the j-order search's.
       uint32_t nearest_j = 27;
-      for (const uint8_t j : kVisitOrder) {
-        const int ox = j / 9, oy = (j / 3) % 3, oz = j % 3;  // offsets + 1
-        const uint64_t key = part[0][ox] | part[1][oy] | part[2][oz];
-        // A cell farther than the best distance so far cannot hold a point that beats it: skip its
-        // lookup. Only when the visited cell is the neighbour the offsets name (float rounding could make
-        // it another one).
-        const float g = gap2[0][ox] + gap2[1][oy] + gap2[2][oz];
-        const bool named = key == own + (uint64_t(int64_t(ox - 1)) << 42) + (uint64_t(int64_t(oy - 1)) << 21) +
-                                      uint64_t(int64_t(oz - 1));
-        if (named && g > best * (1.0f + 1e-4f) + 1e-6f) continue;
+      // Cell j at offsets (ox, oy, oz) + 1; `named`: it is the neighbour the offsets name (float rounding
+      // could make it another one), so its lookup is remembered per query point.
+      auto visit = [&](uint32_t j, int ox, int oy, int oz, bool named) {
         const RefineCell cell{coord[0][ox], coord[1][oy], coord[2][oz]};
         uint32_t begin, end;
-        if (named) {  // the cell at this offset from `own`: found before or looked up once now
+        if (named) {  // found before or looked up once now
           if (known_begin[j] == kNotLooked) map_.find(cell, &known_begin[j], &known_end[j], &tile_hint);
           begin = known_begin[j];
           end = known_end[j];
         } else {
           map_.find(cell, &begin, &end, &tile_hint);
         }
-        if (begin == end) continue;  // most of the 27 cells are empty
+        if (begin == end) return;  // most of the 27 cells are empty
         // The cell's corner once; each point adds its offset (the same arithmetic as position_in).
         const float corner[3] = {float(cell.x) * map_.cell, float(cell.y) * map_.cell, float(cell.z) * map_.cell};
         for (uint32_t id = begin; id < end; ++id) {
@@ -160,6 +157,43 @@ Status Refiner::refine(const VoxelLayer& layer, const Eigen::Isometry3d& initial
             nearest_point = &mp;
             for (int k = 0; k < 3; ++k) nearest[k] = m[k];
           }
+        }
+      };
+      // A named cell farther than the best distance so far (its gap g) cannot hold a point that beats it
+      // (the margin covers float rounding): skipped without a lookup.
+      auto beyond = [&](float g) { return g > best * (1.0f + 1e-4f) + 1e-6f; };
+      if (regular) {
+        // All 27 cells are named. Per axis the own cell, then the nearer neighbour, then the farther: the
+        // gaps grow along each loop (float sums are monotone), so the first cell beyond the best ends it.
+        int order[3][3];
+        for (int k = 0; k < 3; ++k) {
+          const bool low_first = gap2[k][0] <= gap2[k][2];
+          order[k][0] = 1;
+          order[k][1] = low_first ? 0 : 2;
+          order[k][2] = low_first ? 2 : 0;
+        }
+        for (int a = 0; a < 3; ++a) {
+          const int ox = order[0][a];
+          if (beyond(gap2[0][ox])) break;
+          for (int b = 0; b < 3; ++b) {
+            const int oy = order[1][b];
+            const float gxy = gap2[0][ox] + gap2[1][oy];
+            if (beyond(gxy)) break;
+            for (int c = 0; c < 3; ++c) {
+              const int oz = order[2][c];
+              if (beyond(gxy + gap2[2][oz])) break;
+              visit(uint32_t(ox * 9 + oy * 3 + oz), ox, oy, oz, true);
+            }
+          }
+        }
+      } else {
+        for (const uint8_t j : kVisitOrder) {
+          const int ox = j / 9, oy = (j / 3) % 3, oz = j % 3;  // offsets + 1
+          const uint64_t key = part[0][ox] | part[1][oy] | part[2][oz];
+          const bool named = key == own + (uint64_t(int64_t(ox - 1)) << 42) + (uint64_t(int64_t(oy - 1)) << 21) +
+                                        uint64_t(int64_t(oz - 1));
+          if (named && beyond(gap2[0][ox] + gap2[1][oy] + gap2[2][oz])) continue;
+          visit(j, ox, oy, oz, named);
         }
       }
       if (nearest_point == nullptr) continue;
