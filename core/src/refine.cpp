@@ -28,17 +28,10 @@ Status Refiner::bind(Arena& arena, const RefineConfig& c) {
   return Status::Ok;
 }
 
-uint64_t Refiner::cell_key(float x, float y, float z) const {
-  const float inv = 1.0f / config_.cell;
-  const int64_t cx = static_cast<int64_t>(std::floor(x * inv)) + (1 << 20);
-  const int64_t cy = static_cast<int64_t>(std::floor(y * inv)) + (1 << 20);
-  const int64_t cz = static_cast<int64_t>(std::floor(z * inv)) + (1 << 20);
-  return (uint64_t(cx & 0x1FFFFF) << 42) | (uint64_t(cy & 0x1FFFFF) << 21) | uint64_t(cz & 0x1FFFFF);
-}
-
 namespace {
 // The 27 neighbour cells j = 9 (dx + 1) + 3 (dy + 1) + dz + 1 nearest first: the own cell, the 6 faces,
-// the 12 edges, the 8 corners (Refiner::refine).
+// the 12 edges, the 8 corners (Refiner::refine, for a query point whose neighbours are not all the cells
+// their offsets name).
 constexpr uint8_t kVisitOrder[27] = {13, 4,  22, 10, 16, 12, 14, 1, 3, 5,  7,  9,  11, 15,
                                      17, 19, 21, 23, 25, 0,  2,  6, 8, 18, 20, 24, 26};
 }  // namespace
@@ -88,8 +81,9 @@ Status Refiner::refine(const VoxelLayer& layer, const Eigen::Isometry3d& initial
       const MapRefinePoint* nearest_point = nullptr;
       float nearest[3] = {0, 0, 0};
       const float pf[3] = {float(p.x()), float(p.y()), float(p.z())};
-      // The neighbour cell at offset d along axis k is floor((pf[k] + d cell) / cell): per axis, so the 27
-      // keys of cell_key(pf + (dx, dy, dz) cell) are sums of 3 x 3 per-axis parts (9 floors, not 81).
+      // Cells are floor(x * (1 / cell)) per axis (the map builder's convention), keyed as 3 x 21 bits. The
+      // neighbour at offset d along axis k is the cell of pf[k] + d cell, so the 27 neighbour keys are
+      // sums of 3 x 3 per-axis parts (9 floors).
       const float inv = 1.0f / config_.cell;
       uint64_t part[3][3];  // [axis][d + 1]: the axis' field of the key, in place
       int32_t coord[3][3];  // [axis][d + 1]: the cell coordinate the field decodes to (cell_of_key)
@@ -128,7 +122,7 @@ Status Refiner::refine(const VoxelLayer& layer, const Eigen::Isometry3d& initial
       // (-1, -1, 0), ... (cell j = 9 (dx + 1) + 3 (dy + 1) + dz + 1, then point order). The cells are
       // visited nearer first, so the cells farther than the best so far are skipped sooner; a tie (equal
       // d2) goes to the lower j, which keeps the answer the j-order search's.
-      uint32_t nearest_j = 27;
+      uint32_t nearest_j = 0;  // 0 while none: the first point must be strictly within the radius
       // Cell j at offsets (ox, oy, oz) + 1; `named`: it is the neighbour the offsets name (float rounding
       // could make it another one), so its lookup is remembered per query point.
       auto visit = [&](uint32_t j, int ox, int oy, int oz, bool named) {
