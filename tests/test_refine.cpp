@@ -1,9 +1,11 @@
 // Refinement alone (core/include/gsf/detail/refine.h): it pulls a nearby global pose onto the map's point
 // layer (built as the map builder builds it: mapping/refine_layer_builder.h), refuses corrections beyond
-// its limit, refuses a layer of another cell size, and ignores map points without a reliable normal.
+// its limit, refuses a layer of another cell size, ignores map points without a reliable normal, and picks
+// the same nearest map points as the plain 27-cell search (reference_refine below), ties included.
 #include <catch2/catch.hpp>
 
 #include <cmath>
+#include <cstring>
 #include <vector>
 
 #include "arena_buffer.h"
@@ -156,4 +158,176 @@ TEST_CASE("Refinement refuses a layer of another cell size and ignores points wi
   CHECK_FALSE(st.accepted);
   CHECK(out.isApprox(initial));
   CHECK(st.inliers < f.rc.min_inliers);
+}
+
+namespace {
+
+// The refiner's search stated plainly: per query point the 27 cells of p + (dx, dy, dz) cell, in that
+// order, no cell skipped and nothing remembered, the first strictly nearest point within the radius.
+// The same Gauss-Newton steps and acceptance as Refiner::refine (core/src/refine.cpp), which must give
+// the same pose: its skipping, caching and visiting order may only save work.
+Eigen::Isometry3d reference_refine(const VoxelLayer& layer, const RefineLayerView& map, const RefineConfig& c,
+                                   const Eigen::Isometry3d& initial, RefineStats* st) {
+  *st = RefineStats();
+  std::vector<float> query;
+  uint32_t eligible = 0;
+  for (uint32_t i = 0; i < layer.size(); ++i) eligible += stability_weight(layer.voxel(i).label) >= 1.0f;
+  const uint32_t stride = eligible > c.max_points ? (eligible + c.max_points - 1) / c.max_points : 1;
+  uint32_t seen = 0;
+  for (uint32_t i = 0; i < layer.size() && query.size() < size_t(c.max_points) * 3; ++i) {
+    const Voxel& v = layer.voxel(i);
+    if (stability_weight(v.label) < 1.0f || seen++ % stride) continue;
+    query.insert(query.end(), {v.centroid[0], v.centroid[1], v.centroid[2]});
+  }
+  st->query_points = uint32_t(query.size() / 3);
+  const float inv = 1.0f / c.cell, step = map.cell / 256.0f;
+  Eigen::Isometry3d t = initial;
+  for (uint32_t it = 0; it < c.iterations; ++it) {
+    const float frac = c.iterations > 1 ? float(it) / float(c.iterations - 1) : 1.0f;
+    const float radius = c.radius_start + (c.radius_end - c.radius_start) * frac;
+    Eigen::Matrix<double, 6, 6> H = Eigen::Matrix<double, 6, 6>::Zero();
+    Eigen::Matrix<double, 6, 1> g = Eigen::Matrix<double, 6, 1>::Zero();
+    uint32_t inl = 0;
+    double err = 0;
+    for (size_t i = 0; i < query.size(); i += 3) {
+      const Eigen::Vector3d p = t * Eigen::Vector3d(query[i], query[i + 1], query[i + 2]);
+      const float pf[3] = {float(p.x()), float(p.y()), float(p.z())};
+      float best = radius * radius, nearest[3] = {0, 0, 0};
+      const MapRefinePoint* nearest_point = nullptr;
+      for (int dx = -1; dx <= 1; ++dx)
+        for (int dy = -1; dy <= 1; ++dy)
+          for (int dz = -1; dz <= 1; ++dz) {
+            const RefineCell cell{int32_t(std::floor((pf[0] + dx * c.cell) * inv)),
+                                  int32_t(std::floor((pf[1] + dy * c.cell) * inv)),
+                                  int32_t(std::floor((pf[2] + dz * c.cell) * inv))};
+            uint32_t begin, end;
+            map.find(cell, &begin, &end, nullptr);
+            const float corner[3] = {float(cell.x) * map.cell, float(cell.y) * map.cell, float(cell.z) * map.cell};
+            for (uint32_t id = begin; id < end; ++id) {
+              const MapRefinePoint& mp = map.points[id];
+              float m[3], d2 = 0;
+              for (int k = 0; k < 3; ++k) m[k] = corner[k] + (float(mp.offset[k]) + 0.5f) * step;
+              const float ex = m[0] - pf[0], ey = m[1] - pf[1], ez = m[2] - pf[2];
+              d2 = ex * ex + ey * ey + ez * ez;
+              if (d2 < best) {
+                best = d2;
+                nearest_point = &mp;
+                for (int k = 0; k < 3; ++k) nearest[k] = m[k];
+              }
+            }
+          }
+      if (nearest_point == nullptr) continue;
+      float n[3];
+      RefineLayerView::normal(*nearest_point, n);
+      const Eigen::Vector3d nrm(n[0], n[1], n[2]);
+      if (nrm.squaredNorm() < 0.5) continue;
+      const double r = nrm.dot(p - Eigen::Vector3d(nearest[0], nearest[1], nearest[2]));
+      Eigen::Matrix<double, 6, 1> J;
+      J.head<3>() = p.cross(nrm);
+      J.tail<3>() = nrm;
+      H += J * J.transpose();
+      g += J * r;
+      err += r * r;
+      ++inl;
+    }
+    st->iterations = it + 1;
+    st->inliers = inl;
+    st->rmse = inl ? std::sqrt(err / inl) : 0;
+    if (inl < 6) break;
+    const Eigen::Matrix<double, 6, 1> dx = H.ldlt().solve(-g);
+    if (!dx.allFinite()) break;
+    Eigen::Isometry3d s = Eigen::Isometry3d::Identity();
+    const double angle = dx.head<3>().norm();
+    if (angle > 1e-12) s.linear() = Eigen::AngleAxisd(angle, dx.head<3>() / angle).toRotationMatrix();
+    s.translation() = dx.tail<3>();
+    t = s * t;
+  }
+  st->accepted = st->inliers >= c.min_inliers && (t.translation() - initial.translation()).norm() <= c.max_correction;
+  return st->accepted ? t : initial;
+}
+
+}  // namespace
+
+TEST_CASE("Refinement finds the same nearest points as the plain 27-cell search (dense layer, ties)") {
+  // A 0.2 m layer holds up to 25 points a cell, on a lattice, so equal distances are common: the
+  // refiner's skipping, per-point caching and nearest-first visiting must keep the plain search's answer.
+  Fixture f;
+  const Layer map(street_corner(0.2f), f.rc.cell);
+  ArenaBuffer buf(Refiner::required_bytes(f.rc));
+  Refiner r;
+  REQUIRE(r.bind(buf.arena, f.rc) == Status::Ok);
+  REQUIRE(r.set_map(map.view) == Status::Ok);
+  Eigen::Isometry3d nudge = Eigen::Isometry3d::Identity();
+  nudge.translation() = Eigen::Vector3d(0.35, 0.1, -0.2);
+  for (const Eigen::Isometry3d& initial : {f.truth, perturbed(f.truth), f.truth * nudge, pose(4.0, -2.5, 22.0)}) {
+    RefineStats st, ref_st;
+    const Eigen::Isometry3d out = f.run(r, initial, &st);
+    const Eigen::Isometry3d ref = reference_refine(f.voxels, map.view, f.rc, initial, &ref_st);
+    CHECK(st.query_points == ref_st.query_points);
+    CHECK(st.accepted == ref_st.accepted);
+    CHECK((out.matrix() - ref.matrix()).cwiseAbs().maxCoeff() < 1e-4);
+#if defined(__x86_64__) && !defined(__FMA__)
+    // Same operations in the same order: the same bits. (Elsewhere the two translation units may
+    // contract to FMA differently, which can flip a near tie: only close poses are required there.)
+    CHECK(std::memcmp(out.matrix().data(), ref.matrix().data(), sizeof(double) * 16) == 0);
+    CHECK(st.iterations == ref_st.iterations);
+    CHECK(st.inliers == ref_st.inliers);
+    CHECK(st.rmse == ref_st.rmse);
+#endif
+  }
+}
+
+TEST_CASE("A tie between cells goes to the lower (dx, dy, dz) index, as in the plain search") {
+  // Query points exactly on the face x = 1 between cells 0 and 1, each with one map point either side
+  // at the same distance (2^-9 m): the cell below (dx = -1) comes first in the plain order, though the
+  // refiner visits the own cell (x = 1) first. Their normals differ, so the residuals tell them apart.
+  Fixture f;
+  f.rc.iterations = 1;
+  f.rc.min_inliers = 1;
+  std::vector<MapRefineTile> tiles(1);
+  int32_t tx, ty;
+  REQUIRE(refine_tile_of(RefineCell{0, 0, 0}, &tx, &ty, &tiles[0].key));
+  tiles[0].first_point = 0;
+  tiles[0].z_base = 0;
+  std::vector<MapRefinePoint> points;
+  Cloud scan;
+  for (uint16_t y = 0; y < 16; y += 2) {
+    for (uint16_t x = 0; x < 2; ++x) {
+      MapRefinePoint p{};
+      p.cell = uint16_t(y << 4 | x);
+      p.offset[0] = x == 0 ? 255 : 0;  // 1 - 2^-9 and 1 + 2^-9
+      p.offset[1] = p.offset[2] = 128;
+      p.normal[x == 0 ? 0 : 2] = 127;  // below: along x; above: along z
+      points.push_back(p);
+    }
+    scan.add(1.0f, float(y) + 128.5f / 256.0f, 128.5f / 256.0f, kitti_from_class(kBuilding));
+  }
+  // And one query point exactly the last radius (0.5 m) from its only map point: not a correspondence.
+  MapRefinePoint edge{};
+  edge.cell = uint16_t(15 << 4 | 1);
+  edge.offset[0] = edge.offset[1] = edge.offset[2] = 128;
+  edge.normal[0] = 127;
+  points.push_back(edge);
+  scan.add(1.0f + 0.5f / 256.0f, 15.0f + 128.5f / 256.0f, 128.5f / 256.0f, kitti_from_class(kBuilding));
+  RefineLayerView view;
+  view.cell = f.rc.cell;
+  view.tile_count = 1;
+  view.point_count = uint32_t(points.size());
+  view.tiles = tiles.data();
+  view.points = points.data();
+  REQUIRE(view.validate() == Status::Ok);
+  REQUIRE(f.voxels.build(scan.view(), nullptr) == Status::Ok);
+  ArenaBuffer buf(Refiner::required_bytes(f.rc));
+  Refiner r;
+  REQUIRE(r.bind(buf.arena, f.rc) == Status::Ok);
+  REQUIRE(r.set_map(view) == Status::Ok);
+  RefineStats st, ref_st;
+  const Eigen::Isometry3d initial = Eigen::Isometry3d::Identity();
+  f.run(r, initial, &st);
+  reference_refine(f.voxels, view, f.rc, initial, &ref_st);
+  CHECK(st.query_points == 9);
+  CHECK(st.inliers == 8);
+  CHECK(ref_st.inliers == 8);
+  CHECK(st.rmse == Approx(1.0 / 512).epsilon(1e-6));  // the x-normal points below, not the z-normal ones
+  CHECK(st.rmse == ref_st.rmse);
 }

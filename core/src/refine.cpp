@@ -28,19 +28,12 @@ Status Refiner::bind(Arena& arena, const RefineConfig& c) {
   return Status::Ok;
 }
 
-uint64_t Refiner::cell_key(float x, float y, float z) const {
-  const float inv = 1.0f / config_.cell;
-  const int64_t cx = static_cast<int64_t>(std::floor(x * inv)) + (1 << 20);
-  const int64_t cy = static_cast<int64_t>(std::floor(y * inv)) + (1 << 20);
-  const int64_t cz = static_cast<int64_t>(std::floor(z * inv)) + (1 << 20);
-  return (uint64_t(cx & 0x1FFFFF) << 42) | (uint64_t(cy & 0x1FFFFF) << 21) | uint64_t(cz & 0x1FFFFF);
-}
-
 namespace {
-RefineCell cell_of_key(uint64_t key) {
-  return RefineCell{int32_t((key >> 42) & 0x1FFFFF) - (1 << 20), int32_t((key >> 21) & 0x1FFFFF) - (1 << 20),
-                    int32_t(key & 0x1FFFFF) - (1 << 20)};
-}
+// The 27 neighbour cells j = 9 (dx + 1) + 3 (dy + 1) + dz + 1 nearest first: the own cell, the 6 faces,
+// the 12 edges, the 8 corners (Refiner::refine, for a query point whose neighbours are not all the cells
+// their offsets name).
+constexpr uint8_t kVisitOrder[27] = {13, 4,  22, 10, 16, 12, 14, 1, 3, 5,  7,  9,  11, 15,
+                                     17, 19, 21, 23, 25, 0,  2,  6, 8, 18, 20, 24, 26};
 }  // namespace
 
 Status Refiner::set_map(const RefineLayerView& layer) {
@@ -88,65 +81,115 @@ Status Refiner::refine(const VoxelLayer& layer, const Eigen::Isometry3d& initial
       const MapRefinePoint* nearest_point = nullptr;
       float nearest[3] = {0, 0, 0};
       const float pf[3] = {float(p.x()), float(p.y()), float(p.z())};
-      // Gaps from p to the lower and upper faces of its own cell, shrunk by 1 mm (and a relative 1e-5):
-      // every point of the cell below (above) lies at least the lower (upper) gap away along that axis,
-      // whatever the float rounding of its cell key and of d2.
-      const uint64_t own = cell_key(pf[0], pf[1], pf[2]);
+      // Cells are floor(x * (1 / cell)) per axis (the map builder's convention), keyed as 3 x 21 bits. The
+      // neighbour at offset d along axis k is the cell of pf[k] + d cell, so the 27 neighbour keys are
+      // sums of 3 x 3 per-axis parts (9 floors).
+      const float inv = 1.0f / config_.cell;
+      uint64_t part[3][3];  // [axis][d + 1]: the axis' field of the key, in place
+      int32_t coord[3][3];  // [axis][d + 1]: the cell coordinate the field decodes to (cell_of_key)
+      bool regular = true;  // every axis' neighbours are own - 1 and own + 1, no field at its range's edge
+      for (int k = 0; k < 3; ++k) {
+        int64_t raw[3];
+        for (int d = -1; d <= 1; ++d) {
+          const int64_t c = static_cast<int64_t>(std::floor((pf[k] + d * config_.cell) * inv)) + (1 << 20);
+          raw[d + 1] = c;
+          part[k][d + 1] = uint64_t(c & 0x1FFFFF) << (42 - 21 * k);
+          coord[k][d + 1] = int32_t(c & 0x1FFFFF) - (1 << 20);
+        }
+        regular = regular && raw[0] + 1 == raw[1] && raw[2] - 1 == raw[1] && raw[0] > 0 && raw[2] < 0x1FFFFF;
+      }
+      const uint64_t own = part[0][1] | part[1][1] | part[2][1];
       uint32_t* known_begin = query_begin_ + size_t(i) * 27;  // point ranges of the cells around `own`
       uint32_t* known_end = query_end_ + size_t(i) * 27;
       if (query_cell_[i] != own) {
         query_cell_[i] = own;
         for (int j = 0; j < 27; ++j) known_begin[j] = kNotLooked;
       }
-      float gap[3][3];  // [axis][offset + 1]: 0 for the own cell
+      // Gaps from p to the lower and upper faces of its own cell, shrunk by 1 mm (and a relative 1e-5):
+      // every point of the cell below (above) lies at least the lower (upper) gap away along that axis,
+      // whatever the float rounding of its cell key and of d2. Squared here.
+      float gap2[3][3];  // [axis][offset + 1]: 0 for the own cell
       for (int k = 0; k < 3; ++k) {
-        const int64_t c = int64_t((own >> (42 - 21 * k)) & 0x1FFFFF) - (1 << 20);
+        const int64_t c = coord[k][1];
         const double lo = double(c) * config_.cell, hi = double(c + 1) * config_.cell, x = pf[k];
         const double slack = 1e-5 * (std::fabs(lo) + std::fabs(hi)) + 1e-3;
-        gap[k][0] = float(std::max(0.0, x - lo - slack));
-        gap[k][1] = 0.0f;
-        gap[k][2] = float(std::max(0.0, hi - x - slack));
+        const float gl = float(std::max(0.0, x - lo - slack)), gh = float(std::max(0.0, hi - x - slack));
+        gap2[k][0] = gl * gl;
+        gap2[k][1] = 0.0f;
+        gap2[k][2] = gh * gh;
       }
-      for (int dx = -1; dx <= 1; ++dx)
-        for (int dy = -1; dy <= 1; ++dy)
-          for (int dz = -1; dz <= 1; ++dz) {
-            const uint64_t key =
-                cell_key(pf[0] + dx * config_.cell, pf[1] + dy * config_.cell, pf[2] + dz * config_.cell);
-            // A cell farther than the best distance so far cannot hold a point that beats it (the search
-            // keeps the first strictly nearer point): skip its lookup. Only when the visited cell is the
-            // neighbour the offsets name (float rounding could make it another one).
-            const float g =
-                gap[0][dx + 1] * gap[0][dx + 1] + gap[1][dy + 1] * gap[1][dy + 1] + gap[2][dz + 1] * gap[2][dz + 1];
-            const bool named =
-                key == own + (uint64_t(int64_t(dx)) << 42) + (uint64_t(int64_t(dy)) << 21) + uint64_t(int64_t(dz));
-            if (named && g > best * (1.0f + 1e-4f) + 1e-6f) continue;
-            uint32_t begin, end;
-            if (named) {  // the cell at this offset from `own`: found before or looked up once now
-              const int j = (dx + 1) * 9 + (dy + 1) * 3 + (dz + 1);
-              if (known_begin[j] == kNotLooked) map_.find(cell_of_key(key), &known_begin[j], &known_end[j], &tile_hint);
-              begin = known_begin[j];
-              end = known_end[j];
-            } else {
-              map_.find(cell_of_key(key), &begin, &end, &tile_hint);
-            }
-            if (begin == end) continue;  // most of the 27 cells are empty: decode the cell only when not
-            const RefineCell cell = cell_of_key(key);
-            // The cell's corner once; each point adds its offset (the same arithmetic as position_in).
-            const float corner[3] = {float(cell.x) * map_.cell, float(cell.y) * map_.cell, float(cell.z) * map_.cell};
-            for (uint32_t id = begin; id < end; ++id) {
-              const MapRefinePoint& mp = map_.points[id];
-              const float m[3] = {corner[0] + (float(mp.offset[0]) + 0.5f) * step,
-                                  corner[1] + (float(mp.offset[1]) + 0.5f) * step,
-                                  corner[2] + (float(mp.offset[2]) + 0.5f) * step};
-              const float ex = m[0] - pf[0], ey = m[1] - pf[1], ez = m[2] - pf[2];
-              const float d2 = ex * ex + ey * ey + ez * ez;
-              if (d2 < best) {
-                best = d2;
-                nearest_point = &mp;
-                for (int k = 0; k < 3; ++k) nearest[k] = m[k];
-              }
+      // The nearest map point: the first strictly nearest in the order (dx, dy, dz) = (-1, -1, -1),
+      // (-1, -1, 0), ... (cell j = 9 (dx + 1) + 3 (dy + 1) + dz + 1, then point order). The cells are
+      // visited nearer first, so the cells farther than the best so far are skipped sooner; a tie (equal
+      // d2) goes to the lower j, which keeps the answer the j-order search's.
+      uint32_t nearest_j = 0;  // 0 while none: the first point must be strictly within the radius
+      // Cell j at offsets (ox, oy, oz) + 1; `named`: it is the neighbour the offsets name (float rounding
+      // could make it another one), so its lookup is remembered per query point.
+      auto visit = [&](uint32_t j, int ox, int oy, int oz, bool named) {
+        const RefineCell cell{coord[0][ox], coord[1][oy], coord[2][oz]};
+        uint32_t begin, end;
+        if (named) {  // found before or looked up once now
+          if (known_begin[j] == kNotLooked) map_.find(cell, &known_begin[j], &known_end[j], &tile_hint);
+          begin = known_begin[j];
+          end = known_end[j];
+        } else {
+          map_.find(cell, &begin, &end, &tile_hint);
+        }
+        if (begin == end) return;  // most of the 27 cells are empty
+        // The cell's corner once; each point adds its offset (the same arithmetic as position_in).
+        const float corner[3] = {float(cell.x) * map_.cell, float(cell.y) * map_.cell, float(cell.z) * map_.cell};
+        for (uint32_t id = begin; id < end; ++id) {
+          const MapRefinePoint& mp = map_.points[id];
+          const float m[3] = {corner[0] + (float(mp.offset[0]) + 0.5f) * step,
+                              corner[1] + (float(mp.offset[1]) + 0.5f) * step,
+                              corner[2] + (float(mp.offset[2]) + 0.5f) * step};
+          const float ex = m[0] - pf[0], ey = m[1] - pf[1], ez = m[2] - pf[2];
+          const float d2 = ex * ex + ey * ey + ez * ez;
+          if (d2 < best || (d2 == best && j < nearest_j)) {
+            best = d2;
+            nearest_j = j;
+            nearest_point = &mp;
+            for (int k = 0; k < 3; ++k) nearest[k] = m[k];
+          }
+        }
+      };
+      // A named cell farther than the best distance so far (its gap g) cannot hold a point that beats it
+      // (the margin covers float rounding): skipped without a lookup.
+      auto beyond = [&](float g) { return g > best * (1.0f + 1e-4f) + 1e-6f; };
+      if (regular) {
+        // All 27 cells are named. Per axis the own cell, then the nearer neighbour, then the farther: the
+        // gaps grow along each loop (float sums are monotone), so the first cell beyond the best ends it.
+        int order[3][3];
+        for (int k = 0; k < 3; ++k) {
+          const bool low_first = gap2[k][0] <= gap2[k][2];
+          order[k][0] = 1;
+          order[k][1] = low_first ? 0 : 2;
+          order[k][2] = low_first ? 2 : 0;
+        }
+        for (int a = 0; a < 3; ++a) {
+          const int ox = order[0][a];
+          if (beyond(gap2[0][ox])) break;
+          for (int b = 0; b < 3; ++b) {
+            const int oy = order[1][b];
+            const float gxy = gap2[0][ox] + gap2[1][oy];
+            if (beyond(gxy)) break;
+            for (int c = 0; c < 3; ++c) {
+              const int oz = order[2][c];
+              if (beyond(gxy + gap2[2][oz])) break;
+              visit(uint32_t(ox * 9 + oy * 3 + oz), ox, oy, oz, true);
             }
           }
+        }
+      } else {
+        for (const uint8_t j : kVisitOrder) {
+          const int ox = j / 9, oy = (j / 3) % 3, oz = j % 3;  // offsets + 1
+          const uint64_t key = part[0][ox] | part[1][oy] | part[2][oz];
+          const bool named = key == own + (uint64_t(int64_t(ox - 1)) << 42) + (uint64_t(int64_t(oy - 1)) << 21) +
+                                        uint64_t(int64_t(oz - 1));
+          if (named && beyond(gap2[0][ox] + gap2[1][oy] + gap2[2][oz])) continue;
+          visit(j, ox, oy, oz, named);
+        }
+      }
       if (nearest_point == nullptr) continue;
       float nearest_normal[3];
       RefineLayerView::normal(*nearest_point, nearest_normal);

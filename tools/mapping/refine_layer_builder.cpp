@@ -124,7 +124,7 @@ Status build_refine_layer(const float* xyz, uint32_t n, float cell, std::vector<
   tiles->clear();
   points->clear();
   if (!(cell > 0.0f) || !std::isfinite(cell)) return Status::InvalidArgument;
-  const float inv = 1.0f / cell;  // the refiner's cell of a point (Refiner::cell_key)
+  const float inv = 1.0f / cell;  // the refiner's cell of a point: floor(x * inv) (Refiner::refine)
   std::vector<Placed> placed(n);
   for (uint32_t i = 0; i < n; ++i)
     if (!place(xyz + 3 * size_t(i), inv, i, &placed[i])) return Status::InvalidInput;

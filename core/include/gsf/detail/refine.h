@@ -8,7 +8,9 @@
 // normals (the builder computed them), so the refiner reads it in place; its workspace is the query
 // buffers only. Per scan: up to max_points query voxel centroids
 // of long-term classes, a bounded number of Gauss-Newton iterations with a shrinking correspondence
-// radius, nearest neighbours from the 27 surrounding cells, a 6x6 solve per iteration.
+// radius, nearest neighbours from the 27 surrounding cells (visited nearest first, cells farther than
+// the best so far skipped, each cell's point range looked up once while the query point stays in its
+// cell), a 6x6 solve per iteration.
 // The refined pose is accepted only if it keeps enough inliers and stays within max_correction of the
 // global pose; otherwise the global pose is returned unchanged (refinement never makes it worse by
 // jumping to a different place).
@@ -57,7 +59,6 @@ class Refiner {
 
  private:
   bool long_term(int label) const { return (classes_ ? classes_->stability(label) : stability_weight(label)) >= 1.0f; }
-  uint64_t cell_key(float x, float y, float z) const;
   RefineConfig config_{};
   const ClassTable* classes_ = nullptr;
   RefineLayerView map_{};
