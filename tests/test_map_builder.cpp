@@ -280,3 +280,63 @@ TEST_CASE("Map scans are voxelised with at least scan_max_voxels; what a smaller
   CHECK(s.stats.scan_points_dropped > 0);
   CHECK(s.stats.map_voxels < b.stats.map_voxels);
 }
+
+TEST_CASE("count_detections counts same-label detections within the radius, across cell borders") {
+  // Instances at (0.9, 0.9) label 3, (10, 10) label 3, (0.9, 0.9) label 4; radius 2 m cells.
+  const float c[9] = {0.9f, 0.9f, 0.0f, 10.0f, 10.0f, 0.0f, 0.9f, 0.9f, 0.0f};
+  const uint8_t lab[3] = {3, 3, 4};
+  std::vector<mapping::ScanDetection> d;
+  auto add = [&](float x, float y, uint8_t l) {
+    mapping::ScanDetection s{};
+    s.xyz[0] = x;
+    s.xyz[1] = y;
+    s.xyz[2] = 5.0f;  // height does not matter (bird's-eye)
+    s.label = l;
+    d.push_back(s);
+  };
+  add(2.5f, 0.9f, 3);    // 1.6 m away, next cell: counts for instance 0
+  add(-0.9f, -0.5f, 3);  // 2.28 m away: too far
+  add(1.0f, 1.0f, 4);    // label 4: instance 2 only
+  add(10.0f, 11.9f, 3);  // 1.9 m from instance 1
+  add(10.0f, 11.9f, 3);  // a second scan's detection of it
+  const std::vector<uint32_t> n = mapping::count_detections(c, lab, 3, d, 2.0f);
+  REQUIRE(n.size() == 3);
+  CHECK(n[0] == 1);
+  CHECK(n[1] == 2);
+  CHECK(n[2] == 1);
+  CHECK(mapping::count_detections(c, lab, 3, {}, 2.0f) == std::vector<uint32_t>{0, 0, 0});
+}
+
+TEST_CASE("Map triangles join only instances the query stages find in enough mapping scans") {
+  mapping::MapBuildConfig all = single_tile();
+  all.triangle_min_detections = 0;
+  const Built full = build(all, Eigen::Vector3d::Zero());
+  REQUIRE(full.build == Status::Ok);
+  CHECK(full.stats.triangle_instances == full.stats.instances);
+  mapping::MapBuildConfig some = single_tile();
+  some.triangle_min_detections = 2;
+  const Built det = build(some, Eigen::Vector3d::Zero());
+  REQUIRE(det.build == Status::Ok);
+  // Same instances and fields; only the triangles' vertex set shrinks.
+  CHECK(det.stats.instances == full.stats.instances);
+  CHECK(det.stats.scan_detections > 0);
+  CHECK(det.stats.triangle_instances <= det.stats.instances);
+  CHECK(det.stats.triangles <= full.stats.triangles);
+  CHECK(det.stats.triangles > 0);
+  // Every vertex of every map triangle was detected at least twice; the vertex ids are map instance ids.
+  std::vector<bool> vertex(det.map.counts.instances, false);
+  for (uint32_t t = 0; t < det.map.counts.triangles; ++t)
+    for (int k = 0; k < 3; ++k) {
+      REQUIRE(det.map.triangles[t].v[k] < det.map.counts.instances);
+      vertex[det.map.triangles[t].v[k]] = true;
+    }
+  uint32_t vertices = 0;
+  for (bool v : vertex) vertices += v;
+  CHECK(vertices <= det.stats.triangle_instances);
+  // No scan finds anything a million times: no triangles, still a valid map.
+  some.triangle_min_detections = 1000000;
+  const Built none = build(some, Eigen::Vector3d::Zero());
+  REQUIRE(none.build == Status::Ok);
+  CHECK(none.stats.triangle_instances == 0);
+  CHECK(none.stats.triangles == 0);
+}

@@ -26,6 +26,7 @@
 #include "gsf/georeference.h"
 #include "gsf/scan.h"
 #include "gsf/status.h"
+#include "mapping/scan_detections.h"
 #include "mapping/semantic_layer.h"
 #include "mapping/tile_store.h"
 
@@ -42,6 +43,8 @@ struct MapBuildStats {
   uint64_t scan_points_dropped = 0;   // scan points in voxels beyond scan_max_voxels, over all scans
   uint32_t instances_by_class[kNumClasses] = {};
   uint32_t triangles = 0;
+  uint32_t triangle_instances = 0;  // instances the triangles are built over (triangle_min_detections)
+  uint64_t scan_detections = 0;     // instances the query stages found in the mapping scans, summed
   uint32_t index_keys = 0;
   uint32_t refine_points = 0;
   uint32_t refine_tiles = 0;
@@ -107,6 +110,12 @@ struct MapBuildConfig {
   float tile_size = 64.0f;
   uint32_t max_resident_tiles = 24;  // 0: no limit (nothing is spilled)
   std::string spill_dir;
+  // Triangles only among map instances that the query's own instance stages (clustering, geometric
+  // poles) found in at least this many mapping scans, same label within detection_radius m (bird's-eye):
+  // a query finds those, not the instances only the accumulated drive reveals (scan_detections.h).
+  // 0: every map instance is a triangle vertex (the map's other instances are kept either way).
+  uint32_t triangle_min_detections = 0;
+  float detection_radius = 2.0f;
 };
 
 class MapBuilder {
@@ -136,6 +145,9 @@ class MapBuilder {
   std::vector<uint8_t> scan_arena_;
   std::vector<double> scan_points_;                        // per scan voxel: its centroid in the map frame
   std::vector<std::pair<uint64_t, uint32_t>> scan_order_;  // per scan voxel: map voxel key, index
+  ScanDetector detector_;                                  // with triangle_min_detections > 0
+  bool detector_ok_ = false;
+  std::vector<ScanDetection> detections_;  // every mapping scan's instances, map-local frame
 };
 
 }  // namespace gsf::mapping
