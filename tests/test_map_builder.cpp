@@ -323,7 +323,7 @@ TEST_CASE("Map triangles join only instances the query stages find in enough map
   CHECK(det.stats.triangle_instances <= det.stats.instances);
   CHECK(det.stats.triangles <= full.stats.triangles);
   CHECK(det.stats.triangles > 0);
-  // Every vertex of every map triangle was detected at least twice; the vertex ids are map instance ids.
+  // Every triangle vertex is a map instance id among the qualifying instances.
   std::vector<bool> vertex(det.map.counts.instances, false);
   for (uint32_t t = 0; t < det.map.counts.triangles; ++t)
     for (int k = 0; k < 3; ++k) {
@@ -333,10 +333,14 @@ TEST_CASE("Map triangles join only instances the query stages find in enough map
   uint32_t vertices = 0;
   for (bool v : vertex) vertices += v;
   CHECK(vertices <= det.stats.triangle_instances);
-  // No scan finds anything a million times: no triangles, still a valid map.
-  some.triangle_min_detections = 1000000;
-  const Built none = build(some, Eigen::Vector3d::Zero());
-  REQUIRE(none.build == Status::Ok);
-  CHECK(none.stats.triangle_instances == 0);
-  CHECK(none.stats.triangles == 0);
+}
+
+TEST_CASE("A triangle vertex needs min(min_detections, nearby scans) detections") {
+  // Not near any scan: no evidence against it. One nearby scan (a one-scan map): one detection is all it
+  // can have. Otherwise min_detections.
+  const std::vector<uint32_t> det = {0, 1, 2, 5, 0, 1};
+  const std::vector<uint32_t> near = {0, 1, 3, 10, 4, 5};
+  CHECK(mapping::triangle_vertices(det, near, 2) == std::vector<uint32_t>{0, 1, 2, 3});
+  CHECK(mapping::triangle_vertices(det, near, 1) == std::vector<uint32_t>{0, 1, 2, 3, 5});
+  CHECK(mapping::triangle_vertices(det, near, 0) == std::vector<uint32_t>{0, 1, 2, 3, 4, 5});
 }

@@ -96,6 +96,10 @@ Status MapBuilder::add_scan(const ScanView& scan, const Eigen::Isometry3d& frame
     s = detector_.detect(layer, map_T_lidar, &detections_);
     if (s != Status::Ok) return s;
     stats_.scan_detections += detections_.size() - before;
+    ScanDetection at{};
+    for (int k = 0; k < 3; ++k) at.xyz[k] = static_cast<float>(map_T_lidar.translation()[k]);
+    at.label = kAnyLabel;
+    scan_positions_.push_back(at);
   }
   const double vs = config_.voxel.voxel_size;
   const uint32_t n = layer.size();
@@ -180,12 +184,13 @@ Status MapBuilder::build(std::vector<uint64_t>* blob, size_t* bytes_out, MapBuil
   if (!all_vertices) {
     const std::vector<uint32_t> det =
         count_detections(centroids.data(), inst_labels.data(), ni, detections_, options_.detection_radius);
-    for (uint32_t i = 0; i < ni; ++i)
-      if (det[i] >= options_.triangle_min_detections) {
-        vertex_ids.push_back(i);
-        for (int k = 0; k < 3; ++k) vertex_xyz.push_back(centroids[3 * size_t(i) + k]);
-        vertex_labels.push_back(inst_labels[i]);
-      }
+    const std::vector<uint32_t> near =
+        count_detections(centroids.data(), inst_labels.data(), ni, scan_positions_, options_.detection_range);
+    vertex_ids = triangle_vertices(det, near, options_.triangle_min_detections);
+    for (uint32_t i : vertex_ids) {
+      for (int k = 0; k < 3; ++k) vertex_xyz.push_back(centroids[3 * size_t(i) + k]);
+      vertex_labels.push_back(inst_labels[i]);
+    }
   }
   const uint32_t nv = all_vertices ? ni : static_cast<uint32_t>(vertex_ids.size());
   st.triangle_instances = nv;

@@ -114,8 +114,11 @@ struct MapBuildConfig {
   // poles) found in at least this many mapping scans, same label within detection_radius m (bird's-eye):
   // a query finds those, not the instances only the accumulated drive reveals (scan_detections.h).
   // 0: every map instance is a triangle vertex (the map's other instances are kept either way).
+  // An instance needs min(triangle_min_detections, scans whose position is within detection_range m)
+  // detections, so a map of one scan, or an instance no scan came near, keeps its triangles.
   uint32_t triangle_min_detections = 0;
   float detection_radius = 2.0f;
+  float detection_range = 80.0f;  // m, a scan's range (the simulated and nuScenes sensors see about 80 m)
 };
 
 class MapBuilder {
@@ -147,7 +150,8 @@ class MapBuilder {
   std::vector<std::pair<uint64_t, uint32_t>> scan_order_;  // per scan voxel: map voxel key, index
   ScanDetector detector_;                                  // with triangle_min_detections > 0
   bool detector_ok_ = false;
-  std::vector<ScanDetection> detections_;  // every mapping scan's instances, map-local frame
+  std::vector<ScanDetection> detections_;      // every mapping scan's instances, map-local frame
+  std::vector<ScanDetection> scan_positions_;  // every mapping scan's position (label kAnyLabel)
 };
 
 }  // namespace gsf::mapping

@@ -77,11 +77,19 @@ std::vector<uint32_t> count_detections(const float* centroids, const uint8_t* la
         for (; it != idx.end() && it->first == k; ++it) {
           const ScanDetection& d = detections[it->second];
           const float ex = d.xyz[0] - c[0], ey = d.xyz[1] - c[1];
-          if (d.label == labels[i] && ex * ex + ey * ey <= r2) ++count[i];
+          if ((d.label == kAnyLabel || d.label == labels[i]) && ex * ex + ey * ey <= r2) ++count[i];
         }
       }
   }
   return count;
+}
+
+std::vector<uint32_t> triangle_vertices(const std::vector<uint32_t>& detections,
+                                        const std::vector<uint32_t>& opportunities, uint32_t min_detections) {
+  std::vector<uint32_t> ids;
+  for (uint32_t i = 0; i < detections.size(); ++i)
+    if (detections[i] >= std::min(min_detections, opportunities[i])) ids.push_back(i);
+  return ids;
 }
 
 }  // namespace gsf::mapping

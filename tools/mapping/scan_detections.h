@@ -45,9 +45,20 @@ class ScanDetector {
   std::vector<uint32_t> pole_order_;
 };
 
-// Per map instance (centroids xyz, labels), the number of detections of its label within `radius` m
-// (bird's-eye). Deterministic; O((instances + detections) log) through a sorted cell index.
+// Label of a ScanDetection that stands for a mapping scan's position (count_detections matches any).
+constexpr uint8_t kAnyLabel = 0xFF;
+
+// Per map instance (centroids xyz, labels), the number of detections within `radius` m (bird's-eye) of
+// its label (or of any label: kAnyLabel detections). Deterministic; O((instances + detections) log)
+// through a sorted cell index.
 std::vector<uint32_t> count_detections(const float* centroids, const uint8_t* labels, uint32_t n,
                                        const std::vector<ScanDetection>& detections, float radius);
+
+// The triangle vertices of MapBuildConfig::triangle_min_detections: instance i qualifies when its
+// detections reach min(min_detections, opportunities[i]), the opportunities being the mapping scans
+// within the detection range. An instance no scan came near, or a map of one scan, is no evidence
+// against an instance, so a short drive keeps what it has. Returns the qualifying ids in id order.
+std::vector<uint32_t> triangle_vertices(const std::vector<uint32_t>& detections,
+                                        const std::vector<uint32_t>& opportunities, uint32_t min_detections);
 
 }  // namespace gsf::mapping
