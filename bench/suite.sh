@@ -10,6 +10,7 @@
 #   --zones "row lattice hall avenue"   zone types (env SUITE_ZONES)
 #   --out DIR                 output directory (env SUITE_OUT; default out/suite)
 #   --set name=value,...      localizer config overrides for build-map and evaluate (env SUITE_SET)
+#   --build-args "ARGS"       extra build-map options, e.g. "--triangle-min-detections 0" (env SUITE_BUILD_ARGS)
 #   --jobs N                  worlds in parallel (env SUITE_JOBS; default 2)
 #   --preset NAME             simulate preset (default suite; tiny-lattice for a smoke run)
 #   --label-noise P           (default 0.03)    --instance-ids   keep instance ids (default: zeroed)
@@ -27,6 +28,7 @@ seeds=${SUITE_SEEDS:-"1 2 3 4 5"}
 zones=${SUITE_ZONES:-"row lattice hall avenue"}
 out=${SUITE_OUT:-out/suite}
 set_overrides=${SUITE_SET:-}
+build_args=${SUITE_BUILD_ARGS:-}
 jobs=${SUITE_JOBS:-2}
 preset=suite
 label_noise=0.03
@@ -42,6 +44,7 @@ while [ $# -gt 0 ]; do
     --zones) zones=$2; shift 2 ;;
     --out) out=$2; shift 2 ;;
     --set) set_overrides=$2; shift 2 ;;
+    --build-args) build_args=$2; shift 2 ;;
     --jobs) jobs=$2; shift 2 ;;
     --preset) preset=$2; shift 2 ;;
     --label-noise) label_noise=$2; shift 2 ;;
@@ -78,7 +81,7 @@ run_world() {
   {
     "$sim_gsf" simulate --preset "$preset" --zone "$zone" --seed "$seed" --label-noise "$label_noise" $ids_flag $label_set_flag \
       --out "$d/dataset" --quiet &&
-    "$gsf" build-map --dataset "$d/dataset" --out "$d/map.gsfmap" "${set_args[@]}" --quiet &&
+    "$gsf" build-map --dataset "$d/dataset" --out "$d/map.gsfmap" "${set_args[@]}" $build_args --quiet &&
     "$gsf" evaluate --map "$d/map.gsfmap" --dataset "$d/dataset" --mode "$modes" --json "$d/results.json" \
       "${set_args[@]}" --quiet
   } >"$d/log.txt" 2>&1 || { echo "suite: $zone seed $seed FAILED (see $d/log.txt)" >&2; return 1; }
@@ -90,12 +93,12 @@ run_world() {
 export -f run_world
 label_set_flag=""
 [ "$label_set" != semantic-kitti ] && label_set_flag="--label-set $label_set"
-export out gsf sim_gsf preset label_noise label_set_flag ids_flag modes set_overrides keep
+export out gsf sim_gsf preset label_noise label_set_flag ids_flag modes set_overrides build_args keep
 
 start=$SECONDS
 n=0
 for z in $zones; do for s in $seeds; do n=$((n + 1)); done; done
-echo "suite: $n worlds ($zones) x seeds ($seeds), preset $preset, label noise $label_noise, $label_set labels${ids_flag:+, no instance ids}${set_overrides:+, --set $set_overrides}, $jobs in parallel -> $out" >&2
+echo "suite: $n worlds ($zones) x seeds ($seeds), preset $preset, label noise $label_noise, $label_set labels${ids_flag:+, no instance ids}${set_overrides:+, --set $set_overrides}${build_args:+, build-map $build_args}, $jobs in parallel -> $out" >&2
 status=0
 for z in $zones; do for s in $seeds; do printf '%s %s\n' "$z" "$s"; done; done |
   xargs -P "$jobs" -n 2 bash -c 'run_world "$0" "$1"' || status=1

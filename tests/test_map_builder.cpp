@@ -371,3 +371,67 @@ TEST_CASE("A map sink takes the sections in id order, checks them against the he
   CHECK(nowhere.section(MapSection::Instances, base + layout[0].offset, layout[0].bytes) == Status::IoError);
   CHECK(nowhere.finish(m, &bytes) == Status::IoError);
 }
+
+TEST_CASE("count_detections counts same-label detections within the radius, across cell borders") {
+  // Instances at (0.9, 0.9) label 3, (10, 10) label 3, (0.9, 0.9) label 4; radius 2 m cells.
+  const float c[9] = {0.9f, 0.9f, 0.0f, 10.0f, 10.0f, 0.0f, 0.9f, 0.9f, 0.0f};
+  const uint8_t lab[3] = {3, 3, 4};
+  std::vector<mapping::ScanDetection> d;
+  auto add = [&](float x, float y, uint8_t l) {
+    mapping::ScanDetection s{};
+    s.xyz[0] = x;
+    s.xyz[1] = y;
+    s.xyz[2] = 5.0f;  // height does not matter (bird's-eye)
+    s.label = l;
+    d.push_back(s);
+  };
+  add(2.5f, 0.9f, 3);    // 1.6 m away, next cell: counts for instance 0
+  add(-0.9f, -0.5f, 3);  // 2.28 m away: too far
+  add(1.0f, 1.0f, 4);    // label 4: instance 2 only
+  add(10.0f, 11.9f, 3);  // 1.9 m from instance 1
+  add(10.0f, 11.9f, 3);  // a second scan's detection of it
+  const std::vector<uint32_t> n = mapping::count_detections(c, lab, 3, d, 2.0f);
+  REQUIRE(n.size() == 3);
+  CHECK(n[0] == 1);
+  CHECK(n[1] == 2);
+  CHECK(n[2] == 1);
+  CHECK(mapping::count_detections(c, lab, 3, {}, 2.0f) == std::vector<uint32_t>{0, 0, 0});
+}
+
+TEST_CASE("Map triangles join only instances the query stages find in enough mapping scans") {
+  mapping::MapBuildConfig all = single_tile();
+  all.triangle_min_detections = 0;
+  const Built full = build(all, Eigen::Vector3d::Zero());
+  REQUIRE(full.build == Status::Ok);
+  CHECK(full.stats.triangle_instances == full.stats.instances);
+  mapping::MapBuildConfig some = single_tile();
+  some.triangle_min_detections = 2;
+  const Built det = build(some, Eigen::Vector3d::Zero());
+  REQUIRE(det.build == Status::Ok);
+  // Same instances and fields; only the triangles' vertex set shrinks.
+  CHECK(det.stats.instances == full.stats.instances);
+  CHECK(det.stats.scan_detections > 0);
+  CHECK(det.stats.triangle_instances <= det.stats.instances);
+  CHECK(det.stats.triangles <= full.stats.triangles);
+  CHECK(det.stats.triangles > 0);
+  // Every triangle vertex is a map instance id among the qualifying instances.
+  std::vector<bool> vertex(det.map.counts.instances, false);
+  for (uint32_t t = 0; t < det.map.counts.triangles; ++t)
+    for (int k = 0; k < 3; ++k) {
+      REQUIRE(det.map.triangles[t].v[k] < det.map.counts.instances);
+      vertex[det.map.triangles[t].v[k]] = true;
+    }
+  uint32_t vertices = 0;
+  for (bool v : vertex) vertices += v;
+  CHECK(vertices <= det.stats.triangle_instances);
+}
+
+TEST_CASE("A triangle vertex needs min(min_detections, nearby scans) detections") {
+  // Not near any scan: no evidence against it. One nearby scan (a one-scan map): one detection is all it
+  // can have. Otherwise min_detections.
+  const std::vector<uint32_t> det = {0, 1, 2, 5, 0, 1};
+  const std::vector<uint32_t> near = {0, 1, 3, 10, 4, 5};
+  CHECK(mapping::triangle_vertices(det, near, 2) == std::vector<uint32_t>{0, 1, 2, 3});
+  CHECK(mapping::triangle_vertices(det, near, 1) == std::vector<uint32_t>{0, 1, 2, 3, 5});
+  CHECK(mapping::triangle_vertices(det, near, 0) == std::vector<uint32_t>{0, 1, 2, 3, 4, 5});
+}

@@ -194,8 +194,19 @@ TEST_CASE("Real nuScenes-lidarseg: the opposite-direction revisit localizes, the
                                   << " overlapping; answered " << fwd.answered_right << " right, " << fwd.answered_wrong
                                   << " wrong of " << fwd.queries);
   CHECK(fwd.overlap >= 13);
-  CHECK(fwd.correct_pose >= 6);
+  // 13 of 15 measured with triangles among the instances single scans find (MapBuildConfig::
+  // triangle_min_detections; 7 of 15 with every map instance a vertex).
+  CHECK(fwd.correct_pose >= 11);
   CHECK(fwd.answered_wrong == 0);
+  // The reverse: the 0002 map (109 m, 56 of its 144 instances found by two scans) covers less of what
+  // 0004's first frames see; 6 of 13 measured.
+  const NuScenesRun rev = localize_nuscenes(root, "0002", "0004");
+  INFO("map 0002, queries 0004: " << rev.correct_pose << " correct poses of " << rev.overlap
+                                  << " overlapping; answered " << rev.answered_right << " right, " << rev.answered_wrong
+                                  << " wrong of " << rev.queries);
+  CHECK(rev.overlap >= 13);
+  CHECK(rev.correct_pose >= 5);
+  CHECK(rev.answered_wrong == 0);
   const NuScenesRun distractor = localize_nuscenes(root, "0001", "0002");
   INFO("map 0001, queries 0002: answered " << distractor.answered_right + distractor.answered_wrong << " of "
                                            << distractor.queries);

@@ -33,6 +33,10 @@ int cmd_build_map(int argc, char** argv) {
       {"resident-tiles", "tiles held in memory at once; the others are spilled to a temporary file (0: no limit)",
        "24"},
       {"spill-dir", "directory of the spill file (default: the system's temporary directory)", ""},
+      {"triangle-min-detections",
+       "triangles only among map instances the query's instance stages find in at least this many mapping scans "
+       "(0: all instances; default: the library's MapBuildConfig)",
+       ""},
       {"quiet", "no progress on stderr", "", true},
   };
   if (wants_help(argc, argv)) {
@@ -70,6 +74,13 @@ int cmd_build_map(int argc, char** argv) {
       return usage_error("build-map", "--resident-tiles must be a count >= 0, got '" + resident + "'");
     options.max_resident_tiles = static_cast<uint32_t>(n);
     options.spill_dir = args.get("spill-dir");
+    const std::string md = args.get("triangle-min-detections");
+    if (!md.empty()) {  // default: MapBuildConfig's
+      const long d = std::strtol(md.c_str(), &end, 10);
+      if (end == md.c_str() || *end != '\0' || d < 0 || d > 1000000)
+        return usage_error("build-map", "--triangle-min-detections must be a count >= 0, got '" + md + "'");
+      options.triangle_min_detections = static_cast<uint32_t>(d);
+    }
   }
   MapGeoreference probe;
   if (!set_frame_name(&probe, options.frame.c_str()))
@@ -124,6 +135,11 @@ int cmd_build_map(int argc, char** argv) {
         static_cast<unsigned long long>(st.tiles.peak_resident_voxels),
         static_cast<unsigned long long>(st.tiles.spills), static_cast<unsigned long long>(st.tiles.reloads),
         st.tiles.spill_bytes / 1e6);
+  if (options.triangle_min_detections > 0)
+    std::printf(
+        "  triangles over %u of %u instances (found by the query stages in >= %u of the scans' %llu detections)\n",
+        st.triangle_instances, st.instances, options.triangle_min_detections,
+        static_cast<unsigned long long>(st.scan_detections));
   std::printf("  origin %.3f, %.3f, %.3f m in frame '%s' (map coordinates are relative to it)\n", st.georef.origin[0],
               st.georef.origin[1], st.georef.origin[2], st.georef.frame);
   if (st.instances_dropped > 0 || st.field_points_dropped > 0 || st.scan_points_dropped > 0)

@@ -63,6 +63,8 @@ MapBuilder::MapBuilder(const MapBuildConfig& config)
   for (int k = 0; k < 3; ++k) georef_.origin[k] = options_.origin[k];
   georef_valid_ = georef_valid_ && valid_georeference(georef_);
   origin_fixed_ = options_.origin_given;
+  if (options_.triangle_min_detections > 0)
+    detector_ok_ = detector_.init(config_, config_.voxel.max_voxels) == Status::Ok;
 }
 
 Status MapBuilder::add_scan(const ScanView& scan, const Eigen::Isometry3d& frame_T_lidar) {
@@ -89,6 +91,17 @@ Status MapBuilder::add_scan(const ScanView& scan, const Eigen::Isometry3d& frame
   s = layer.build(scan, &vst);
   if (s != Status::Ok && s != Status::CapacityExceeded) return s;
   stats_.scan_points_dropped += vst.dropped_points;
+  if (options_.triangle_min_detections > 0) {
+    if (!detector_ok_) return Status::InvalidArgument;
+    const size_t before = detections_.size();
+    s = detector_.detect(layer, map_T_lidar, &detections_);
+    if (s != Status::Ok) return s;
+    stats_.scan_detections += detections_.size() - before;
+    ScanDetection at{};
+    for (int k = 0; k < 3; ++k) at.xyz[k] = static_cast<float>(map_T_lidar.translation()[k]);
+    at.label = kAnyLabel;
+    scan_positions_.push_back(at);
+  }
   const double vs = config_.voxel.voxel_size;
   const uint32_t n = layer.size();
   scan_points_.resize(size_t(n) * 3);
@@ -200,9 +213,32 @@ Status MapBuilder::build(MapSink& sink, size_t* bytes_out, MapBuildStats* stats_
     FixedVector<Triangle> tris;
     if (tb.bind(tws.arena, tc, ni + 1) != Status::Ok || !tris.bind(tws.arena, tc.max_triangles))
       return Status::InvalidArgument;
-    s = tb.build(content.centroids.data(), 3, content.labels.data(), ni, tris);
+    // The triangle vertices: every instance, or those the query stages found in enough mapping scans
+    // (kept in id order, so the canonical vertex order's id tie-breaks are those of the full build).
+    std::vector<uint32_t> vertex_ids;
+    std::vector<float> vertex_xyz;
+    std::vector<uint8_t> vertex_labels;
+    const bool all_vertices = options_.triangle_min_detections == 0;
+    if (!all_vertices) {
+      const std::vector<uint32_t> det =
+          count_detections(content.centroids.data(), content.labels.data(), ni, detections_, options_.detection_radius);
+      const std::vector<uint32_t> near = count_detections(content.centroids.data(), content.labels.data(), ni,
+                                                          scan_positions_, options_.detection_range);
+      vertex_ids = triangle_vertices(det, near, options_.triangle_min_detections);
+      for (uint32_t i : vertex_ids) {
+        for (int k = 0; k < 3; ++k) vertex_xyz.push_back(content.centroids[3 * size_t(i) + k]);
+        vertex_labels.push_back(content.labels[i]);
+      }
+    }
+    const uint32_t nv = all_vertices ? ni : static_cast<uint32_t>(vertex_ids.size());
+    st.triangle_instances = nv;
+    s = all_vertices ? tb.build(content.centroids.data(), 3, content.labels.data(), ni, tris)
+                     : tb.build(vertex_xyz.data(), 3, vertex_labels.data(), nv, tris);
     if (s != Status::Ok) return s;
     const uint32_t nt = tris.size();
+    if (!all_vertices)
+      for (uint32_t t = 0; t < nt; ++t)
+        for (int k = 0; k < 3; ++k) tris[t].v[k] = vertex_ids[tris[t].v[k]];
     std::vector<uint64_t> ikeys(nt + 1), scratch(nt + 1);
     std::vector<uint32_t> offsets(nt + 2), entries(nt + 1);
     uint32_t key_count = 0;
