@@ -193,9 +193,8 @@ Status Localizer::init(const LocalizerConfig& config, const MapView& map, void* 
   im.answer.set_verify_weights(im.weights);
   im.index.keys = map.index_keys;
   im.index.offsets = map.index_offsets;
-  im.index.entries = map.index_entries;
   im.index.key_count = map.counts.index_keys;
-  im.index.entry_count = map.counts.triangles;
+  im.index.triangle_count = map.counts.triangles;
   im.semantic = map.semantic_grid();
   im.answer.forget();
   impl_ = &im;

@@ -165,11 +165,17 @@ Status MapBuilder::build(std::vector<uint64_t>* blob, size_t* bytes_out, MapBuil
   s = tb.build(centroids.data(), 3, inst_labels.data(), ni, tris);
   if (s != Status::Ok) return s;
   const uint32_t nt = tris.size();
+  // The map stores its triangles in index-key order (format v5), so a key's bucket is a contiguous run.
+  std::vector<Triangle> sorted(nt + 1);
   std::vector<uint64_t> ikeys(nt + 1), scratch(nt + 1);
-  std::vector<uint32_t> offsets(nt + 2), entries(nt + 1);
+  std::vector<uint32_t> offsets(nt + 2), ids(nt + 1);
   uint32_t key_count = 0;
-  build_triangle_index(tris.data(), nt, tc.side_bin, ikeys.data(), offsets.data(), entries.data(), &key_count,
-                       scratch.data());
+  s = build_triangle_index(tris.data(), nt, tc.side_bin, sorted.data(), ikeys.data(), offsets.data(), &key_count,
+                           scratch.data(), ids.data());
+  if (s != Status::Ok) return s;
+  std::vector<uint64_t>().swap(tws.memory);  // `tris` (copied to `sorted`) is not read after this
+  std::vector<uint32_t>().swap(ids);
+  std::vector<uint64_t>().swap(scratch);
   st.triangles = nt;
   st.index_keys = key_count;
   st.seconds_triangles = seconds_since(t_tri);
@@ -207,10 +213,9 @@ Status MapBuilder::build(std::vector<uint64_t>* blob, size_t* bytes_out, MapBuil
   view.instances = instances.data();
   view.grid_mean = mean.data();
   view.grid_var = var.data();
-  view.triangles = tris.data();
+  view.triangles = sorted.data();
   view.index_keys = ikeys.data();
   view.index_offsets = offsets.data();
-  view.index_entries = entries.data();
   view.refine_xyz = refine.empty() ? nullptr : refine.data();
   view.refine_points = st.refine_points;
   view.refine_cell = config_.refine.cell;

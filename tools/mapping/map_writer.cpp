@@ -38,7 +38,6 @@ Status write_compact_map(const MapContents& c, std::vector<uint64_t>* blob, size
   view.triangles = c.triangles;
   view.index_keys = c.index_keys;
   view.index_offsets = c.index_offsets;
-  view.index_entries = c.index_entries;
   view.refine_tiles = tiles.empty() ? nullptr : tiles.data();
   view.refine_points = points.empty() ? nullptr : points.data();
   std::vector<uint32_t> palette_offsets, palette;

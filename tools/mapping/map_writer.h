@@ -1,5 +1,5 @@
 // Offline (host, may use the heap): serialise what the map builder computed at full precision into the
-// compact on-board format (map_format.h, version 4): grids quantised per instance (map_quantization.h),
+// compact on-board format (map_format.h, version 5): grids quantised per instance (map_quantization.h),
 // the refinement layer sorted into its grid with normals (refine_layer_builder.h), the semantic layer
 // with a palette per tile (semantic_layer.h). Only what the
 // localizer reads is written (the fields' inducing inputs and weights are not: the localizer reads the
@@ -20,10 +20,9 @@ struct MapContents {
   const MapInstance* instances = nullptr;  // centroid, stability, point_count, label (scales are set here)
   const float* grid_mean = nullptr;        // instances x G x D
   const float* grid_var = nullptr;         // instances x G
-  const MapTriangle* triangles = nullptr;
+  const MapTriangle* triangles = nullptr;  // in index-key order (build_triangle_index)
   const uint64_t* index_keys = nullptr;
   const uint32_t* index_offsets = nullptr;
-  const uint32_t* index_entries = nullptr;
   const float* refine_xyz = nullptr;  // refine_points x 3, map-local
   uint32_t refine_points = 0;
   float refine_cell = 1.0f;  // m, the localizer's refine.cell
