@@ -161,6 +161,20 @@ TEST_CASE("Triangle index: lookup equals brute force, validate rejects bad array
     CHECK(rb == idx.offsets[k]);
     CHECK(re - rb == count);
   }
+  // range_from over increasing ranges (galloping from where the last ended) equals range() each time,
+  // for ranges near each other and far apart, present or not.
+  for (uint64_t stride : {uint64_t(1), uint64_t(3), uint64_t(1) << 16, uint64_t(1) << 32, uint64_t(1) << 48}) {
+    uint32_t from = 0, checked = 0;
+    for (uint64_t lo = keys[0] > 5 ? keys[0] - 5 : 0; lo <= keys[kc - 1] + 1 && checked < 20000;
+         lo += stride, ++checked) {
+      uint32_t b1, e1, b2, e2;
+      const bool r1 = idx.range(lo, lo + 2 < lo + stride ? lo + 2 : lo + stride - 1, &b1, &e1);
+      const bool r2 = idx.range_from(lo, lo + 2 < lo + stride ? lo + 2 : lo + stride - 1, &from, &b2, &e2);
+      REQUIRE(r1 == r2);
+      CHECK(b1 == b2);
+      CHECK(e1 == e2);
+    }
+  }
   uint32_t bgn, end;
   const uint8_t no_labels[3] = {9, 9, 9};
   CHECK_FALSE(idx.lookup(triangle_key(no_labels, 999, 999, 999), &bgn, &end));

@@ -5,20 +5,38 @@
 
 namespace gsf {
 
-bool TriangleIndexView::range(uint64_t lo, uint64_t hi, uint32_t* begin, uint32_t* end) const {
+bool TriangleIndexView::range_from(uint64_t lo, uint64_t hi, uint32_t* from, uint32_t* begin, uint32_t* end) const {
   *begin = *end = 0;
-  if (key_count == 0) return false;
-  // Branch-free lower bound (the first key >= lo): the same index as the branching binary search.
-  const uint64_t* base = keys;
-  uint32_t n = key_count;
-  while (n > 1) {
-    const uint32_t half = n / 2;
-    base = base[half] < lo ? base + half : base;
-    n -= half;
+  uint32_t a = *from;
+  if (a == 0) {
+    if (key_count == 0) return false;
+    // Branch-free lower bound (the first key >= lo): the same index as the branching binary search.
+    const uint64_t* base = keys;
+    uint32_t n = key_count;
+    while (n > 1) {
+      const uint32_t half = n / 2;
+      base = base[half] < lo ? base + half : base;
+      n -= half;
+    }
+    a = static_cast<uint32_t>(base - keys) + (*base < lo ? 1u : 0u);
+  } else if (a < key_count && keys[a] < lo) {
+    // Gallop: keys[prev] < lo; double the step until a key >= lo (or the end), then bisect.
+    uint32_t prev = a, step = 1;
+    while (prev + step < key_count && keys[prev + step] < lo) {
+      prev += step;
+      step *= 2;
+    }
+    uint32_t l = prev + 1, r = prev + step < key_count ? prev + step : key_count;
+    while (l < r) {
+      const uint32_t m = l + (r - l) / 2;
+      if (keys[m] < lo) l = m + 1;
+      else r = m;
+    }
+    a = l;
   }
-  const uint32_t a = static_cast<uint32_t>(base - keys) + (*base < lo ? 1u : 0u);
   uint32_t b = a;
   while (b < key_count && keys[b] <= hi) ++b;  // keys are unique: at most hi - lo + 1 steps
+  *from = b;
   if (b == a) return false;
   *begin = offsets[a];
   *end = offsets[b];

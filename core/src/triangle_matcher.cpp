@@ -90,13 +90,16 @@ TriangleMatchStats TriangleMatcher::match(const Triangle& q, const TriangleIndex
     constexpr int32_t kMax = int32_t(kTriangleKeyMaxBin);
     const uint32_t lo2 = static_cast<uint32_t>(qk[2] > 0 ? qk[2] - 1 : 0);
     const uint32_t hi2 = static_cast<uint32_t>(qk[2] < kMax ? qk[2] + 1 : kMax);
+    // The 9 ranges come in increasing key order (same labels; (q0, q1) lexicographic), so each search
+    // continues from where the previous one ended.
+    uint32_t from = 0;
     for (int d0 = -1; d0 <= 1; ++d0)
       for (int d1 = -1; d1 <= 1; ++d1) {
         const int32_t a0 = qk[0] + d0, a1 = qk[1] + d1;
         if (a0 < 0 || a1 < 0 || a0 > kMax || a1 > kMax) continue;
         uint32_t b, e;
-        if (!index.range(triangle_key(label, uint32_t(a0), uint32_t(a1), lo2),
-                         triangle_key(label, uint32_t(a0), uint32_t(a1), hi2), &b, &e))
+        if (!index.range_from(triangle_key(label, uint32_t(a0), uint32_t(a1), lo2),
+                              triangle_key(label, uint32_t(a0), uint32_t(a1), hi2), &from, &b, &e))
           continue;
         for (uint32_t mid = b; mid < e; ++mid) {
           const Triangle& m = map[mid];  // sequential: a bucket is a contiguous run of triangles

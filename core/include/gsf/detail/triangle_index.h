@@ -24,7 +24,14 @@ struct TriangleIndexView {
   uint32_t triangle_count = 0;
 
   // Triangle ids [*begin, *end) of the keys in [lo, hi] (hi - lo <= 2: at most 3 keys); false when none.
-  bool range(uint64_t lo, uint64_t hi, uint32_t* begin, uint32_t* end) const;
+  bool range(uint64_t lo, uint64_t hi, uint32_t* begin, uint32_t* end) const {
+    uint32_t from = 0;
+    return range_from(lo, hi, &from, begin, end);
+  }
+  // range() for a sequence of increasing ranges: searches only the keys from index *from on (every key
+  // before *from must be < lo; 0 searches all with a binary search, otherwise the search gallops
+  // forward from *from, cheap when the next range is near) and sets *from to the first key > hi.
+  bool range_from(uint64_t lo, uint64_t hi, uint32_t* from, uint32_t* begin, uint32_t* end) const;
   // [*begin, *end) of the triangles with `key`; false (empty range) if absent.
   bool lookup(uint64_t key, uint32_t* begin, uint32_t* end) const { return range(key, key, begin, end); }
   // Structural checks for untrusted arrays: keys strictly increasing, offsets monotone from 0 to
