@@ -1,13 +1,14 @@
 #!/usr/bin/env bash
-# Cost growth with map size: the same kind of queries against maps of 1x, 2x, 4x and 16x the demo
-# world's road length (city blocks 4x3 = 3.5 km, 6x4 -> ~2x, 8x6 -> ~4x, 19x14 -> ~16x = 57 km). Per map:
+# Cost growth with map size: the same kind of queries against maps of 1x, 2x, 4x, 10x and 16x the demo
+# world's road length (city blocks 4x3 = 3.5 km, 6x4 -> ~2x, 8x6 -> ~4x, 15x11 -> ~10x, 19x14 -> ~16x =
+# 57 km; 10x is the scale of issue 11's query-time target). Per map:
 # map bytes, bytes/km, instances, triangles, the builder's peak RSS (build-map's summary: getrusage
 # ru_maxrss of the build-map process; the builder streams in tiles, build-map --tile-size) and CPU time
 # (user + sys), and for the first N queries (same roads in every world) success, median and p95 time,
 # candidates per query (triangle match candidates, median), the median match-stage time and the
 # workspace of the instance-only and GSF rows.
 # Usage: bench/scale.sh [OUT_DIR] [N_QUERIES]
-# Environment: SCALES (default "1x 2x 4x"; any of 1x 2x 4x 16x), GSF (a gsf binary to use instead of
+# Environment: SCALES (default "1x 2x 4x"; any of 1x 2x 4x 10x 16x), GSF (a gsf binary to use instead of
 # building build/release, e.g. a copy for a long background run), BUILD_MAP_ARGS (extra build-map options).
 # A dataset already under OUT_DIR/<scale>/dataset is reused.
 set -euo pipefail
@@ -29,6 +30,7 @@ for s in $scales; do
     1x) spec="1x 4 3" ;;
     2x) spec="2x 6 4" ;;
     4x) spec="4x 8 6" ;;
+    10x) spec="10x 15 11" ;;
     16x) spec="16x 19 14" ;;
     *) echo "scale.sh: unknown scale $s" >&2; exit 2 ;;
   esac

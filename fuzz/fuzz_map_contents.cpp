@@ -47,7 +47,7 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
     for (int k = 0; k < 3; ++k) sink = sink + view.instances[view.triangles[t].v[k]].centroid[0];
   for (uint32_t k = 0; k < view.counts.index_keys; ++k)
     for (uint32_t e = view.index_offsets[k]; e < view.index_offsets[k + 1]; ++e)
-      sink = sink + view.triangles[view.index_entries[e]].side[0];
+      sink = sink + view.triangles[e].side[0];
   uint32_t hint = 0;
   const gsf::SemanticGridView grid = view.semantic_grid();
   for (float x = -3; x < 3; x += 0.7f)

@@ -18,6 +18,6 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
     for (int k = 0; k < 3; ++k) sink = sink + view.instances[view.triangles[t].v[k]].centroid[0];
   for (uint32_t k = 0; k < view.counts.index_keys; ++k)
     for (uint32_t e = view.index_offsets[k]; e < view.index_offsets[k + 1]; ++e)
-      sink = sink + view.triangles[view.index_entries[e]].side[0];
+      sink = sink + view.triangles[e].side[0];
   return 0;
 }

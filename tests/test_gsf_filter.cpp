@@ -186,8 +186,18 @@ TEST_CASE("GSF filter caches: hits cost nothing, full caches compute into scratc
   CHECK(a.similarity(qf, 0, map.view, 1, 2) == s0);  // identical map instances
   CHECK(a.comparisons() == 2);
   CHECK(a.probes() == 1);
+  // The cost queries the localizer orders vertices by: a cached omega, a cached probe; neither computes.
+  CHECK(a.cached_similarity(0, 0, 2) != nullptr);
+  CHECK(*a.cached_similarity(0, 0, 2) == s0);
+  CHECK(a.cached_similarity(0, 2, 9) == nullptr);
+  CHECK(a.probe_ready(qf, 0, 2));
+  CHECK_FALSE(a.probe_ready(qf, 0, 9));
+  CHECK(a.probes() == 1);
+  CHECK(a.comparisons() == 2);
   const float s_other_bin = a.similarity(qf, 0, map.view, 2, 9);
   CHECK(a.probes() == 2);
+  CHECK(a.probe_ready(qf, 0, 9));
+  CHECK(*a.cached_similarity(0, 2, 9) == s_other_bin);
 
   // Full caches: one probe slot and one similarity slot. The second bin's probe goes to scratch and a
   // repeated similarity is computed again, with the same values as the big caches give.

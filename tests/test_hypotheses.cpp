@@ -22,25 +22,29 @@ using gsf_test::Cloud;
 
 namespace {
 
+// The map's triangles in key order (format v5) with their index; input(i) is the position in the
+// builder's list of stored triangle i.
 struct Index {
   std::vector<Triangle> tris;
   std::vector<uint64_t> keys, scratch;
-  std::vector<uint32_t> offsets, entries;
+  std::vector<uint32_t> offsets, ids;
   TriangleIndexView view;
-  explicit Index(std::vector<Triangle> t, float bin) : tris(std::move(t)) {
-    const uint32_t n = static_cast<uint32_t>(tris.size());
+  explicit Index(const std::vector<Triangle>& t, float bin) {
+    const uint32_t n = static_cast<uint32_t>(t.size());
+    tris.resize(n + 1);
     keys.resize(n + 1);
     scratch.resize(n + 1);
     offsets.resize(n + 2);
-    entries.resize(n + 1);
+    ids.resize(n + 1);
     uint32_t kc = 0;
-    build_triangle_index(tris.data(), n, bin, keys.data(), offsets.data(), entries.data(), &kc, scratch.data());
+    REQUIRE(build_triangle_index(t.data(), n, bin, tris.data(), keys.data(), offsets.data(), &kc, scratch.data(),
+                                 ids.data()) == Status::Ok);
     view.keys = keys.data();
     view.offsets = offsets.data();
-    view.entries = entries.data();
     view.key_count = kc;
-    view.entry_count = n;
+    view.triangle_count = n;
   }
+  uint32_t input(uint32_t stored) const { return ids[stored]; }
 };
 
 Triangle triangle_with_sides(uint32_t id0, float s0, float s1, float s2) {
@@ -77,7 +81,7 @@ TEST_CASE("Ranked matching keeps the best-fitting map triangle when a cap would 
   CHECK(st.kept == 8);
   CHECK(st.dropped() == 293);  // every drop is counted
   REQUIRE(matcher.size() == 8);
-  CHECK(matcher.match_at(0).map == 300);  // the exact copy ranks first
+  CHECK(idx.input(matcher.match_at(0).map) == 300);  // the exact copy ranks first
   CHECK(matcher.match_at(0).residual == 0.0f);
   for (uint32_t i = 1; i < matcher.size(); ++i) CHECK(matcher.match_at(i - 1).residual <= matcher.match_at(i).residual);
 }
@@ -87,6 +91,7 @@ TEST_CASE("Tied query sides are tried in both vertex orders") {
   // noise put its two short sides the other way round, so its canonical order pairs the vertices
   // differently; only the tied order pairs them as the map does.
   std::vector<Triangle> map = {triangle_with_sides(0, 5.0f, 5.05f, 8.0f)};
+  map[0].label[1] = kTrunk;  // labels (pole, trunk, pole), part of the key
   Index idx(map, 1.0f);
   TriangleConfig tc;
   ArenaBuffer buf(TriangleMatcher::required_bytes(16));
@@ -96,9 +101,6 @@ TEST_CASE("Tied query sides are tried in both vertex orders") {
   q.label[0] = kPole;
   q.label[1] = kTrunk;
   q.label[2] = kPole;
-  idx.tris[0].label[0] = kPole;
-  idx.tris[0].label[1] = kTrunk;
-  idx.tris[0].label[2] = kPole;
   // Without ties only the canonical order is tried.
   TriangleMatchStats st = matcher.match(q, idx.view, idx.tris.data(), tc, 0.0f);
   CHECK(st.orders == 1);

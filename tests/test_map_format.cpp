@@ -26,7 +26,7 @@ struct SmallMap {
   std::vector<MapRefinePoint> refine;
   std::vector<MapTriangle> tris;
   std::vector<uint64_t> keys;
-  std::vector<uint32_t> offsets, entries;
+  std::vector<uint32_t> offsets;
   MapView view;
 
   SmallMap() {
@@ -88,9 +88,9 @@ struct SmallMap {
     t.v[2] = 3;
     t.side[2] = 9.5f;
     tris.push_back(t);
-    keys = {11, 42};
+    // Stored in key order (format v5): one key each, (pole x 3; 3, 5, 8) then (pole x 3; 3, 5, 9).
+    keys = {triangle_key(tris[0], p.side_bin), triangle_key(tris[1], p.side_bin)};
     offsets = {0, 1, 2};
-    entries = {1, 0};
     // Refinement layer: two tiles, (0, 0) from z cell -1 and (1, 0) from z cell 3; a point without a normal.
     p.refine_cell = 1.0f;
     refine_tiles = {{(32768u << 16) | 32768u, 0, -1}, {(32769u << 16) | 32768u, 2, 3}};
@@ -109,7 +109,6 @@ struct SmallMap {
     view.triangles = tris.data();
     view.index_keys = keys.data();
     view.index_offsets = offsets.data();
-    view.index_entries = entries.data();
     view.refine_tiles = refine_tiles.data();
     view.refine_points = refine.data();
   }
@@ -144,7 +143,6 @@ bool same_map(const MapView& a, const MapView& b) {
          std::memcmp(a.triangles, b.triangles, a.counts.triangles * sizeof(MapTriangle)) == 0 &&
          std::memcmp(a.index_keys, b.index_keys, a.counts.index_keys * 8) == 0 &&
          std::memcmp(a.index_offsets, b.index_offsets, (a.counts.index_keys + 1) * 4) == 0 &&
-         std::memcmp(a.index_entries, b.index_entries, a.counts.triangles * 4) == 0 &&
          std::memcmp(a.refine_tiles, b.refine_tiles, a.counts.refine_tiles * sizeof(MapRefineTile)) == 0 &&
          std::memcmp(a.refine_points, b.refine_points, a.counts.refine_points * sizeof(MapRefinePoint)) == 0 &&
          same_semantic_layer(a, b);
@@ -332,14 +330,45 @@ TEST_CASE("Semantically invalid contents with valid CRCs are rejected") {
   }
 
   SmallMap unsorted;
-  unsorted.keys = {42, 11};
-  unsorted.view.index_keys = unsorted.keys.data();
+  std::swap(unsorted.keys[0], unsorted.keys[1]);
   Blob b3(size);
   REQUIRE(write_map(unsorted.view, b3.data(), size, nullptr) == Status::Ok);
   CHECK(load_map(b3.data(), size, &v) == Status::CorruptData);
+  // Behind valid CRCs and sorted keys: triangles out of key order (each under the other's key), a side
+  // moved to another bin, labels changed consistently with their instances (labels are part of the key),
+  // one bucket holding both triangles.
+  for (int which = 0; which < 4; ++which) {
+    SmallMap bad;
+    if (which == 0) std::swap(bad.tris[0], bad.tris[1]);
+    if (which == 1) bad.tris[1].side[2] = 10.5f;
+    if (which == 2) {
+      for (MapInstance& in : bad.instances) in.label = kTrunk;
+      for (MapTriangle& t : bad.tris)
+        for (int k = 0; k < 3; ++k) t.label[k] = kTrunk;
+    }
+    if (which == 3) bad.offsets = {0, 2, 2};
+    Blob b4(size);
+    REQUIRE(write_map(bad.view, b4.data(), size, nullptr) == Status::Ok);
+    INFO("index case " << which);
+    CHECK(load_map(b4.data(), size, &v) == Status::CorruptData);
+  }
+  // A side bin too fine for the keys' 16-bit sides (max_side / side_bin >= 65534).
+  SmallMap fine;
+  fine.view.params.side_bin = 50.0f / 65534.0f;
+  Blob b5(size);
+  CHECK(write_map(fine.view, b5.data(), size, nullptr) == Status::InvalidArgument);
 }
 
-TEST_CASE("Version 1, 2 and 3 maps are refused as VersionMismatch, real v2 and v3 files included") {
+TEST_CASE("Version 1 to 4 maps are refused as VersionMismatch, real v2, v3 and v4 files included") {
+  // tests/data/map_v4_small.gsfmap: the fuzz seed map as format version 4 wrote it (13 sections, an
+  // IndexEntries section, triangles in build order, keys without labels).
+  const std::vector<uint8_t> v4 = read_file(std::string(GSF_SOURCE_DIR) + "/tests/data/map_v4_small.gsfmap");
+  REQUIRE(v4.size() == 1424);
+  Blob old4(v4.size());
+  std::memcpy(old4.data(), v4.data(), v4.size());
+  MapView v4view;
+  CHECK(load_map(old4.data(), v4.size(), &v4view) == Status::VersionMismatch);
+  CHECK(v4view.instances == nullptr);
   // tests/data/map_v3_small.gsfmap: the fuzz seed map as format version 3 wrote it (240-byte header,
   // float grids, inducing inputs and alpha, raw refinement points).
   const std::vector<uint8_t> v3 = read_file(std::string(GSF_SOURCE_DIR) + "/tests/data/map_v3_small.gsfmap");
@@ -357,10 +386,10 @@ TEST_CASE("Version 1, 2 and 3 maps are refused as VersionMismatch, real v2 and v
   MapView v;
   CHECK(load_map(old.data(), v2.size(), &v) == Status::VersionMismatch);
   CHECK(v.instances == nullptr);
-  // A current map relabelled as version 1 or 2 (header CRC re-sealed): the version decides, not the CRC.
+  // A current map relabelled as an older version (header CRC re-sealed): the version decides, not the CRC.
   SmallMap sm;
   const size_t size = map_serialized_size(sm.view);
-  for (uint32_t version : {1u, 2u, 3u}) {
+  for (uint32_t version : {1u, 2u, 3u, 4u}) {
     Blob b(size);
     REQUIRE(write_map(sm.view, b.data(), size, nullptr) == Status::Ok);
     reseal_header(b.data(), [&](MapHeader* h) { h->version = version; });

@@ -62,7 +62,7 @@ void GsfFilter::reset() {
 }
 
 float GsfFilter::similarity(const QueryFields& qf, uint32_t qi, const MapView& map, uint32_t mi, uint32_t yaw_bin) {
-  const uint64_t skey = (uint64_t(qi) << 44) | (uint64_t(yaw_bin) << 32) | mi;
+  const uint64_t skey = similarity_key(qi, mi, yaw_bin);
   if (const float* cached = similarity_.find(skey)) return *cached;
   ++comparisons_;
   float omega = 0.0f;

@@ -193,9 +193,8 @@ Status Localizer::init(const LocalizerConfig& config, const MapView& map, void* 
   im.answer.set_verify_weights(im.weights);
   im.index.keys = map.index_keys;
   im.index.offsets = map.index_offsets;
-  im.index.entries = map.index_entries;
   im.index.key_count = map.counts.index_keys;
-  im.index.entry_count = map.counts.triangles;
+  im.index.triangle_count = map.counts.triangles;
   im.semantic = map.semantic_grid();
   im.answer.forget();
   impl_ = &im;
@@ -330,11 +329,26 @@ void Localizer::Impl::match_and_filter(const LocalizerConfig& cfg, const MapView
       }
       float omega[3] = {1.0f, 1.0f, 1.0f};
       if (cfg.match.use_gsf) {
+        // A match survives when all three omegas reach min_similarity, so the cheapest go first and
+        // the first failure stops: cached similarities (pass 0), then comparisons against a cached
+        // probe (pass 1), then those needing a new query probe (pass 2). The decision and the
+        // survivors' omegas are the vertex-order loop's; only fewer probes and comparisons are made.
         bool keep = true;
-        for (int v = 0; v < 3 && keep; ++v) {
-          omega[v] = gsf.similarity(qf, qv[v], map, mt.v[v], bin);
-          keep = omega[v] >= cfg.match.min_similarity;
-        }
+        uint32_t done = 0;
+        for (int pass = 0; pass < 3 && keep; ++pass)
+          for (int v = 0; v < 3 && keep; ++v) {
+            if (done & (1u << v)) continue;
+            if (pass == 0) {
+              const float* c = gsf.cached_similarity(qv[v], mt.v[v], bin);
+              if (c == nullptr) continue;
+              omega[v] = *c;
+            } else {
+              if (pass == 1 && !gsf.probe_ready(qf, qv[v], bin)) continue;
+              omega[v] = gsf.similarity(qf, qv[v], map, mt.v[v], bin);
+            }
+            done |= 1u << v;
+            keep = omega[v] >= cfg.match.min_similarity;
+          }
         if (!keep) continue;
       }
       ++survivors;

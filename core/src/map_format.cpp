@@ -5,6 +5,7 @@
 
 #include "gsf/detail/crc32.h"
 #include "gsf/detail/map_quantization.h"
+#include "gsf/detail/triangle_index.h"
 #include "gsf/semantic_classes.h"
 
 namespace gsf {
@@ -37,16 +38,15 @@ bool section_specs(const MapView& m, SectionSpec* s) {
   s[3] = {MapSection::Triangles, sizeof(MapTriangle), m.counts.triangles, m.triangles};
   s[4] = {MapSection::IndexKeys, sizeof(uint64_t), m.counts.index_keys, m.index_keys};
   s[5] = {MapSection::IndexOffsets, sizeof(uint32_t), uint64_t(m.counts.index_keys) + 1, m.index_offsets};
-  s[6] = {MapSection::IndexEntries, sizeof(uint32_t), m.counts.triangles, m.index_entries};
-  s[7] = {MapSection::RefineTiles, sizeof(MapRefineTile), m.counts.refine_tiles, m.refine_tiles};
-  s[8] = {MapSection::RefinePoints, sizeof(MapRefinePoint), m.counts.refine_points, m.refine_points};
+  s[6] = {MapSection::RefineTiles, sizeof(MapRefineTile), m.counts.refine_tiles, m.refine_tiles};
+  s[7] = {MapSection::RefinePoints, sizeof(MapRefinePoint), m.counts.refine_points, m.refine_points};
   const uint64_t tc = m.params.semantic_tile_cells;
   if (tc > kMaxSemanticTileCells) return false;
-  s[9] = {MapSection::SemanticTileKeys, sizeof(uint32_t), m.counts.semantic_tiles, m.semantic_tile_keys};
+  s[8] = {MapSection::SemanticTileKeys, sizeof(uint32_t), m.counts.semantic_tiles, m.semantic_tile_keys};
   const uint64_t tiles = m.counts.semantic_tiles;
-  s[10] = {MapSection::SemanticPaletteOffsets, sizeof(uint32_t), tiles ? tiles + 1 : 0, m.semantic_palette_offsets};
-  s[11] = {MapSection::SemanticPalette, sizeof(uint32_t), m.counts.semantic_palette, m.semantic_palette};
-  s[12] = {MapSection::SemanticCells, sizeof(uint8_t), tiles * tc * tc, m.semantic_cells};
+  s[9] = {MapSection::SemanticPaletteOffsets, sizeof(uint32_t), tiles ? tiles + 1 : 0, m.semantic_palette_offsets};
+  s[10] = {MapSection::SemanticPalette, sizeof(uint32_t), m.counts.semantic_palette, m.semantic_palette};
+  s[11] = {MapSection::SemanticCells, sizeof(uint8_t), tiles * tc * tc, m.semantic_cells};
   return true;
 }
 
@@ -77,6 +77,8 @@ Status check_params(const MapParams& p) {
   if (!(p.grid_spacing > 0 && p.length_scale > 0 && p.signal_variance > 0 && p.noise_variance > 0 &&
         p.field_radius > 0 && p.voxel_size > 0 && p.side_bin > 0 && p.min_side >= 0 && p.max_side > p.min_side))
     return Status::CorruptData;
+  // The triangle keys' 16-bit side fields hold every side up to max_side (triangle.h).
+  if (!(p.max_side / p.side_bin < float(kTriangleKeyMaxBin - 1))) return Status::CorruptData;
   // The semantic layer's shape: both zero (no layer) or a positive cell and 1..64 cells per tile.
   const bool no_layer = p.semantic_cell == 0.0f && p.semantic_tile_cells == 0;
   if (!no_layer && !(std::isfinite(p.semantic_cell) && p.semantic_cell > 0 && p.semantic_tile_cells > 0 &&
@@ -116,15 +118,15 @@ Status check_contents(const MapView& m) {
     if (!all_finite(tri.side, 3) || !(tri.side[0] <= tri.side[1] && tri.side[1] <= tri.side[2]) || tri.side[0] < 0)
       return Status::CorruptData;
   }
-  // CSR index: strictly increasing keys, monotone offsets covering exactly the entries.
-  const uint32_t k = m.counts.index_keys;
-  if (m.index_offsets[0] != 0 || m.index_offsets[k] != m.counts.triangles) return Status::CorruptData;
-  for (uint32_t i = 0; i < k; ++i) {
-    if (m.index_offsets[i] > m.index_offsets[i + 1]) return Status::CorruptData;
-    if (i > 0 && m.index_keys[i - 1] >= m.index_keys[i]) return Status::CorruptData;
-  }
-  for (uint32_t i = 0; i < m.counts.triangles; ++i)
-    if (m.index_entries[i] >= m.counts.triangles) return Status::CorruptData;
+  // CSR index over the triangles (stored in key order): strictly increasing keys, monotone offsets
+  // covering exactly the triangles, every triangle's key equal to its bucket's.
+  TriangleIndexView index;
+  index.keys = m.index_keys;
+  index.offsets = m.index_offsets;
+  index.key_count = m.counts.index_keys;
+  index.triangle_count = m.counts.triangles;
+  const Status is = index.validate(m.triangles, m.params.side_bin);
+  if (is != Status::Ok) return is;
   // Refinement layer: present exactly when it has points, with a cell size; then structurally valid.
   if ((m.counts.refine_points == 0) != (m.counts.refine_tiles == 0)) return Status::CorruptData;
   if (m.counts.refine_points > 0 && !(m.params.refine_cell > 0.0f)) return Status::CorruptData;
@@ -280,13 +282,12 @@ Status load_map(const void* data, size_t bytes, MapView* out) {
   m.triangles = static_cast<const MapTriangle*>(ptr[3]);
   m.index_keys = static_cast<const uint64_t*>(ptr[4]);
   m.index_offsets = static_cast<const uint32_t*>(ptr[5]);
-  m.index_entries = static_cast<const uint32_t*>(ptr[6]);
-  m.refine_tiles = m.counts.refine_tiles ? static_cast<const MapRefineTile*>(ptr[7]) : nullptr;
-  m.refine_points = m.counts.refine_points ? static_cast<const MapRefinePoint*>(ptr[8]) : nullptr;
-  m.semantic_tile_keys = m.counts.semantic_tiles ? static_cast<const uint32_t*>(ptr[9]) : nullptr;
-  m.semantic_palette_offsets = m.counts.semantic_tiles ? static_cast<const uint32_t*>(ptr[10]) : nullptr;
-  m.semantic_palette = m.counts.semantic_tiles ? static_cast<const uint32_t*>(ptr[11]) : nullptr;
-  m.semantic_cells = m.counts.semantic_tiles ? static_cast<const uint8_t*>(ptr[12]) : nullptr;
+  m.refine_tiles = m.counts.refine_tiles ? static_cast<const MapRefineTile*>(ptr[6]) : nullptr;
+  m.refine_points = m.counts.refine_points ? static_cast<const MapRefinePoint*>(ptr[7]) : nullptr;
+  m.semantic_tile_keys = m.counts.semantic_tiles ? static_cast<const uint32_t*>(ptr[8]) : nullptr;
+  m.semantic_palette_offsets = m.counts.semantic_tiles ? static_cast<const uint32_t*>(ptr[9]) : nullptr;
+  m.semantic_palette = m.counts.semantic_tiles ? static_cast<const uint32_t*>(ptr[10]) : nullptr;
+  m.semantic_cells = m.counts.semantic_tiles ? static_cast<const uint8_t*>(ptr[11]) : nullptr;
   const Status cs = check_contents(m);
   if (cs != Status::Ok) return cs;
   *out = m;

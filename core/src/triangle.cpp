@@ -2,7 +2,11 @@
 
 #include <cmath>
 
+#include "gsf/semantic_classes.h"
+
 namespace gsf {
+static_assert(kNumClasses <= int(kTriangleKeyLabelLimit), "a dense class must fit the key's 5-bit label field");
+
 namespace {
 
 float dist(const float* a, const float* b) {
@@ -17,19 +21,20 @@ Status validate(const TriangleConfig& c) {
       (c.map_neighbours != 0 && (c.map_neighbours < c.neighbours || c.map_neighbours > 64)) || !(c.min_side >= 0.0f) ||
       !(c.max_side > c.min_side) || !(c.side_bin > 0.0f) || !(c.relative_side_tolerance > 0.0f) || c.max_triangles == 0)
     return Status::InvalidArgument;
+  // Every side quantises into the key's 16 bits, with room for the matcher's +1 neighbour.
+  if (!(c.max_side / c.side_bin < float(kTriangleKeyMaxBin - 1))) return Status::InvalidArgument;
   return Status::Ok;
 }
 
-uint64_t triangle_key(int32_t q0, int32_t q1, int32_t q2) {
-  constexpr int32_t kOff = 1 << 20;
-  auto u = [](int32_t q) { return uint64_t(uint32_t(q + kOff) & 0x1FFFFFu); };
-  return (u(q0) << 42) | (u(q1) << 21) | u(q2);
-}
-
 uint64_t triangle_key(const Triangle& t, float bin) {
-  return triangle_key(static_cast<int32_t>(std::floor(t.side[0] / bin)),
-                      static_cast<int32_t>(std::floor(t.side[1] / bin)),
-                      static_cast<int32_t>(std::floor(t.side[2] / bin)));
+  uint32_t q[3];
+  for (int k = 0; k < 3; ++k) {
+    if (t.label[k] >= kTriangleKeyLabelLimit) return kInvalidTriangleKey;
+    const float f = std::floor(t.side[k] / bin);
+    if (!(f >= 0.0f && f <= float(kTriangleKeyMaxBin))) return kInvalidTriangleKey;  // also NaN
+    q[k] = static_cast<uint32_t>(f);
+  }
+  return triangle_key(t.label, q[0], q[1], q[2]);
 }
 
 Triangle make_triangle(uint32_t a, uint32_t b, uint32_t c, const float* pa, const float* pb, const float* pc,

@@ -84,33 +84,47 @@ TriangleMatchStats TriangleMatcher::match(const Triangle& q, const TriangleIndex
     ++st.orders;
     int32_t qk[3];
     for (int i = 0; i < 3; ++i) qk[i] = static_cast<int32_t>(std::floor(side[i] / config.side_bin));
+    // The 27 neighbouring keys (q0 +- 1, q1 +- 1, q2 +- 1) of this label triple as 9 key ranges: q2 is the
+    // key's lowest field, so its three neighbours are contiguous, and so are their triangles (stored in
+    // key order). Quantised sides below 0 or above the key's field do not exist.
+    constexpr int32_t kMax = int32_t(kTriangleKeyMaxBin);
+    const uint32_t lo2 = static_cast<uint32_t>(qk[2] > 0 ? qk[2] - 1 : 0);
+    const uint32_t hi2 = static_cast<uint32_t>(qk[2] < kMax ? qk[2] + 1 : kMax);
+    // The 9 ranges come in increasing key order (same labels; (q0, q1) lexicographic), so each search
+    // continues from where the previous one ended.
+    uint32_t from = 0;
     for (int d0 = -1; d0 <= 1; ++d0)
-      for (int d1 = -1; d1 <= 1; ++d1)
-        for (int d2 = -1; d2 <= 1; ++d2) {
-          uint32_t b, e;
-          if (!index.lookup(triangle_key(qk[0] + d0, qk[1] + d1, qk[2] + d2), &b, &e)) continue;
-          for (uint32_t it = b; it < e; ++it) {
-            const uint32_t mid = index.entries[it];
-            const Triangle& m = map[mid];
-            if (m.label[0] != label[0] || m.label[1] != label[1] || m.label[2] != label[2]) continue;
-            float residual = 0.0f;
-            bool ok = true;
-            for (int s = 0; s < 3 && ok; ++s) {
-              const float r = std::fabs(side[s] - m.side[s]);
-              ok = r < config.relative_side_tolerance * side[s];
-              const float rel = side[s] > 0.0f ? r / side[s] : 0.0f;
-              residual = rel > residual ? rel : residual;
-            }
-            if (!ok) continue;
-            ++st.accepted;
-            RankedTriangleMatch c{};
-            c.map = mid;
-            c.residual = residual;
-            c.tie = static_cast<uint32_t>(mix64((uint64_t(mid) << 3) | o) >> 32);
-            c.order = o;
-            offer(c);
+      for (int d1 = -1; d1 <= 1; ++d1) {
+        const int32_t a0 = qk[0] + d0, a1 = qk[1] + d1;
+        if (a0 < 0 || a1 < 0 || a0 > kMax || a1 > kMax) continue;
+        uint32_t b, e;
+        if (!index.range_from(triangle_key(label, uint32_t(a0), uint32_t(a1), lo2),
+                              triangle_key(label, uint32_t(a0), uint32_t(a1), hi2), &from, &b, &e))
+          continue;
+        for (uint32_t mid = b; mid < e; ++mid) {
+          const Triangle& m = map[mid];  // sequential: a bucket is a contiguous run of triangles
+          if (m.label[0] != label[0] || m.label[1] != label[1] || m.label[2] != label[2]) continue;
+          float residual = 0.0f;
+          bool ok = true;
+          for (int s = 0; s < 3 && ok; ++s) {
+            const float r = std::fabs(side[s] - m.side[s]);
+            ok = r < config.relative_side_tolerance * side[s];
+            const float rel = side[s] > 0.0f ? r / side[s] : 0.0f;
+            residual = rel > residual ? rel : residual;
           }
+          if (!ok) continue;
+          ++st.accepted;
+          RankedTriangleMatch c{};
+          c.map = mid;
+          c.residual = residual;
+          // Position-free: a hash of the map triangle's instance ids and the order, not of where the
+          // triangle is stored.
+          c.tie = static_cast<uint32_t>(
+              mix64(mix64((uint64_t(m.v[0]) << 32) | m.v[1]) ^ ((uint64_t(m.v[2]) << 3) | o)) >> 32);
+          c.order = o;
+          offer(c);
         }
+      }
   }
   // Best first (heap sort: repeatedly move the worst to the end).
   for (uint32_t n = size_; n > 1; --n) {

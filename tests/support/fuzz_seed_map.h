@@ -66,8 +66,9 @@ inline std::vector<uint64_t> fuzz_seed_map(size_t* bytes) {
     t[k].side[2] = 5.6f + k;
     for (int j = 0; j < 3; ++j) t[k].label[j] = kPole;
   }
-  static uint64_t keys[2] = {7, 9};
-  static uint32_t off[3] = {0, 1, 2}, ent[2] = {1, 0};
+  // Format v5: triangles in key order, one key each.
+  static uint64_t keys[2] = {triangle_key(t[0], p.side_bin), triangle_key(t[1], p.side_bin)};
+  static uint32_t off[3] = {0, 1, 2};
   v.counts.instances = 4;
   v.counts.triangles = 2;
   v.counts.index_keys = 2;
@@ -79,7 +80,6 @@ inline std::vector<uint64_t> fuzz_seed_map(size_t* bytes) {
   v.triangles = t;
   v.index_keys = keys;
   v.index_offsets = off;
-  v.index_entries = ent;
   v.refine_tiles = refine_tiles;
   v.refine_points = refine;
   // A two-tile semantic layer (2 x 2 cells per tile) so its checks are fuzzed too.

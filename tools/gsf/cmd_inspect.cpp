@@ -99,7 +99,7 @@ int cmd_inspect(int argc, char** argv) {
   std::printf("  semantic layer  %u tiles of %ux%u cells @ %.2f m, %u palette masks (%.2f MB)\n",
               map.counts.semantic_tiles, map.params.semantic_tile_cells, map.params.semantic_tile_cells,
               map.params.semantic_cell, map.counts.semantic_palette, sem_bytes / 1e6);
-  // Bytes per section (format v4: docs/map-format.md), so the size can be traced to what it stores.
+  // Bytes per section (format v5: docs/map-format.md), so the size can be traced to what it stores.
   const uint64_t n = map.counts.instances, g = map.grid_points(), d = map.params.num_classes;
   const struct {
     const char* name;
@@ -109,7 +109,7 @@ int cmd_inspect(int argc, char** argv) {
       {"grid means (u8)", n * g * d},
       {"grid variances (u16)", n * g * 2},
       {"triangles", uint64_t(map.counts.triangles) * sizeof(MapTriangle)},
-      {"triangle index", uint64_t(map.counts.index_keys) * 12 + 4 + uint64_t(map.counts.triangles) * 4},
+      {"triangle index", uint64_t(map.counts.index_keys) * 12 + 4},
       {"refinement layer", uint64_t(map.counts.refine_tiles) * sizeof(MapRefineTile) +
                                uint64_t(map.counts.refine_points) * sizeof(MapRefinePoint)},
       {"semantic layer", sem_bytes},

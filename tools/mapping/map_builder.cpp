@@ -239,19 +239,24 @@ Status MapBuilder::build(MapSink& sink, size_t* bytes_out, MapBuildStats* stats_
     if (!all_vertices)
       for (uint32_t t = 0; t < nt; ++t)
         for (int k = 0; k < 3; ++k) tris[t].v[k] = vertex_ids[tris[t].v[k]];
+    // The map stores its triangles in index-key order (format v5), so a key's bucket is a contiguous run.
+    std::vector<Triangle> sorted(nt + 1);
     std::vector<uint64_t> ikeys(nt + 1), scratch(nt + 1);
-    std::vector<uint32_t> offsets(nt + 2), entries(nt + 1);
+    std::vector<uint32_t> offsets(nt + 2), ids(nt + 1);
     uint32_t key_count = 0;
-    build_triangle_index(tris.data(), nt, tc.side_bin, ikeys.data(), offsets.data(), entries.data(), &key_count,
-                         scratch.data());
+    s = build_triangle_index(tris.data(), nt, tc.side_bin, sorted.data(), ikeys.data(), offsets.data(), &key_count,
+                             scratch.data(), ids.data());
+    if (s != Status::Ok) return s;
+    std::vector<uint64_t>().swap(tws.memory);  // `tris` (copied to `sorted`) is not read after this
+    std::vector<uint32_t>().swap(ids);
+    std::vector<uint64_t>().swap(scratch);
     st.triangles = nt;
     st.index_keys = key_count;
     header.counts.triangles = nt;
     header.counts.index_keys = key_count;
-    write(MapSection::Triangles, tris.data(), nt, sizeof(MapTriangle));
+    write(MapSection::Triangles, sorted.data(), nt, sizeof(MapTriangle));
     write(MapSection::IndexKeys, ikeys.data(), key_count, sizeof(uint64_t));
     write(MapSection::IndexOffsets, offsets.data(), size_t(key_count) + 1, sizeof(uint32_t));
-    write(MapSection::IndexEntries, entries.data(), nt, sizeof(uint32_t));
     if (s != Status::Ok) return s;
     st.seconds_triangles = seconds_since(t_tri);
     if (progress) progress("triangles", nt, nt);

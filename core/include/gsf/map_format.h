@@ -22,8 +22,9 @@ namespace gsf {
 constexpr char kMapMagic[8] = {'G', 'S', 'F', 'M', 'A', 'P', '\r', '\n'};
 // 2: semantic layer for hypothesis verification; 3: georeference (origin + frame) and the class table id;
 // 4: compact - only what the localizer reads, grids quantised, the refinement layer stored in its grid
-// with normals. Older maps -> VersionMismatch (rebuild with gsf build-map).
-constexpr uint32_t kMapVersion = 4;
+// with normals; 5: triangles stored in index-key order, the key carries the labels, no IndexEntries
+// section. Older maps -> VersionMismatch (rebuild with gsf build-map).
+constexpr uint32_t kMapVersion = 5;
 
 // Parameters the map was built with that a localizer must agree with (checked by the Localizer).
 struct MapParams {
@@ -78,10 +79,9 @@ enum class MapSection : uint32_t {
   Instances = 1,           // MapInstance x instances
   GridMean,                // uint8 x instances x G x D  (posterior mean on the canonical, yaw-0 grid; quantised)
   GridVar,                 // uint16 x instances x G     (posterior variance on that grid; quantised)
-  Triangles,               // MapTriangle x triangles
+  Triangles,               // MapTriangle x triangles, sorted by index key (triangle.h)
   IndexKeys,               // uint64 x index_keys (sorted, unique)
-  IndexOffsets,            // uint32 x (index_keys + 1), CSR into IndexEntries
-  IndexEntries,            // uint32 x triangles (triangle ids)
+  IndexOffsets,            // uint32 x (index_keys + 1): key k's triangles are Triangles[off[k] .. off[k + 1])
   RefineTiles,             // MapRefineTile x refine_tiles (refine_layer.h) - optional
   RefinePoints,            // MapRefinePoint x refine_points - optional
   SemanticTileKeys,        // uint32 x semantic_tiles (sorted, unique; semantic_grid.h)
@@ -89,7 +89,7 @@ enum class MapSection : uint32_t {
   SemanticPalette,         // uint32 x semantic_palette (class masks)
   SemanticCells,           // uint8 x semantic_tiles x semantic_tile_cells^2 (indices into the tile's palette)
 };
-constexpr uint32_t kMapSectionCount = 13;
+constexpr uint32_t kMapSectionCount = 12;
 
 struct SectionEntry {
   uint32_t id;
@@ -113,7 +113,7 @@ struct MapInstance {
 };
 static_assert(sizeof(MapInstance) == 40, "on-disk layout");
 
-using MapTriangle = Triangle;  // triangle.h: sides sorted d01 <= d12 <= d20
+using MapTriangle = Triangle;  // triangle.h: sides sorted d01 <= d12 <= d20; stored in key order
 static_assert(sizeof(MapHeader) == 256 && sizeof(SectionEntry) == 32, "on-disk layout (docs/map-format.md)");
 static_assert(offsetof(MapHeader, georef) == 32 && offsetof(MapHeader, params) == 88 &&
                   offsetof(MapHeader, counts) == 180 && offsetof(MapHeader, header_crc) == 244,
@@ -130,8 +130,7 @@ struct MapView {
   const uint16_t* grid_var = nullptr;
   const MapTriangle* triangles = nullptr;
   const uint64_t* index_keys = nullptr;
-  const uint32_t* index_offsets = nullptr;
-  const uint32_t* index_entries = nullptr;
+  const uint32_t* index_offsets = nullptr;  // into triangles (stored in key order)
   const MapRefineTile* refine_tiles = nullptr;
   const MapRefinePoint* refine_points = nullptr;
   const uint32_t* semantic_tile_keys = nullptr;

@@ -59,11 +59,23 @@ class GsfFilter {
     for (int c = 0; c < kNumClasses; ++c) weights_[c] = weights[c];
   }
   float similarity(const QueryFields& fields, uint32_t qi, const MapView& map, uint32_t mi, uint32_t yaw_bin);
+  // What similarity() would cost, without doing it: the omega if it is cached (else nullptr), and
+  // whether no new query probe is needed (the probe of (qi, yaw_bin) is cached or qi has no field), so
+  // a caller that needs several similarities can evaluate the cheap ones first.
+  const float* cached_similarity(uint32_t qi, uint32_t mi, uint32_t yaw_bin) const {
+    return similarity_.find(similarity_key(qi, mi, yaw_bin));
+  }
+  bool probe_ready(const QueryFields& fields, uint32_t qi, uint32_t yaw_bin) const {
+    return fields.m[qi] == 0 || probe_slot_.find((uint64_t(qi) << 32) | yaw_bin) != nullptr;
+  }
 
   uint32_t probes() const { return probe_used_ + probe_overflow_; }
   uint32_t comparisons() const { return comparisons_; }
 
  private:
+  static uint64_t similarity_key(uint32_t qi, uint32_t mi, uint32_t yaw_bin) {
+    return (uint64_t(qi) << 44) | (uint64_t(yaw_bin) << 32) | mi;
+  }
   GsfFilterConfig config_{};
   FieldConfig field_{};
   FieldSolver* solver_ = nullptr;

@@ -2,7 +2,8 @@
 // change between versions. The stable interface is localizer.h, config.h, map_format.h, scan.h, status.h,
 // platform.h, class_table.h, georeference.h and the C API gsf.h.
 // Triangle descriptors over the object layer (Outram / STD style): each instance with its K nearest
-// instances forms triangles; the key is the sorted, quantised side lengths (permutation invariant).
+// instances forms triangles; the key is the labels in vertex order and the sorted, quantised side
+// lengths (permutation invariant).
 //
 // Canonical vertex order: side[0] = |v0 v1| <= side[1] = |v1 v2| <= side[2] = |v2 v0| (the paper's
 // d12 <= d23 <= d31), so v0 joins the shortest and longest sides. Exact ties are broken by instance id,
@@ -41,7 +42,20 @@ static_assert(sizeof(Triangle) == 28, "map record layout");
 
 Status validate(const TriangleConfig& config);
 
-uint64_t triangle_key(int32_t q0, int32_t q1, int32_t q2);
+// The index key (map format v5, docs/map-format.md): bits 62..48 the three labels in vertex order (5 bits
+// each), then the quantised sides q_k = floor(side_k / side_bin), 16 bits each (47..32 q0, 31..16 q1, 15..0
+// q2). Sorted keys therefore group a label triple's triangles, then q0, q1, q2: the three q2 neighbours of
+// a (labels, q0, q1) are one contiguous key range. validate() keeps max_side / side_bin below
+// kTriangleKeyMaxBin so every side of a valid triangle fits, with room for the +1 neighbour.
+constexpr uint32_t kTriangleKeyMaxBin = 65535;          // largest quantised side a key can hold
+constexpr uint32_t kTriangleKeyLabelLimit = 32;         // labels must be below this (5 bits)
+constexpr uint64_t kInvalidTriangleKey = ~uint64_t(0);  // never a valid key (bit 63 is always 0)
+inline uint64_t triangle_key(const uint8_t* labels, uint32_t q0, uint32_t q1, uint32_t q2) {
+  return (uint64_t(labels[0]) << 58) | (uint64_t(labels[1]) << 53) | (uint64_t(labels[2]) << 48) |
+         (uint64_t(q0) << 32) | (uint64_t(q1) << 16) | uint64_t(q2);
+}
+// The key of a triangle; kInvalidTriangleKey when a label is >= kTriangleKeyLabelLimit or a side is
+// negative, not finite or quantises above kTriangleKeyMaxBin.
 uint64_t triangle_key(const Triangle& t, float side_bin);
 
 // Canonical triangle of three instances (ids a, b, c with positions pa, pb, pc).

@@ -3,12 +3,13 @@
 // platform.h, class_table.h, georeference.h and the C API gsf.h.
 // Coarse matching of one query triangle against the map's triangle index, ranked and then capped.
 //
-// Every map triangle found under the 27 neighbouring keys that passes Outram's acceptance rules (labels
-// equal in vertex order, every side within the relative tolerance) is a candidate. Candidates are
-// ranked by their side residual (the largest relative side difference), ties broken by a hash of the map
-// triangle id, and only the best `cap` are kept. Storage order (key, then map x order) never decides
-// what survives: in a lattice, where thousands of map triangles fit equally well, a cap that kept "the
-// first N" would keep one corner of the map. The caller learns how many were accepted and dropped.
+// Every map triangle found under the 27 neighbouring keys (labels in vertex order, quantised sides +- 1
+// bin; 9 contiguous key ranges, triangle_index.h) that passes Outram's acceptance rules (labels equal in
+// vertex order, every side within the relative tolerance) is a candidate. Candidates are ranked by
+// their side residual (the largest relative side difference), ties broken by a hash of the map
+// triangle's instance ids and the vertex order (position-free), and only the best `cap` are kept. Storage order (key,
+// then map x order) never decides what survives: in a lattice, where thousands of map triangles fit equally well, a cap
+// that kept "the first N" would keep one corner of the map. The caller learns how many were accepted and dropped.
 //
 // Vertex order: the canonical order (triangle.h) sorts sides, so when two query sides tie within the
 // tie tolerance (isosceles triangles are the rule in lattices) the order, and with it the vertex
@@ -30,7 +31,7 @@ constexpr uint8_t kTriangleVertexOrders[6][3] = {{0, 1, 2}, {2, 1, 0}, {1, 0, 2}
 struct RankedTriangleMatch {
   uint32_t map;    // map triangle id
   float residual;  // max over sides of |d_q - d_m| / d_q
-  uint32_t tie;    // deterministic, position-free tie breaker (hash of map id and order)
+  uint32_t tie;    // deterministic, position-free tie breaker (hash of the map triangle's vertices and order)
   uint8_t order;   // query vertex order (kTriangleVertexOrders row)
   uint8_t pad[3];
 };
