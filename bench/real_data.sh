@@ -99,4 +99,7 @@ for m, q in (("0004", "0002"), ("0002", "0004"), ("0001", "0002")):
         times.sort()
         print(f"{m + ' -> ' + q:16} {mode:11} {ov:7d} {cp:12d} {ar:14d} {aw:14d} {el:9d} {er:11d} {ew:11d} "
               f"{times[len(times) // 2]:9.1f}")
+        if (m, q) == ("0004", "0002"):  # the data README's revisit frames (issue target: >= 9 of 13)
+            rev = sum(bool(x["success"]) for x in v["queries"] if 8 <= x["frame"] <= 20)
+            print(f"{'':16} {'':11} query frames 8-20 (6-8.5 m from the 0004 drive): {rev} of 13 correct")
 PY

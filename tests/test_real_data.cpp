@@ -102,6 +102,7 @@ namespace {
 
 struct NuScenesRun {
   uint32_t overlap = 0, correct_pose = 0, answered_right = 0, answered_wrong = 0, queries = 0;
+  uint32_t correct_8_to_20 = 0;  // correct poses among query frames 8-20 (the data README's revisit frames)
 };
 
 std::vector<uint64_t> build_nuscenes_map(const std::string& root, const char* seq, const LocalizerConfig& cfg,
@@ -175,6 +176,7 @@ NuScenesRun localize_nuscenes(const std::string& root, const char* map_seq, cons
       ++run.overlap;
       run.correct_pose += right;
     }
+    if (i >= 8 && i <= 20) run.correct_8_to_20 += right;
     run.answered_right += answered && right;
     run.answered_wrong += answered && !right;
   }
@@ -190,13 +192,17 @@ TEST_CASE("Real nuScenes-lidarseg: the opposite-direction revisit localizes, the
     return;
   }
   const NuScenesRun fwd = localize_nuscenes(root, "0004", "0002");
-  INFO("map 0004, queries 0002: " << fwd.correct_pose << " correct poses of " << fwd.overlap
-                                  << " overlapping; answered " << fwd.answered_right << " right, " << fwd.answered_wrong
-                                  << " wrong of " << fwd.queries);
+  INFO("map 0004, queries 0002: " << fwd.correct_8_to_20 << " of frames 8-20 and " << fwd.correct_pose
+                                  << " correct poses of " << fwd.overlap << " overlapping; answered "
+                                  << fwd.answered_right << " right, " << fwd.answered_wrong << " wrong of "
+                                  << fwd.queries);
   CHECK(fwd.overlap >= 13);
   // 13 of 15 measured with triangles among the instances single scans find (MapBuildConfig::
   // triangle_min_detections; 7 of 15 with every map instance a vertex).
   CHECK(fwd.correct_pose >= 11);
+  // The data README's revisit: scene 0002 frames 8-20 pass 6-8.5 m from scene 0004's drive (11 of 13
+  // measured; the issue's target is 9).
+  CHECK(fwd.correct_8_to_20 >= 9);
   CHECK(fwd.answered_wrong == 0);
   // The reverse: the 0002 map (109 m, 56 of its 144 instances found by two scans) covers less of what
   // 0004's first frames see; 6 of 13 measured.
