@@ -197,15 +197,17 @@ Status FieldSolver::probe(const FieldView& field, const float* chol, const float
     else
       kernel_row<false>(field.inputs + 3 * i, grid, g, config_.length_scale, config_.signal_variance, kstar_ + i * g);
   }
-  for (uint32_t x = 0; x < g * kNumClasses; ++x) mean[x] = 0.0f;
-  for (uint32_t i = 0; i < m; ++i) {
-    const float* a = field.alpha + size_t(i) * kNumClasses;
-    const float* k = kstar_ + size_t(i) * g;
-    for (uint32_t s = 0; s < g; ++s) {
-      const float ks = k[s];
-      float* out = mean + size_t(s) * kNumClasses;
-      for (int d = 0; d < kNumClasses; ++d) out[d] += ks * a[d];
+  // One grid point at a time with its D sums in a local array (registers), so the m terms are not
+  // loaded from and stored to `mean` once each; every sum still adds i = 0, 1, ... in order from 0.
+  for (uint32_t s = 0; s < g; ++s) {
+    float acc[kNumClasses] = {};
+    for (uint32_t i = 0; i < m; ++i) {
+      const float ks = kstar_[size_t(i) * g + s];
+      const float* a = field.alpha + size_t(i) * kNumClasses;
+      for (int d = 0; d < kNumClasses; ++d) acc[d] += ks * a[d];
     }
+    float* out = mean + size_t(s) * kNumClasses;
+    for (int d = 0; d < kNumClasses; ++d) out[d] = acc[d];
   }
   // V = L^-1 k* ; var_s = k(0) - |V_s|^2 ; cov = K** - V^T V
   for (uint32_t i = 0; i < m * g; ++i) work_[i] = kstar_[i];
