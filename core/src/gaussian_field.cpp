@@ -33,8 +33,21 @@ bool cholesky(float* a, uint32_t m) {
 void forward_solve(const float* l, uint32_t m, float* b, uint32_t cols) {
   for (uint32_t i = 0; i < m; ++i) {
     float* bi = b + size_t(i) * cols;
-    for (uint32_t k = 0; k < i; ++k) {
-      const float lik = l[i * m + k];
+    const float* li = l + size_t(i) * m;
+    uint32_t k = 0;
+    // Four earlier rows per sweep over bi: each element still subtracts l_ik b_k for k = 0, 1, ... in
+    // order (bit-identical; this file is compiled with -ffp-contract=off), with a quarter of the
+    // loads and stores of bi.
+    for (; k + 4 <= i; k += 4) {
+      const float l0 = li[k], l1 = li[k + 1], l2 = li[k + 2], l3 = li[k + 3];
+      const float* b0 = b + size_t(k) * cols;
+      const float* b1 = b0 + cols;
+      const float* b2 = b1 + cols;
+      const float* b3 = b2 + cols;
+      for (uint32_t c = 0; c < cols; ++c) bi[c] = (((bi[c] - l0 * b0[c]) - l1 * b1[c]) - l2 * b2[c]) - l3 * b3[c];
+    }
+    for (; k < i; ++k) {
+      const float lik = li[k];
       const float* bk = b + size_t(k) * cols;
       for (uint32_t c = 0; c < cols; ++c) bi[c] -= lik * bk[c];
     }
