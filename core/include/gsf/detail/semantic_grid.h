@@ -80,8 +80,8 @@ PoseVerification verify_pose(const VoxelLayer& voxels, const SemanticGridView& g
 // scored on max_points / search_divisor voxels, the last (finest) round's on max_points /
 // polish_divisor. *refined (optional) receives the best pose found. at_start (optional):
 // verify_pose(map_T_scan, max_points) already computed by the caller, returned as is when the search
-// does not move. Cost: up to 12 x ((rounds - 1) x max_points / search_divisor + max_points /
-// polish_divisor) + 2 x max_points cell lookups.
+// does not move. Cost: at most (12 (rounds - 1) + 1) x max_points / search_divisor + 13 x max_points /
+// polish_divisor + max_points cell lookups (and up to 4 more per disagreeing voxel).
 PoseVerification verify_pose_refined(const VoxelLayer& voxels, const SemanticGridView& grid,
                                      const Eigen::Isometry3d& map_T_scan, uint32_t max_points, const float* weights,
                                      uint32_t rounds, float step_m, float step_deg, Eigen::Isometry3d* refined,
