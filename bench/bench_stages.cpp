@@ -10,6 +10,8 @@
 //       without a clock. Meant for `valgrind --tool=callgrind` (bench/stages.sh --counts): the
 //       inclusive instruction counts of the stage functions are the per-stage instruction counts.
 //
+//   bench_stages ... --set name=value,...   config overrides of `gsf evaluate --set` for every mode
+//
 //   bench_stages ... --icount-file PATH   (under qemu-aarch64 with bench/qemu_icount_plugin.c)
 //       the stage clock reads the guest instruction count from the plugin instead of the time: the
 //       table's "us" columns are then thousands of instructions (bench/stages.sh --arm64-counts).
@@ -258,10 +260,16 @@ int main(int argc, char** argv) {
     std::fprintf(stderr, "unknown --count mode '%s'\n", count_mode.c_str());
     return 2;
   }
+  const std::string overrides = arg(argc, argv, "--set", "");
   for (int m = 0; m < 3; ++m) {
     if (!active[m]) continue;
     Mode& md = modes[m];
     md.cfg = cli::default_config();
+    std::string error;
+    if (!cli::apply_overrides(&md.cfg, overrides, &error)) {
+      std::fprintf(stderr, "--set: %s\n", error.c_str());
+      return 2;
+    }
     md.cfg.match.use_gsf = md.gsf;
     md.cfg.refine.enabled = md.refine;
     md.workspace.assign(Localizer::required_bytes(md.cfg) / 8 + 2, 0);

@@ -264,6 +264,36 @@ TEST_CASE("Verification picks the true lattice shift given one distinguishing bu
   CHECK(verify_pose(voxels, layer.view, nan_pose, 4096, weights).scored == 0);
 }
 
+TEST_CASE("The pattern search's sample sizes: defaults as before, coarse to fine, and no re-score when it stays") {
+  LatticeLayer layer;
+  VoxelConfig vc;
+  vc.min_range = 0.0f;
+  ArenaBuffer buf(VoxelLayer::required_bytes(vc));
+  VoxelLayer voxels;
+  REQUIRE(voxels.bind(buf.arena, vc) == Status::Ok);
+  const Cloud scan = lattice_scan(24.0f, true);
+  REQUIRE(voxels.build(scan.view(), nullptr) == Status::Ok);
+  float weights[kNumClasses];
+  stability_weights(weights);
+  Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
+  T.translation() = Eigen::Vector3d(24.3, 0.2, 0);  // a fraction of a metre off the truth
+  Eigen::Isometry3d a, b, c;
+  const PoseVerification d = verify_pose_refined(voxels, layer.view, T, 4096, weights, 3, 0.4f, 0.8f, &a);
+  const PoseVerification e = verify_pose_refined(voxels, layer.view, T, 4096, weights, 3, 0.4f, 0.8f, &b, 4, 4);
+  CHECK(d.score == e.score);
+  CHECK(a.isApprox(b, 0.0));
+  // Coarse to fine still ends with the full score (all points) of the pose it found.
+  const PoseVerification f = verify_pose_refined(voxels, layer.view, T, 4096, weights, 3, 0.4f, 0.8f, &c, 8, 4);
+  const PoseVerification at_c = verify_pose(voxels, layer.view, c, 4096, weights);
+  CHECK(f.score == at_c.score);
+  CHECK(f.scored == at_c.scored);
+  // No rounds: the search cannot move, so the caller's full score comes back as given.
+  PoseVerification given;
+  given.score = 12345.0f;
+  CHECK(verify_pose_refined(voxels, layer.view, T, 4096, weights, 0, 0.4f, 0.8f, &c, 4, 4, &given).score == 12345.0f);
+  CHECK(c.isApprox(T, 0.0));
+}
+
 TEST_CASE("Semantic layer validation rejects unsorted keys, foreign bits and bad shapes") {
   LatticeLayer layer;
   SemanticGridView v = layer.view;

@@ -99,9 +99,10 @@ void AnswerSelector::choose(PoseHypotheses& hyps, const VoxelLayer& voxels, cons
     refined_count = nt;
     for (uint32_t k = 0; k < nt; ++k) {
       refined_id_[k] = top[k];
-      hyps[top[k]].verification =
-          verify_pose_refined(voxels, semantic, hyps[top[k]].map_T_scan, vc.max_points, verify_weights_,
-                              vc.refine_rounds, vc.refine_step_m, vc.refine_step_deg, &refined_pose_[k]);
+      const PoseVerification full = hyps[top[k]].verification;  // verify_pose at max_points, just above
+      hyps[top[k]].verification = verify_pose_refined(
+          voxels, semantic, hyps[top[k]].map_T_scan, vc.max_points, verify_weights_, vc.refine_rounds, vc.refine_step_m,
+          vc.refine_step_deg, &refined_pose_[k], vc.search_divisor, vc.polish_divisor, &full);
     }
     // The answer, and as runner-up the best fully scored hypothesis at another place or heading: a
     // near-twin of the answer (within same_pose_m and same_pose_deg in the bird's-eye view the

@@ -28,8 +28,9 @@ Status validate(const LocalizerConfig& c) {
       !(h.shift_bin > 0) || !(h.max_tilt_deg >= 0 && h.max_tilt_deg <= 180))
     return Status::InvalidArgument;
   if (c.verify.max_points == 0 || !(c.verify.margin_scale > 0) || !(c.verify.quality_high > c.verify.quality_low) ||
-      c.verify.refine_top > 64 || c.verify.coarse_divisor == 0 || c.verify.full_top == 0 ||
-      !(c.verify.refine_step_m >= 0) || !(c.verify.refine_step_deg >= 0) || c.verify.refine_rounds > 16 ||
+      c.verify.refine_top > 64 || c.verify.coarse_divisor == 0 || c.verify.search_divisor == 0 ||
+      c.verify.polish_divisor == 0 || c.verify.full_top == 0 || !(c.verify.refine_step_m >= 0) ||
+      !(c.verify.refine_step_deg >= 0) || c.verify.refine_rounds > 16 ||
       !(c.verify.rarity_exponent >= 0 && c.verify.rarity_exponent <= 2))
     return Status::InvalidArgument;
   if (c.cluster.max_instances == 0 || c.cluster.max_instances >= (1u << 16)) return Status::InvalidArgument;

@@ -33,8 +33,21 @@ bool cholesky(float* a, uint32_t m) {
 void forward_solve(const float* l, uint32_t m, float* b, uint32_t cols) {
   for (uint32_t i = 0; i < m; ++i) {
     float* bi = b + size_t(i) * cols;
-    for (uint32_t k = 0; k < i; ++k) {
-      const float lik = l[i * m + k];
+    const float* li = l + size_t(i) * m;
+    uint32_t k = 0;
+    // Four earlier rows per sweep over bi: each element still subtracts l_ik b_k for k = 0, 1, ... in
+    // order (bit-identical; this file is compiled with -ffp-contract=off), with a quarter of the
+    // loads and stores of bi.
+    for (; k + 4 <= i; k += 4) {
+      const float l0 = li[k], l1 = li[k + 1], l2 = li[k + 2], l3 = li[k + 3];
+      const float* b0 = b + size_t(k) * cols;
+      const float* b1 = b0 + cols;
+      const float* b2 = b1 + cols;
+      const float* b3 = b2 + cols;
+      for (uint32_t c = 0; c < cols; ++c) bi[c] = (((bi[c] - l0 * b0[c]) - l1 * b1[c]) - l2 * b2[c]) - l3 * b3[c];
+    }
+    for (; k < i; ++k) {
+      const float lik = li[k];
       const float* bk = b + size_t(k) * cols;
       for (uint32_t c = 0; c < cols; ++c) bi[c] -= lik * bk[c];
     }
@@ -197,15 +210,17 @@ Status FieldSolver::probe(const FieldView& field, const float* chol, const float
     else
       kernel_row<false>(field.inputs + 3 * i, grid, g, config_.length_scale, config_.signal_variance, kstar_ + i * g);
   }
-  for (uint32_t x = 0; x < g * kNumClasses; ++x) mean[x] = 0.0f;
-  for (uint32_t i = 0; i < m; ++i) {
-    const float* a = field.alpha + size_t(i) * kNumClasses;
-    const float* k = kstar_ + size_t(i) * g;
-    for (uint32_t s = 0; s < g; ++s) {
-      const float ks = k[s];
-      float* out = mean + size_t(s) * kNumClasses;
-      for (int d = 0; d < kNumClasses; ++d) out[d] += ks * a[d];
+  // One grid point at a time with its D sums in a local array (registers), so the m terms are not
+  // loaded from and stored to `mean` once each; every sum still adds i = 0, 1, ... in order from 0.
+  for (uint32_t s = 0; s < g; ++s) {
+    float acc[kNumClasses] = {};
+    for (uint32_t i = 0; i < m; ++i) {
+      const float ks = kstar_[size_t(i) * g + s];
+      const float* a = field.alpha + size_t(i) * kNumClasses;
+      for (int d = 0; d < kNumClasses; ++d) acc[d] += ks * a[d];
     }
+    float* out = mean + size_t(s) * kNumClasses;
+    for (int d = 0; d < kNumClasses; ++d) out[d] = acc[d];
   }
   // V = L^-1 k* ; var_s = k(0) - |V_s|^2 ; cov = K** - V^T V
   for (uint32_t i = 0; i < m * g; ++i) work_[i] = kstar_[i];

@@ -198,12 +198,23 @@ PoseVerification verify_pose(const VoxelLayer& voxels, const SemanticGridView& g
 
 PoseVerification verify_pose_refined(const VoxelLayer& voxels, const SemanticGridView& grid, const Eigen::Isometry3d& T,
                                      uint32_t max_points, const float* weights, uint32_t rounds, float step_m,
-                                     float step_deg, Eigen::Isometry3d* refined) {
+                                     float step_deg, Eigen::Isometry3d* refined, uint32_t search_divisor,
+                                     uint32_t polish_divisor, const PoseVerification* at_start) {
   Eigen::Isometry3d best = T;
-  const uint32_t coarse = max_points / 4 > 0 ? max_points / 4 : 1;
-  float best_score = verify_pose(voxels, grid, best, coarse, weights).score;
+  auto sample = [max_points](uint32_t divisor) {
+    const uint32_t d = divisor > 0 ? divisor : 1;
+    return max_points / d > 0 ? max_points / d : 1;
+  };
+  const uint32_t coarse = sample(search_divisor), polish = sample(polish_divisor);
+  bool any_move = false;
+  uint32_t points = rounds > 1 ? coarse : polish;
+  float best_score = verify_pose(voxels, grid, best, points, weights).score;
   double step = step_m, turn = double(step_deg) * 3.14159265358979323846 / 180.0;
   for (uint32_t r = 0; r < rounds; ++r, step *= 0.5, turn *= 0.5) {
+    if (r + 1 == rounds && points != polish) {  // the last, finest round on its own sample
+      points = polish;
+      best_score = verify_pose(voxels, grid, best, points, weights).score;
+    }
     bool moved = true;
     for (int pass = 0; pass < 2 && moved; ++pass) {
       moved = false;
@@ -217,16 +228,18 @@ PoseVerification verify_pose_refined(const VoxelLayer& voxels, const SemanticGri
           c.linear() =
               c.linear() * Eigen::AngleAxisd(k == 4 ? turn : -turn, Eigen::Vector3d::UnitZ()).toRotationMatrix();
         }
-        const float sc = verify_pose(voxels, grid, c, coarse, weights).score;
+        const float sc = verify_pose(voxels, grid, c, points, weights).score;
         if (sc > best_score) {
           best_score = sc;
           best = c;
-          moved = true;
+          moved = any_move = true;
         }
       }
     }
   }
   if (refined) *refined = best;
+  // Not moved: the full score at the start pose is the caller's, when it has it (the same call).
+  if (!any_move && at_start) return *at_start;
   return verify_pose(voxels, grid, best, max_points, weights);
 }
 

@@ -70,6 +70,8 @@ bool apply_override(LocalizerConfig* c, const std::string& a, std::string* error
       {"verify.full_top", nullptr, &c->verify.full_top},
       {"verify.coarse_divisor", nullptr, &c->verify.coarse_divisor},
       {"verify.refine_rounds", nullptr, &c->verify.refine_rounds},
+      {"verify.search_divisor", nullptr, &c->verify.search_divisor},
+      {"verify.polish_divisor", nullptr, &c->verify.polish_divisor},
       {"verify.refine_step_m", &c->verify.refine_step_m, nullptr},
       {"verify.refine_step_deg", &c->verify.refine_step_deg, nullptr},
       {"field.length_scale", &c->field.length_scale, nullptr},

@@ -55,6 +55,10 @@ struct VerifyConfig {
   // (semantic_grid.h: verify_pose_refined), so a near-truth clique pose is compared at its best.
   uint32_t refine_top = 4;
   uint32_t refine_rounds = 3;
+  // The pattern search's probes are scored on max_points / search_divisor voxels, those of its last
+  // (finest) round on max_points / polish_divisor; the pose it ends at is scored on max_points.
+  uint32_t search_divisor = 4;
+  uint32_t polish_divisor = 4;
   // Rarity weighting: each class's weight is scaled by (its share of the scan's sampled voxels)^-e, then
   // all are rescaled to keep the total weight, so the few voxels of rare classes (the cues beside
   // repeated objects) count for more than the road and rows that agree at every lattice shift. 0 = off.

@@ -74,11 +74,18 @@ PoseVerification verify_pose(const VoxelLayer& voxels, const SemanticGridView& g
                              const Eigen::Isometry3d& map_T_scan, uint32_t max_points, const float* weights);
 
 // verify_pose after a small bird's-eye pattern search around map_T_scan (moves of step_m along x and y
-// and step_deg of heading, halved each round, scored on a quarter of the points), so a hypothesis whose
-// clique pose is a fraction of a metre off is compared at its best alignment. *refined (optional)
-// receives the best pose found. Cost: rounds x 6 x max_points/4 + max_points cell lookups.
+// and step_deg of heading, halved each round, 6 probes a pass, a second pass when the first moved), so
+// a hypothesis whose clique pose is a fraction of a metre off is compared at its best alignment; the
+// pose found is then scored on max_points. Coarse to fine: the probes of every round but the last are
+// scored on max_points / search_divisor voxels, the last (finest) round's on max_points /
+// polish_divisor. *refined (optional) receives the best pose found. at_start (optional):
+// verify_pose(map_T_scan, max_points) already computed by the caller, returned as is when the search
+// does not move. Cost: at most (12 (rounds - 1) + 1) x max_points / search_divisor + 13 x max_points /
+// polish_divisor + max_points cell lookups (and up to 4 more per disagreeing voxel).
 PoseVerification verify_pose_refined(const VoxelLayer& voxels, const SemanticGridView& grid,
                                      const Eigen::Isometry3d& map_T_scan, uint32_t max_points, const float* weights,
-                                     uint32_t rounds, float step_m, float step_deg, Eigen::Isometry3d* refined);
+                                     uint32_t rounds, float step_m, float step_deg, Eigen::Isometry3d* refined,
+                                     uint32_t search_divisor = 4, uint32_t polish_divisor = 4,
+                                     const PoseVerification* at_start = nullptr);
 
 }  // namespace gsf
