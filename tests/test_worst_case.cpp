@@ -1,6 +1,7 @@
 // Adversarial inputs for the expensive stages: work and memory stay within what the Config implies.
 #include <catch2/catch.hpp>
 
+#include <algorithm>
 #include <cmath>
 #include <random>
 #include <vector>
@@ -115,4 +116,24 @@ TEST_CASE("A lattice where every triangle collides in the hash: matches, corresp
     CHECK(r.capacity_truncated);  // the caps were hit and reported
     CHECK(loc.workspace_bytes() <= need);
   }
+  // A scan budget (match.max_matches_per_scan) bounds the matches of all triangles together: each
+  // triangle keeps its best budget / triangles (at least 1), and the drops are still counted.
+  LocalizerConfig budgeted = cfg;
+  budgeted.match.max_matches_per_scan = 2000;
+  REQUIRE(Localizer::required_bytes(budgeted) == need);  // a work bound, not memory
+  Localizer lb;
+  std::vector<uint64_t> ws2(need / 8 + 2);
+  REQUIRE(lb.init(budgeted, map, ws2.data(), ws2.size() * 8) == Status::Ok);
+  LocalizeResult full, cut;
+  loc.set_use_gsf(true);
+  loc.localize(q, &full);
+  lb.localize(q, &cut);
+  REQUIRE(cut.query_triangles == full.query_triangles);
+  const uint32_t per_triangle = std::max<uint32_t>(1, 2000 / cut.query_triangles);
+  INFO(cut.query_triangles << " triangles, " << full.triangle_matches << " matches without the budget, "
+                           << cut.triangle_matches << " with it");
+  CHECK(cut.triangle_matches <= cut.query_triangles * per_triangle);
+  CHECK(cut.triangle_matches < full.triangle_matches);
+  CHECK(cut.match_candidates == full.match_candidates);  // the same candidates, ranked, then capped
+  CHECK(cut.match_dropped == cut.match_candidates - cut.triangle_matches);
 }

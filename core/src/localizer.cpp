@@ -292,6 +292,13 @@ Status Localizer::Impl::build_query_triangles(LocalizeResult& out) {
 
 // 5a. Heading votes (heading_votes.h): only matches at the best-supported headings go on.
 void Localizer::Impl::vote_headings(const LocalizerConfig& cfg, const MapView& map, LocalizeResult& out) {
+  // The scan's match budget (MatchConfig::max_matches_per_scan) sets the per-triangle cap of the votes
+  // and of match_and_filter alike.
+  const uint32_t T = triangles.size();
+  uint32_t cap = cfg.match.max_matches_per_triangle;
+  if (cfg.match.max_matches_per_scan > 0 && T > 0 && cfg.match.max_matches_per_scan / T < cap)
+    cap = cfg.match.max_matches_per_scan / T;
+  matcher.set_limit(cap);
   const HeadingVoteParams params{cfg.match.heading_bins, cfg.match.heading_sample_triangles,
                                  cfg.match.vertex_tie_tolerance};
   out.headings_kept += headings.vote(triangles, centroids, matcher, index, map, cfg.triangle, params);

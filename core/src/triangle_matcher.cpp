@@ -37,12 +37,12 @@ Status TriangleMatcher::bind(Arena& arena, uint32_t cap) {
   heap_ = arena.allocate<RankedTriangleMatch>(cap);
   if (arena.counting()) return Status::Ok;
   if (!heap_) return Status::BufferTooSmall;
-  cap_ = cap;
+  cap_ = limit_ = cap;
   return Status::Ok;
 }
 
 void TriangleMatcher::offer(const RankedTriangleMatch& m) {
-  if (size_ < cap_) {  // sift up
+  if (size_ < limit_) {  // sift up
     uint32_t i = size_++;
     heap_[i] = m;
     while (i > 0) {
@@ -63,7 +63,7 @@ TriangleMatchStats TriangleMatcher::match(const Triangle& q, const TriangleIndex
                                           const TriangleConfig& config, float tie_tolerance) {
   TriangleMatchStats st;
   size_ = 0;
-  if (cap_ == 0) return st;
+  if (limit_ == 0) return st;
   // Distances between canonical vertices: d(0,1) = side[0], d(1,2) = side[1], d(2,0) = side[2].
   auto dist = [&q](uint8_t i, uint8_t j) {
     const uint8_t lo = i < j ? i : j, hi = i < j ? j : i;

@@ -46,6 +46,7 @@ bool apply_override(LocalizerConfig* c, const std::string& a, std::string* error
       {"match.vertex_tie_tolerance", &c->match.vertex_tie_tolerance, nullptr},
       {"match.max_correspondences", nullptr, &c->match.max_correspondences},
       {"match.max_matches_per_triangle", nullptr, &c->match.max_matches_per_triangle},
+      {"match.max_matches_per_scan", nullptr, &c->match.max_matches_per_scan},
       {"match.max_candidates", nullptr, &c->match.max_candidates},
       {"match.heading_bins", nullptr, &c->match.heading_bins},
       {"match.heading_sample_triangles", nullptr, &c->match.heading_sample_triangles},

@@ -23,7 +23,12 @@ namespace gsf {
 struct MatchConfig {
   bool use_gsf = true;                      // false: instance-only Outram behaviour (ablation)
   uint32_t max_matches_per_triangle = 256;  // best map triangles kept per query triangle (by side residual)
-  float vertex_tie_tolerance = 0.06f;       // relative; query sides closer than this are tried in both orders
+  // Work budget of one scan: the per-triangle cap shrinks to max_matches_per_scan / query triangles
+  // (at least 1) when that is smaller, so a lattice's thousands of equally good matches per triangle
+  // cannot make the GSF filter and the correspondences cost triangles x 256; still ranked, then capped,
+  // and counted in match_dropped. 0: no scan budget.
+  uint32_t max_matches_per_scan = 0;
+  float vertex_tie_tolerance = 0.06f;  // relative; query sides closer than this are tried in both orders
   // Heading votes (localizer.cpp, step 5a): the best `heading_bins` yaw bins (gsf.yaw_bins of them,
   // each with its two neighbours) by the votes of an even sample of `heading_sample_triangles` query
   // triangles' matches; matches at other headings are dropped and counted. 0 = off.

@@ -53,6 +53,12 @@ class TriangleMatcher {
   TriangleMatchStats match(const Triangle& q, const TriangleIndexView& index, const Triangle* map_triangles,
                            const TriangleConfig& config, float tie_tolerance);
   uint32_t size() const { return size_; }
+  // Keep at most `n` (1 <= n; at most the bound capacity) of the ranked matches from the next match()
+  // on; returns the limit in effect.
+  uint32_t set_limit(uint32_t n) {
+    limit_ = n == 0 ? 1 : (n < cap_ ? n : cap_);
+    return limit_;
+  }
   const RankedTriangleMatch& match_at(uint32_t i) const { return heap_[i]; }
   // The query triangle's vertex (instance id) at matched position j for the order of match i.
   static uint32_t query_vertex(const Triangle& q, uint8_t order, int j) { return q.v[kTriangleVertexOrders[order][j]]; }
@@ -61,6 +67,7 @@ class TriangleMatcher {
   void offer(const RankedTriangleMatch& m);
   RankedTriangleMatch* heap_ = nullptr;  // max-heap on (residual, tie) while collecting; sorted after
   uint32_t cap_ = 0;
+  uint32_t limit_ = 0;  // <= cap_: what match() keeps (set_limit)
   uint32_t size_ = 0;
 };
 
