@@ -179,6 +179,14 @@ TEST_CASE("Class table text: a valid file with comments, tabs, CRLF and default 
   CHECK(back.id() == odd.id());
   CHECK(back.stability(kRoad) == odd.stability(kRoad));
   CHECK(odd.stability(kPole) == 0.3f);
+  // Twelve decimals and no leading zero (fuzz_class_table found that 11 decimals lost this weight).
+  ClassTable twelve;
+  REQUIRE(parse("4 a road .000040400407\n", &twelve, &e) == Status::Ok);
+  const std::string twelve_text = port::format_class_table(twelve);
+  INFO(twelve_text);
+  REQUIRE(parse(twelve_text, &back, &e) == Status::Ok);
+  CHECK(back.id() == twelve.id());
+  CHECK(back.stability(kRoad) == twelve.stability(kRoad));
 }
 
 TEST_CASE("Class table text: every defect is rejected with its status, line and field") {

@@ -216,17 +216,20 @@ std::string format_class_table(const ClassTable& table) {
   for (uint32_t i = 0; i < table.size(); ++i) {
     const ClassTableEntry& e = table.entry(i);
     const bool ignored = e.library_class == kIgnoredClass;
-    // The shortest fixed-point form that parses back to the same float (at most 11 decimals: any
-    // weight parse_class_table accepted has one, as it had at most 12 digits).
+    // The shortest fixed-point form that parses back to the same float, without the leading zero of a
+    // weight below 1 so that 12 decimals fit parse_decimal's 12 digits (any weight parse_class_table
+    // accepted was written with at most 12 digits, e.g. ".000040400407", found by fuzz_class_table).
     const float w = ignored ? 0.0f : table.stability(e.library_class);
     char num[32];
-    for (int p = 1; p <= 11; ++p) {
+    const char* shortest = num;
+    for (int p = 1; p <= 12; ++p) {
       std::snprintf(num, sizeof(num), "%.*f", p, double(w));
+      shortest = (num[0] == '0' && num[1] == '.') ? num + 1 : num;
       float back = -1.0f;
-      if (parse_decimal(Token{num, static_cast<uint32_t>(std::strlen(num))}, &back) && back == w) break;
+      if (parse_decimal(Token{shortest, static_cast<uint32_t>(std::strlen(shortest))}, &back) && back == w) break;
     }
     std::snprintf(line, sizeof(line), "%u %s %s %s %s\n", unsigned(e.raw_id), e.name[0] ? e.name : "-",
-                  ignored ? "ignored" : class_name(e.library_class), num, role_name(e.role));
+                  ignored ? "ignored" : class_name(e.library_class), shortest, role_name(e.role));
     s += line;
   }
   return s;
