@@ -63,6 +63,7 @@ struct Localizer::Impl {
   Status find_instances(const LocalizerConfig& cfg, LocalizeResult& out);
   void fit_query_fields(const LocalizerConfig& cfg, LocalizeResult& out);
   Status build_query_triangles(LocalizeResult& out);
+  void limit_matches(const LocalizerConfig& cfg);
   void vote_headings(const LocalizerConfig& cfg, const MapView& map, LocalizeResult& out);
   void match_and_filter(const LocalizerConfig& cfg, const MapView& map, Clock* clock, LocalizeResult& out);
   uint32_t select_correspondences(const LocalizerConfig& cfg, const MapView& map, LocalizeResult& out);
@@ -238,14 +239,7 @@ Status Localizer::Impl::find_instances(const LocalizerConfig& cfg, LocalizeResul
     if (s == Status::CapacityExceeded) out.capacity_truncated = true;
     else if (s != Status::Ok) return s;
     const uint32_t np = poles.size();
-    for (uint32_t i = 0; i < np; ++i) {  // insertion sort by score (np <= poles.max_instances, small)
-      uint32_t pos = i;
-      while (pos > 0 && poles.info(pole_order[pos - 1]).score < poles.info(i).score) {
-        pole_order[pos] = pole_order[pos - 1];
-        --pos;
-      }
-      pole_order[pos] = i;
-    }
+    poles.order_by_score(pole_order);
     for (uint32_t k = 0; k < np; ++k) {
       if (n >= cfg.cluster.max_instances) {
         ++out.pole_instances_dropped;
@@ -290,15 +284,18 @@ Status Localizer::Impl::build_query_triangles(LocalizeResult& out) {
   return Status::Ok;
 }
 
-// 5a. Heading votes (heading_votes.h): only matches at the best-supported headings go on.
-void Localizer::Impl::vote_headings(const LocalizerConfig& cfg, const MapView& map, LocalizeResult& out) {
-  // The scan's match budget (MatchConfig::max_matches_per_scan) sets the per-triangle cap of the votes
-  // and of match_and_filter alike.
+// 5. The per-triangle cap of this scan, for the heading votes and match_and_filter alike:
+// match.max_matches_per_triangle, or less under the scan's budget (MatchConfig::max_matches_per_scan).
+void Localizer::Impl::limit_matches(const LocalizerConfig& cfg) {
   const uint32_t T = triangles.size();
   uint32_t cap = cfg.match.max_matches_per_triangle;
   if (cfg.match.max_matches_per_scan > 0 && T > 0 && cfg.match.max_matches_per_scan / T < cap)
     cap = cfg.match.max_matches_per_scan / T;
   matcher.set_limit(cap);
+}
+
+// 5a. Heading votes (heading_votes.h): only matches at the best-supported headings go on.
+void Localizer::Impl::vote_headings(const LocalizerConfig& cfg, const MapView& map, LocalizeResult& out) {
   const HeadingVoteParams params{cfg.match.heading_bins, cfg.match.heading_sample_triangles,
                                  cfg.match.vertex_tie_tolerance};
   out.headings_kept += headings.vote(triangles, centroids, matcher, index, map, cfg.triangle, params);
@@ -449,6 +446,7 @@ Status Localizer::localize(const ScanView& scan, LocalizeResult* out_ptr) {
   s = im.build_query_triangles(out);
   lap(&out.times.triangle);
   if (s != Status::Ok) return finish(s);
+  im.limit_matches(cfg);
   im.vote_headings(cfg, map_, out);
   lap(&out.times.match);  // the heading votes are index matching too
   im.match_and_filter(cfg, map_, clock_, out);

@@ -330,4 +330,15 @@ Status PoleExtraction::build(const VoxelLayer& layer, PoleStats* stats_out) {
   return stats.dropped_capacity ? Status::CapacityExceeded : Status::Ok;
 }
 
+void PoleExtraction::order_by_score(uint32_t* order) const {
+  for (uint32_t i = 0; i < count_; ++i) {  // insertion sort (count_ <= max_instances, small), stable
+    uint32_t pos = i;
+    while (pos > 0 && info_[order[pos - 1]].score < info_[i].score) {
+      order[pos] = order[pos - 1];
+      --pos;
+    }
+    order[pos] = i;
+  }
+}
+
 }  // namespace gsf

@@ -45,10 +45,8 @@ Status ScanDetector::detect(const VoxelLayer& voxels, const Eigen::Isometry3d& m
   if (!poles_on_) return Status::Ok;
   s = poles_.build(voxels, nullptr);
   if (s != Status::Ok && s != Status::CapacityExceeded) return s;
-  const uint32_t np = std::min<uint32_t>(poles_.size(), static_cast<uint32_t>(pole_order_.size()));
-  for (uint32_t i = 0; i < np; ++i) pole_order_[i] = i;
-  std::stable_sort(pole_order_.begin(), pole_order_.begin() + np,
-                   [&](uint32_t a, uint32_t b) { return poles_.info(a).score > poles_.info(b).score; });
+  const uint32_t np = poles_.size();  // <= poles.max_instances = pole_order_.size()
+  poles_.order_by_score(pole_order_.data());
   for (uint32_t k = 0; k < np && n < max_instances_; ++k, ++n) push(poles_.instance(pole_order_[k]));
   return Status::Ok;
 }

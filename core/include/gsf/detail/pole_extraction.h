@@ -117,6 +117,9 @@ class PoleExtraction {
   const Instance& instance(uint32_t i) const { return instances_[i]; }
   const Instance* instances() const { return instances_; }
   const PoleInfo& info(uint32_t i) const { return info_[i]; }
+  // The kept poles' indices best score first (ties in index order) into order[0 .. size()): the rank by
+  // which the localizer, and the map builder's per-scan detections, fill the instance slots left free.
+  void order_by_score(uint32_t* order) const;
   // Instance id of each voxel after build (UINT32_MAX for voxels in no kept instance).
   const uint32_t* voxel_instance() const { return voxel_seg_; }
   const PoleConfig& config() const { return config_; }
