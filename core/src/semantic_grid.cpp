@@ -73,11 +73,12 @@ GridConstants grid_constants(const SemanticGridView& g) {
   return k;
 }
 
+template <bool kExactInverse>
 inline GridAxis grid_axis(const GridConstants& k, float x) {
   if (!k.usable) return {kOutsideTiles, 0};
   // cell_at's tile floor(x / tile) is valid within (-32768, 32768), i.e. for a quotient in
   // [-32767, 32768), where truncation through an int32 floors it (SSE2 has no rounding instruction).
-  const float q = k.exact_inverse ? x * k.inv_tile : x / k.tile;
+  const float q = kExactInverse ? x * k.inv_tile : x / k.tile;
   if (!(q >= -32767.0f && q < 32768.0f)) return {kOutsideTiles, 0};  // also rejects NaN
   int32_t tile = static_cast<int32_t>(q);
   float f = static_cast<float>(tile);
@@ -87,7 +88,7 @@ inline GridAxis grid_axis(const GridConstants& k, float x) {
   }
   // The cell: (x - f tile) / cell truncated and clamped to [0, n - 1], as in cell_at.
   const float r = x - f * k.tile;
-  int32_t c = static_cast<int32_t>(k.exact_inverse ? r * k.inv_cell : r / k.cell);
+  int32_t c = static_cast<int32_t>(kExactInverse ? r * k.inv_cell : r / k.cell);
   c = c < 0 ? 0 : (c >= k.tile_cells ? k.tile_cells - 1 : c);  // float rounding at the tile's far edge
   return {tile, c};
 }
@@ -188,13 +189,12 @@ struct PointSource {
   }
 };
 
-template <class Source>
-PoseVerification score_pose(const Source& src, const SemanticGridView& grid, const Eigen::Isometry3d& T,
-                            uint32_t max_points, const float* weights) {
+// The scoring loop, with the grid's reciprocal test hoisted out of it (kExactInverse: k.exact_inverse).
+template <bool kExactInverse, class Source>
+PoseVerification score_samples(const Source& src, const SemanticGridView& grid, const GridConstants& k,
+                               const Eigen::Isometry3d& T, uint32_t stride, const float* weights) {
   PoseVerification v;
   const uint32_t n = src.size();
-  if (n == 0 || max_points == 0 || grid.empty()) return v;
-  const uint32_t stride = (n + max_points - 1) / max_points;
   // Bird's-eye comparison under the upright prior: only the hypothesis' heading and position matter. A
   // clique of mid-height centroids constrains roll and pitch poorly, and a few degrees of tilt would
   // move every tall structure's voxels across cells.
@@ -202,11 +202,10 @@ PoseVerification score_pose(const Source& src, const SemanticGridView& grid, con
   const Eigen::Matrix3f R = Eigen::AngleAxisf(yaw, Eigen::Vector3f::UnitZ()).toRotationMatrix();
   const Eigen::Vector3f t = T.translation().cast<float>();
   TileCache cache;
-  const GridConstants k = grid_constants(grid);
   for (uint32_t i = 0; i < n; i += stride) {
     uint8_t label;
     const Eigen::Vector2f p = src.at(i, R, t, &label);
-    const GridAxis ax = grid_axis(k, p.x()), ay = grid_axis(k, p.y());
+    const GridAxis ax = grid_axis<kExactInverse>(k, p.x()), ay = grid_axis<kExactInverse>(k, p.y());
     const uint32_t mask = cell_at_axes(grid, k, ax, ay, cache);
     const uint32_t bit = class_bit(label);
     const float w = weights[label];
@@ -221,10 +220,10 @@ PoseVerification score_pose(const Source& src, const SemanticGridView& grid, con
       // lattice shift moves cues by metres, far beyond this tolerance). A neighbour shares one axis
       // with p, so only the other is computed again.
       const float c = grid.cell;
-      if ((cell_at_axes(grid, k, grid_axis(k, p.x() - c), ay, cache) & bit) ||
-          (cell_at_axes(grid, k, grid_axis(k, p.x() + c), ay, cache) & bit) ||
-          (cell_at_axes(grid, k, ax, grid_axis(k, p.y() - c), cache) & bit) ||
-          (cell_at_axes(grid, k, ax, grid_axis(k, p.y() + c), cache) & bit))
+      if ((cell_at_axes(grid, k, grid_axis<kExactInverse>(k, p.x() - c), ay, cache) & bit) ||
+          (cell_at_axes(grid, k, grid_axis<kExactInverse>(k, p.x() + c), ay, cache) & bit) ||
+          (cell_at_axes(grid, k, ax, grid_axis<kExactInverse>(k, p.y() - c), cache) & bit) ||
+          (cell_at_axes(grid, k, ax, grid_axis<kExactInverse>(k, p.y() + c), cache) & bit))
         verdict = 1;
     }
     if (verdict == 0) {
@@ -237,6 +236,17 @@ PoseVerification score_pose(const Source& src, const SemanticGridView& grid, con
   }
   v.score = v.agree - v.disagree;
   return v;
+}
+
+template <class Source>
+PoseVerification score_pose(const Source& src, const SemanticGridView& grid, const Eigen::Isometry3d& T,
+                            uint32_t max_points, const float* weights) {
+  const uint32_t n = src.size();
+  if (n == 0 || max_points == 0 || grid.empty()) return PoseVerification();
+  const uint32_t stride = (n + max_points - 1) / max_points;
+  const GridConstants k = grid_constants(grid);
+  return k.exact_inverse ? score_samples<true>(src, grid, k, T, stride, weights)
+                         : score_samples<false>(src, grid, k, T, stride, weights);
 }
 
 template <class Source>
