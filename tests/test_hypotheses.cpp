@@ -3,6 +3,7 @@
 #include <catch2/catch.hpp>
 
 #include <cmath>
+#include <random>
 #include <vector>
 
 #include "arena_buffer.h"
@@ -292,6 +293,116 @@ TEST_CASE("The pattern search's sample sizes: defaults as before, coarse to fine
   given.score = 12345.0f;
   CHECK(verify_pose_refined(voxels, layer.view, T, 4096, weights, 0, 0.4f, 0.8f, &c, 4, 4, &given).score == 12345.0f);
   CHECK(c.isApprox(T, 0.0));
+}
+
+namespace {
+
+// The verification rule of semantic_grid.h written plainly over SemanticGridView::cell_at (std::floor,
+// divisions, one call per cell): the reference the optimised scorer must match bit for bit.
+PoseVerification plain_verify(const VoxelLayer& voxels, const SemanticGridView& g, const Eigen::Isometry3d& T,
+                              uint32_t max_points, const float* weights) {
+  PoseVerification v;
+  const uint32_t n = voxels.size(), stride = (n + max_points - 1) / max_points;
+  const float yaw = static_cast<float>(std::atan2(T.linear()(1, 0), T.linear()(0, 0)));
+  const Eigen::Matrix3f R = Eigen::AngleAxisf(yaw, Eigen::Vector3f::UnitZ()).toRotationMatrix();
+  const Eigen::Vector3f t = T.translation().cast<float>();
+  for (uint32_t i = 0; i < n; i += stride) {
+    const Voxel& vx = voxels.voxel(i);
+    const Eigen::Vector3f p = R * Eigen::Vector3f(vx.centroid[0], vx.centroid[1], vx.centroid[2]) + t;
+    const uint32_t mask = g.cell_at(p.x(), p.y(), nullptr), bit = class_bit(vx.label);
+    int verdict = 0;
+    if (bit & kGroundClasses) {
+      if (mask & kGroundClasses) verdict = (mask & bit) ? 1 : -1;
+    } else if (mask & kCellObserved) {
+      verdict = (mask & bit) ? 1 : -1;
+    }
+    if (verdict < 0 &&
+        ((g.cell_at(p.x() - g.cell, p.y(), nullptr) & bit) || (g.cell_at(p.x() + g.cell, p.y(), nullptr) & bit) ||
+         (g.cell_at(p.x(), p.y() - g.cell, nullptr) & bit) || (g.cell_at(p.x(), p.y() + g.cell, nullptr) & bit)))
+      verdict = 1;
+    if (verdict == 0) {
+      ++v.unknown;
+      continue;
+    }
+    ++v.scored;
+    if (verdict > 0) v.agree += weights[vx.label];
+    else v.disagree += weights[vx.label];
+  }
+  v.score = v.agree - v.disagree;
+  return v;
+}
+
+bool same_bits(const PoseVerification& a, const PoseVerification& b) {
+  return a.score == b.score && a.agree == b.agree && a.disagree == b.disagree && a.scored == b.scored &&
+         a.unknown == b.unknown;
+}
+
+}  // namespace
+
+TEST_CASE("Verification's fast paths (compact points, exact reciprocals) give the plain rule's scores bit for bit") {
+  LatticeLayer layer;
+  VoxelConfig vc;
+  vc.min_range = 0.0f;
+  ArenaBuffer buf(VoxelLayer::required_bytes(vc));
+  VoxelLayer voxels;
+  REQUIRE(voxels.bind(buf.arena, vc) == Status::Ok);
+  const Cloud scan = lattice_scan(24.0f, true);
+  REQUIRE(voxels.build(scan.view(), nullptr) == Status::Ok);
+  std::vector<VerifyPoint> points(voxels.size());
+  fill_verify_points(voxels, points.data());
+  float weights[kNumClasses];
+  stability_weights(weights);
+  // 1 m cells in 16 m tiles (powers of two: the multiply path) and 0.85 m cells (the division path).
+  SemanticGridView odd = layer.view;
+  odd.cell = 0.85f;
+  std::mt19937 rng(7);
+  std::uniform_real_distribution<double> pos(-10.0, 70.0), yaw(-3.2, 3.2), frac(0.0, 1.0);
+  uint32_t compared = 0, with_disagreement = 0;
+  for (const SemanticGridView* g : {&layer.view, &odd}) {
+    for (int k = 0; k < 60; ++k) {
+      Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
+      // Half the poses on whole or half metres, where a voxel can sit exactly on a cell or tile edge.
+      const double x = k % 2 ? pos(rng) : std::round(pos(rng) * 2.0) / 2.0, y = frac(rng) * 6.0 - 3.0;
+      T.translation() = Eigen::Vector3d(x, y, 0.0);
+      T.linear() = Eigen::AngleAxisd(k % 3 ? yaw(rng) : 0.0, Eigen::Vector3d::UnitZ()).toRotationMatrix();
+      for (uint32_t max_points : {4096u, 512u}) {
+        const PoseVerification ref = plain_verify(voxels, *g, T, max_points, weights);
+        const PoseVerification fast = verify_pose(voxels, *g, T, max_points, weights);
+        const PoseVerification compact = verify_pose(points.data(), voxels.size(), *g, T, max_points, weights);
+        INFO("pose " << k << " cell " << g->cell << " points " << max_points);
+        CHECK(same_bits(ref, fast));
+        CHECK(same_bits(ref, compact));
+        ++compared;
+        with_disagreement += ref.disagree > 0.0f;
+      }
+    }
+    Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
+    T.translation() = Eigen::Vector3d(24.3, 0.2, 0);
+    Eigen::Isometry3d a, b;
+    const PoseVerification r1 = verify_pose_refined(voxels, *g, T, 4096, weights, 3, 0.4f, 0.8f, &a);
+    const PoseVerification r2 =
+        verify_pose_refined(points.data(), voxels.size(), *g, T, 4096, weights, 3, 0.4f, 0.8f, &b);
+    CHECK(same_bits(r1, r2));
+    CHECK(a.isApprox(b, 0.0));
+  }
+  CHECK(compared == 240);
+  CHECK(with_disagreement > 20);  // the neighbour lookups ran too
+  // Where x / tile and x * (1 / tile) floor to different tiles (0.85 m cells: 13.6 m tiles, so 1 / tile
+  // is inexact), the scorer must follow the division: a one-voxel scan at the layer's far edge (tile 3
+  // stored, tile 4 not) is scored or unknown exactly as the plain rule says.
+  const float tile = odd.cell * 16.0f, inv_tile = 1.0f / tile;
+  uint32_t edges = 0;
+  for (float x = 4.0f * tile - 1e-4f; x < 4.0f * tile + 1e-4f && edges < 4; x = std::nextafter(x, 100.0f)) {
+    if (std::floor(x / tile) == std::floor(x * inv_tile)) continue;
+    Cloud one;
+    one.add(x, 0.3f, 0.0f, 40);
+    REQUIRE(voxels.build(one.view(), nullptr) == Status::Ok);
+    const Eigen::Isometry3d I = Eigen::Isometry3d::Identity();
+    INFO("x " << x);
+    CHECK(same_bits(plain_verify(voxels, odd, I, 4096, weights), verify_pose(voxels, odd, I, 4096, weights)));
+    ++edges;
+  }
+  CHECK(edges > 0);
 }
 
 TEST_CASE("Semantic layer validation rejects unsorted keys, foreign bits and bad shapes") {

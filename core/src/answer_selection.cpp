@@ -59,12 +59,16 @@ double agreement_ambiguity(const PoseVerification& plain, float quality_low, flo
   return (double(quality_high) - q) / (double(quality_high) - quality_low);
 }
 
-size_t AnswerSelector::required_bytes(uint32_t refine_top) { return counted_bytes<AnswerSelector>(refine_top); }
+size_t AnswerSelector::required_bytes(uint32_t refine_top, uint32_t max_voxels) {
+  return counted_bytes<AnswerSelector>(refine_top, max_voxels);
+}
 
-Status AnswerSelector::bind(Arena& arena, uint32_t refine_top) {
+Status AnswerSelector::bind(Arena& arena, uint32_t refine_top, uint32_t max_voxels) {
   refine_top_ = refine_top;
   refined_pose_ = arena.allocate<Eigen::Isometry3d>(refine_top);
   refined_id_ = arena.allocate<uint32_t>(refine_top);
+  points_ = arena.allocate<VerifyPoint>(max_voxels);
+  max_points_ = max_voxels;
   chosen_ = UINT32_MAX;
   return arena.overflowed() ? Status::BufferTooSmall : Status::Ok;
 }
@@ -82,17 +86,24 @@ void AnswerSelector::choose(PoseHypotheses& hyps, const VoxelLayer& voxels, cons
   uint8_t full_scored[PoseHypotheses::kMaxHypotheses] = {};
   uint32_t refined_count = 0;
   rarity_weights(voxels, weights, vc.rarity_exponent, vc.max_points, verify_weights_);
+  // Every score below reads the voxels through their compact copy (the same results, bit for bit);
+  // a layer larger than the copy (never: the copy has the layer's capacity) would read the voxels.
+  const bool compact = verify && voxels.size() <= max_points_ && points_ != nullptr;
+  if (compact) fill_verify_points(voxels, points_);
+  const uint32_t nv = voxels.size();
+  auto score = [&](const Eigen::Isometry3d& T, uint32_t max_points, const float* w) {
+    return compact ? verify_pose(points_, nv, semantic, T, max_points, w)
+                   : verify_pose(voxels, semantic, T, max_points, w);
+  };
   if (verify) {
     // Coarse score for every hypothesis, the full score for the best `full_top`, then the best
     // `refine_top` at their best local alignment. Each step ranks, then caps.
     uint32_t top[PoseHypotheses::kMaxHypotheses];
     const uint32_t coarse_points = std::max<uint32_t>(1, vc.max_points / vc.coarse_divisor);
-    for (uint32_t h = 0; h < H; ++h)
-      hyps[h].verification = verify_pose(voxels, semantic, hyps[h].map_T_scan, coarse_points, verify_weights_);
+    for (uint32_t h = 0; h < H; ++h) hyps[h].verification = score(hyps[h].map_T_scan, coarse_points, verify_weights_);
     uint32_t nt = top_by_score(hyps, H, nullptr, vc.full_top, top);
     for (uint32_t k = 0; k < nt; ++k) {
-      hyps[top[k]].verification =
-          verify_pose(voxels, semantic, hyps[top[k]].map_T_scan, vc.max_points, verify_weights_);
+      hyps[top[k]].verification = score(hyps[top[k]].map_T_scan, vc.max_points, verify_weights_);
       full_scored[top[k]] = 1;
     }
     nt = vc.refine_rounds > 0 ? top_by_score(hyps, H, full_scored, std::min(vc.refine_top, refine_top_), top) : 0;
@@ -100,9 +111,13 @@ void AnswerSelector::choose(PoseHypotheses& hyps, const VoxelLayer& voxels, cons
     for (uint32_t k = 0; k < nt; ++k) {
       refined_id_[k] = top[k];
       const PoseVerification full = hyps[top[k]].verification;  // verify_pose at max_points, just above
-      hyps[top[k]].verification = verify_pose_refined(
-          voxels, semantic, hyps[top[k]].map_T_scan, vc.max_points, verify_weights_, vc.refine_rounds, vc.refine_step_m,
-          vc.refine_step_deg, &refined_pose_[k], vc.search_divisor, vc.polish_divisor, &full);
+      hyps[top[k]].verification =
+          compact ? verify_pose_refined(points_, nv, semantic, hyps[top[k]].map_T_scan, vc.max_points, verify_weights_,
+                                        vc.refine_rounds, vc.refine_step_m, vc.refine_step_deg, &refined_pose_[k],
+                                        vc.search_divisor, vc.polish_divisor, &full)
+                  : verify_pose_refined(voxels, semantic, hyps[top[k]].map_T_scan, vc.max_points, verify_weights_,
+                                        vc.refine_rounds, vc.refine_step_m, vc.refine_step_deg, &refined_pose_[k],
+                                        vc.search_divisor, vc.polish_divisor, &full);
     }
     // The answer, and as runner-up the best fully scored hypothesis at another place or heading: a
     // near-twin of the answer (within same_pose_m and same_pose_deg in the bird's-eye view the
@@ -173,7 +188,7 @@ void AnswerSelector::choose(PoseHypotheses& hyps, const VoxelLayer& voxels, cons
       const Eigen::Isometry3d* at = &answer.map_T_scan;
       for (uint32_t k = 0; k < refined_count; ++k)
         if (refined_id_[k] == best) at = &refined_pose_[k];
-      plain = verify_pose(voxels, semantic, *at, vc.max_points, weights);
+      plain = score(*at, vc.max_points, weights);
     }
     terms.quality = agreement_ambiguity(plain, vc.quality_low, vc.quality_high);
   }

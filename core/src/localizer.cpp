@@ -121,7 +121,8 @@ Status Localizer::bind_workspace(Arena& ar, const LocalizerConfig& config, Impl&
     return Status::InvalidArgument;
   record(&b.correspondence);
   if (im.hypotheses.bind(ar, C, config.hypotheses.max_hypotheses) != Status::Ok) return Status::InvalidArgument;
-  if (im.answer.bind(ar, config.verify.refine_top) != Status::Ok && !ar.counting()) return Status::InvalidArgument;
+  if (im.answer.bind(ar, config.verify.refine_top, config.voxel.max_voxels) != Status::Ok && !ar.counting())
+    return Status::InvalidArgument;
   record(&b.clique);
   if (config.refine.enabled && im.refiner.bind(ar, config.refine) != Status::Ok) return Status::InvalidArgument;
   record(&b.refine);

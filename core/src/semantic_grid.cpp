@@ -46,9 +46,19 @@ constexpr int32_t kOutsideTiles = INT32_MIN;
 
 struct GridConstants {
   float cell, tile;
+  // 1 / cell and 1 / tile when both are powers of two (the default 1 m cells in 16 m tiles): then x *
+  // (1 / d) is the same correctly rounded x / d, bit for bit, and a multiply instead of a division
+  // takes the division's latency off the per-voxel chain (it was the hottest instruction of verify_pose).
+  float inv_cell, inv_tile;
+  bool exact_inverse;
   int32_t tile_cells;
   bool usable;
 };
+
+bool is_power_of_two(float d) {
+  int e;
+  return d > 0.0f && std::isfinite(d) && std::frexp(d, &e) == 0.5f;
+}
 
 GridConstants grid_constants(const SemanticGridView& g) {
   GridConstants k;
@@ -56,14 +66,19 @@ GridConstants grid_constants(const SemanticGridView& g) {
   k.cell = g.cell;
   k.tile = g.cell * static_cast<float>(g.tile_cells);
   k.tile_cells = static_cast<int32_t>(g.tile_cells);
+  k.exact_inverse = k.usable && is_power_of_two(k.cell) && is_power_of_two(k.tile) && std::isnormal(1.0f / k.cell) &&
+                    std::isnormal(1.0f / k.tile);
+  k.inv_cell = k.exact_inverse ? 1.0f / k.cell : 0.0f;
+  k.inv_tile = k.exact_inverse ? 1.0f / k.tile : 0.0f;
   return k;
 }
 
+template <bool kExactInverse>
 inline GridAxis grid_axis(const GridConstants& k, float x) {
   if (!k.usable) return {kOutsideTiles, 0};
   // cell_at's tile floor(x / tile) is valid within (-32768, 32768), i.e. for a quotient in
   // [-32767, 32768), where truncation through an int32 floors it (SSE2 has no rounding instruction).
-  const float q = x / k.tile;
+  const float q = kExactInverse ? x * k.inv_tile : x / k.tile;
   if (!(q >= -32767.0f && q < 32768.0f)) return {kOutsideTiles, 0};  // also rejects NaN
   int32_t tile = static_cast<int32_t>(q);
   float f = static_cast<float>(tile);
@@ -72,7 +87,8 @@ inline GridAxis grid_axis(const GridConstants& k, float x) {
     f -= 1.0f;
   }
   // The cell: (x - f tile) / cell truncated and clamped to [0, n - 1], as in cell_at.
-  int32_t c = static_cast<int32_t>((x - f * k.tile) / k.cell);
+  const float r = x - f * k.tile;
+  int32_t c = static_cast<int32_t>(kExactInverse ? r * k.inv_cell : r / k.cell);
   c = c < 0 ? 0 : (c >= k.tile_cells ? k.tile_cells - 1 : c);  // float rounding at the tile's far edge
   return {tile, c};
 }
@@ -146,12 +162,39 @@ Status SemanticGridView::validate(uint32_t num_classes) const {
   return Status::Ok;
 }
 
-PoseVerification verify_pose(const VoxelLayer& voxels, const SemanticGridView& grid, const Eigen::Isometry3d& T,
-                             uint32_t max_points, const float* weights) {
+namespace {
+
+// The two sources verification reads: the voxel layer itself, or its compact bird's-eye copy.
+struct VoxelSource {
+  const VoxelLayer& voxels;
+  uint32_t size() const { return voxels.size(); }
+  // Bird's-eye position under the upright rotation R (its third column is exactly zero: a z rotation,
+  // see verify_pose) plus t; the z term would add an exact zero, so R * (x, y, z) + t is this, bit for bit.
+  Eigen::Vector2f at(uint32_t i, const Eigen::Matrix3f& R, const Eigen::Vector3f& t, uint8_t* label) const {
+    const Voxel& vx = voxels.voxel(i);
+    *label = vx.label;
+    const Eigen::Vector3f p = R * Eigen::Vector3f(vx.centroid[0], vx.centroid[1], vx.centroid[2]) + t;
+    return p.head<2>();
+  }
+};
+
+struct PointSource {
+  const VerifyPoint* points;
+  uint32_t n;
+  uint32_t size() const { return n; }
+  Eigen::Vector2f at(uint32_t i, const Eigen::Matrix3f& R, const Eigen::Vector3f& t, uint8_t* label) const {
+    const VerifyPoint& q = points[i];
+    *label = static_cast<uint8_t>(q.label);
+    return Eigen::Vector2f(R(0, 0) * q.x + R(0, 1) * q.y + t.x(), R(1, 0) * q.x + R(1, 1) * q.y + t.y());
+  }
+};
+
+// The scoring loop, with the grid's reciprocal test hoisted out of it (kExactInverse: k.exact_inverse).
+template <bool kExactInverse, class Source>
+PoseVerification score_samples(const Source& src, const SemanticGridView& grid, const GridConstants& k,
+                               const Eigen::Isometry3d& T, uint32_t stride, const float* weights) {
   PoseVerification v;
-  const uint32_t n = voxels.size();
-  if (n == 0 || max_points == 0 || grid.empty()) return v;
-  const uint32_t stride = (n + max_points - 1) / max_points;
+  const uint32_t n = src.size();
   // Bird's-eye comparison under the upright prior: only the hypothesis' heading and position matter. A
   // clique of mid-height centroids constrains roll and pitch poorly, and a few degrees of tilt would
   // move every tall structure's voxels across cells.
@@ -159,14 +202,13 @@ PoseVerification verify_pose(const VoxelLayer& voxels, const SemanticGridView& g
   const Eigen::Matrix3f R = Eigen::AngleAxisf(yaw, Eigen::Vector3f::UnitZ()).toRotationMatrix();
   const Eigen::Vector3f t = T.translation().cast<float>();
   TileCache cache;
-  const GridConstants k = grid_constants(grid);
   for (uint32_t i = 0; i < n; i += stride) {
-    const Voxel& vx = voxels.voxel(i);
-    const Eigen::Vector3f p = R * Eigen::Vector3f(vx.centroid[0], vx.centroid[1], vx.centroid[2]) + t;
-    const GridAxis ax = grid_axis(k, p.x()), ay = grid_axis(k, p.y());
+    uint8_t label;
+    const Eigen::Vector2f p = src.at(i, R, t, &label);
+    const GridAxis ax = grid_axis<kExactInverse>(k, p.x()), ay = grid_axis<kExactInverse>(k, p.y());
     const uint32_t mask = cell_at_axes(grid, k, ax, ay, cache);
-    const uint32_t bit = class_bit(vx.label);
-    const float w = weights[vx.label];
+    const uint32_t bit = class_bit(label);
+    const float w = weights[label];
     int verdict = 0;  // +1 agree, -1 disagree, 0 unknown
     if (bit & kGroundClasses) {
       if (mask & kGroundClasses) verdict = (mask & bit) ? 1 : -1;
@@ -178,10 +220,10 @@ PoseVerification verify_pose(const VoxelLayer& voxels, const SemanticGridView& g
       // lattice shift moves cues by metres, far beyond this tolerance). A neighbour shares one axis
       // with p, so only the other is computed again.
       const float c = grid.cell;
-      if ((cell_at_axes(grid, k, grid_axis(k, p.x() - c), ay, cache) & bit) ||
-          (cell_at_axes(grid, k, grid_axis(k, p.x() + c), ay, cache) & bit) ||
-          (cell_at_axes(grid, k, ax, grid_axis(k, p.y() - c), cache) & bit) ||
-          (cell_at_axes(grid, k, ax, grid_axis(k, p.y() + c), cache) & bit))
+      if ((cell_at_axes(grid, k, grid_axis<kExactInverse>(k, p.x() - c), ay, cache) & bit) ||
+          (cell_at_axes(grid, k, grid_axis<kExactInverse>(k, p.x() + c), ay, cache) & bit) ||
+          (cell_at_axes(grid, k, ax, grid_axis<kExactInverse>(k, p.y() - c), cache) & bit) ||
+          (cell_at_axes(grid, k, ax, grid_axis<kExactInverse>(k, p.y() + c), cache) & bit))
         verdict = 1;
     }
     if (verdict == 0) {
@@ -196,10 +238,22 @@ PoseVerification verify_pose(const VoxelLayer& voxels, const SemanticGridView& g
   return v;
 }
 
-PoseVerification verify_pose_refined(const VoxelLayer& voxels, const SemanticGridView& grid, const Eigen::Isometry3d& T,
-                                     uint32_t max_points, const float* weights, uint32_t rounds, float step_m,
-                                     float step_deg, Eigen::Isometry3d* refined, uint32_t search_divisor,
-                                     uint32_t polish_divisor, const PoseVerification* at_start) {
+template <class Source>
+PoseVerification score_pose(const Source& src, const SemanticGridView& grid, const Eigen::Isometry3d& T,
+                            uint32_t max_points, const float* weights) {
+  const uint32_t n = src.size();
+  if (n == 0 || max_points == 0 || grid.empty()) return PoseVerification();
+  const uint32_t stride = (n + max_points - 1) / max_points;
+  const GridConstants k = grid_constants(grid);
+  return k.exact_inverse ? score_samples<true>(src, grid, k, T, stride, weights)
+                         : score_samples<false>(src, grid, k, T, stride, weights);
+}
+
+template <class Source>
+PoseVerification search_pose(const Source& src, const SemanticGridView& grid, const Eigen::Isometry3d& T,
+                             uint32_t max_points, const float* weights, uint32_t rounds, float step_m, float step_deg,
+                             Eigen::Isometry3d* refined, uint32_t search_divisor, uint32_t polish_divisor,
+                             const PoseVerification* at_start) {
   Eigen::Isometry3d best = T;
   auto sample = [max_points](uint32_t divisor) {
     const uint32_t d = divisor > 0 ? divisor : 1;
@@ -208,12 +262,12 @@ PoseVerification verify_pose_refined(const VoxelLayer& voxels, const SemanticGri
   const uint32_t coarse = sample(search_divisor), polish = sample(polish_divisor);
   bool any_move = false;
   uint32_t points = rounds > 1 ? coarse : polish;
-  float best_score = verify_pose(voxels, grid, best, points, weights).score;
+  float best_score = score_pose(src, grid, best, points, weights).score;
   double step = step_m, turn = double(step_deg) * 3.14159265358979323846 / 180.0;
   for (uint32_t r = 0; r < rounds; ++r, step *= 0.5, turn *= 0.5) {
     if (r + 1 == rounds && points != polish) {  // the last, finest round on its own sample
       points = polish;
-      best_score = verify_pose(voxels, grid, best, points, weights).score;
+      best_score = score_pose(src, grid, best, points, weights).score;
     }
     bool moved = true;
     for (int pass = 0; pass < 2 && moved; ++pass) {
@@ -228,7 +282,7 @@ PoseVerification verify_pose_refined(const VoxelLayer& voxels, const SemanticGri
           c.linear() =
               c.linear() * Eigen::AngleAxisd(k == 4 ? turn : -turn, Eigen::Vector3d::UnitZ()).toRotationMatrix();
         }
-        const float sc = verify_pose(voxels, grid, c, points, weights).score;
+        const float sc = score_pose(src, grid, c, points, weights).score;
         if (sc > best_score) {
           best_score = sc;
           best = c;
@@ -240,7 +294,43 @@ PoseVerification verify_pose_refined(const VoxelLayer& voxels, const SemanticGri
   if (refined) *refined = best;
   // Not moved: the full score at the start pose is the caller's, when it has it (the same call).
   if (!any_move && at_start) return *at_start;
-  return verify_pose(voxels, grid, best, max_points, weights);
+  return score_pose(src, grid, best, max_points, weights);
+}
+
+}  // namespace
+
+void fill_verify_points(const VoxelLayer& voxels, VerifyPoint* out) {
+  for (uint32_t i = 0; i < voxels.size(); ++i) {
+    const Voxel& vx = voxels.voxel(i);
+    out[i] = VerifyPoint{vx.centroid[0], vx.centroid[1], vx.label};
+  }
+}
+
+PoseVerification verify_pose(const VoxelLayer& voxels, const SemanticGridView& grid, const Eigen::Isometry3d& T,
+                             uint32_t max_points, const float* weights) {
+  return score_pose(VoxelSource{voxels}, grid, T, max_points, weights);
+}
+
+PoseVerification verify_pose(const VerifyPoint* points, uint32_t n, const SemanticGridView& grid,
+                             const Eigen::Isometry3d& T, uint32_t max_points, const float* weights) {
+  return score_pose(PointSource{points, n}, grid, T, max_points, weights);
+}
+
+PoseVerification verify_pose_refined(const VoxelLayer& voxels, const SemanticGridView& grid, const Eigen::Isometry3d& T,
+                                     uint32_t max_points, const float* weights, uint32_t rounds, float step_m,
+                                     float step_deg, Eigen::Isometry3d* refined, uint32_t search_divisor,
+                                     uint32_t polish_divisor, const PoseVerification* at_start) {
+  return search_pose(VoxelSource{voxels}, grid, T, max_points, weights, rounds, step_m, step_deg, refined,
+                     search_divisor, polish_divisor, at_start);
+}
+
+PoseVerification verify_pose_refined(const VerifyPoint* points, uint32_t n, const SemanticGridView& grid,
+                                     const Eigen::Isometry3d& T, uint32_t max_points, const float* weights,
+                                     uint32_t rounds, float step_m, float step_deg, Eigen::Isometry3d* refined,
+                                     uint32_t search_divisor, uint32_t polish_divisor,
+                                     const PoseVerification* at_start) {
+  return search_pose(PointSource{points, n}, grid, T, max_points, weights, rounds, step_m, step_deg, refined,
+                     search_divisor, polish_divisor, at_start);
 }
 
 }  // namespace gsf

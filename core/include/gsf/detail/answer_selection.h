@@ -42,8 +42,9 @@ double agreement_ambiguity(const PoseVerification& plain, float quality_low, flo
 
 class AnswerSelector {
  public:
-  static size_t required_bytes(uint32_t refine_top);
-  Status bind(Arena& arena, uint32_t refine_top);
+  // max_voxels: the voxel layer's capacity (the compact copy verification reads holds that many).
+  static size_t required_bytes(uint32_t refine_top, uint32_t max_voxels);
+  Status bind(Arena& arena, uint32_t refine_top, uint32_t max_voxels);
 
   // Verifies `hyps` (when verification is on and the map has a semantic layer), chooses the answer and
   // fills out's pose, inliers, hypothesis reports and ambiguity. `weights`: the stability weights.
@@ -58,6 +59,8 @@ class AnswerSelector {
  private:
   Eigen::Isometry3d* refined_pose_ = nullptr;  // refine_top: poses the pattern search chose
   uint32_t* refined_id_ = nullptr;             // refine_top: their hypotheses
+  VerifyPoint* points_ = nullptr;              // max_voxels: the query voxels' bird's-eye copy (fill_verify_points)
+  uint32_t max_points_ = 0;
   uint32_t refine_top_ = 0;
   uint32_t chosen_ = UINT32_MAX;
   float verify_weights_[kNumClasses] = {};

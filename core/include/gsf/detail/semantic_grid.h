@@ -68,6 +68,15 @@ struct PoseVerification {
   uint32_t unknown = 0;  // sampled voxels that landed outside the map's layer
 };
 
+// The bird's-eye part of a query voxel that verification reads (12 B of the voxel's 96): a query scores
+// a few hundred poses on strided samples of its voxels, and this compact copy keeps them in cache.
+struct VerifyPoint {
+  float x, y;
+  uint32_t label;  // dense class
+};
+// out[i] for every voxel i of the layer (out holds voxels.size()).
+void fill_verify_points(const VoxelLayer& voxels, VerifyPoint* out);
+
 // Scores map_T_scan over at most max_points voxels of the query's voxel layer, sampled with a uniform
 // stride over the layer (never "the first N"). weights: stability weight per dense class.
 PoseVerification verify_pose(const VoxelLayer& voxels, const SemanticGridView& grid,
@@ -83,6 +92,15 @@ PoseVerification verify_pose(const VoxelLayer& voxels, const SemanticGridView& g
 // does not move. Cost: at most (12 (rounds - 1) + 1) x max_points / search_divisor + 13 x max_points /
 // polish_divisor + max_points cell lookups (and up to 4 more per disagreeing voxel).
 PoseVerification verify_pose_refined(const VoxelLayer& voxels, const SemanticGridView& grid,
+                                     const Eigen::Isometry3d& map_T_scan, uint32_t max_points, const float* weights,
+                                     uint32_t rounds, float step_m, float step_deg, Eigen::Isometry3d* refined,
+                                     uint32_t search_divisor = 4, uint32_t polish_divisor = 4,
+                                     const PoseVerification* at_start = nullptr);
+
+// The same two, over n compact points (fill_verify_points of the layer: the same results, bit for bit).
+PoseVerification verify_pose(const VerifyPoint* points, uint32_t n, const SemanticGridView& grid,
+                             const Eigen::Isometry3d& map_T_scan, uint32_t max_points, const float* weights);
+PoseVerification verify_pose_refined(const VerifyPoint* points, uint32_t n, const SemanticGridView& grid,
                                      const Eigen::Isometry3d& map_T_scan, uint32_t max_points, const float* weights,
                                      uint32_t rounds, float step_m, float step_deg, Eigen::Isometry3d* refined,
                                      uint32_t search_divisor = 4, uint32_t polish_divisor = 4,
