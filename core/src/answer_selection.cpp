@@ -68,7 +68,7 @@ Status AnswerSelector::bind(Arena& arena, uint32_t refine_top, uint32_t max_voxe
   refined_pose_ = arena.allocate<Eigen::Isometry3d>(refine_top);
   refined_id_ = arena.allocate<uint32_t>(refine_top);
   points_ = arena.allocate<VerifyPoint>(max_voxels);
-  max_points_ = max_voxels;
+  point_capacity_ = max_voxels;
   chosen_ = UINT32_MAX;
   return arena.overflowed() ? Status::BufferTooSmall : Status::Ok;
 }
@@ -88,7 +88,7 @@ void AnswerSelector::choose(PoseHypotheses& hyps, const VoxelLayer& voxels, cons
   rarity_weights(voxels, weights, vc.rarity_exponent, vc.max_points, verify_weights_);
   // Every score below reads the voxels through their compact copy (the same results, bit for bit);
   // a layer larger than the copy (never: the copy has the layer's capacity) would read the voxels.
-  const bool compact = verify && voxels.size() <= max_points_ && points_ != nullptr;
+  const bool compact = verify && voxels.size() <= point_capacity_ && points_ != nullptr;
   if (compact) fill_verify_points(voxels, points_);
   const uint32_t nv = voxels.size();
   auto score = [&](const Eigen::Isometry3d& T, uint32_t max_points, const float* w) {
