@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "arena_buffer.h"
+#include "gsf/config.h"
 #include "gsf/detail/max_clique.h"
 #include "gsf/detail/pose_hypotheses.h"
 #include "gsf/detail/semantic_grid.h"
@@ -518,4 +519,52 @@ TEST_CASE("Removing the edges at a heading removes exactly the pairs that turn b
   CHECK_FALSE(g.adjacent(0, 2));
   CHECK(g.adjacent(1, 2));
   CHECK(g.adjacent(0, 3));  // (0,3) turns by 0 deg
+}
+
+TEST_CASE("Shift votes rank bins by their support: a translation split across a bin edge still becomes a hypothesis") {
+  // One heading (the first clique's: 8 correspondences at translation (100, 50)), lattice shifts with
+  // 3 votes each in one bin, and the truth with 4 votes that straddle the bin edge at x = 160 (2 + 2).
+  std::vector<float> a, b;
+  auto add = [&](float x, float y, float z, float tx, float ty) {
+    a.insert(a.end(), {x, y, z});
+    b.insert(b.end(), {x + tx, y + ty, z});
+  };
+  const float clique_pts[8][2] = {{3, 1}, {-7, 4}, {12, -5}, {-2, -14}, {18, 9}, {-15, -3}, {6, 11}, {-11, 7}};
+  for (const auto& p : clique_pts) add(p[0], p[1], 0.5f, 100.0f, 50.0f);
+  float x = 30.0f;
+  for (int k = 1; k <= 6; ++k)  // lattice shifts 8 m apart, bins well inside
+    for (int j = 0; j < 3; ++j, x += 1.7f) add(x, -20.0f + 3.0f * j, 1.0f, 100.0f + 8.0f * k + 1.0f, 50.0f + 0.5f);
+  for (int j = 0; j < 4; ++j, x += 1.9f) add(x, 25.0f + 2.0f * j, 1.0f, 160.0f + (j % 2 ? 0.05f : -0.05f), 51.0f);
+  const uint32_t n = static_cast<uint32_t>(a.size() / 3);
+  std::vector<float> w(n, 1.0f);
+  HypothesisConfig hc;
+  hc.max_peeled = 1;
+  hc.heading_cliques = 0;
+  hc.max_hypotheses = 4;  // the clique and 3 shift votes
+  ArenaBuffer buf(PoseHypotheses::required_bytes(64, 8));
+  PoseHypotheses hyp;
+  REQUIRE(hyp.bind(buf.arena, 64, 8) == Status::Ok);
+  auto has_translation = [&](double tx, double ty) {
+    for (uint32_t h = 0; h < hyp.size(); ++h)
+      if ((hyp[h].map_T_scan.translation().head<2>() - Eigen::Vector2d(tx, ty)).norm() < 0.2) return true;
+    return false;
+  };
+  HypothesisStats st;
+  hc.shift_vote_support = 0;  // each bin on its own: the truth's bins hold 2 votes each, below min_inliers
+  REQUIRE(hyp.generate(a.data(), b.data(), w.data(), n, hc, &st) == Status::Ok);
+  CHECK(hyp.size() == 4);
+  CHECK(has_translation(100, 50));
+  CHECK_FALSE(has_translation(160, 51));
+  hc.shift_vote_support = 1;
+  REQUIRE(hyp.generate(a.data(), b.data(), w.data(), n, hc, &st) == Status::Ok);
+  CHECK(hyp.size() == 4);
+  CHECK(has_translation(100, 50));
+  CHECK(has_translation(160, 51));
+  // A bad radius is a configuration error, not a slow query.
+  LocalizerConfig cfg;
+  cfg.hypotheses.shift_vote_support = 2;
+  CHECK(validate(cfg) == Status::InvalidArgument);
+  cfg.hypotheses.shift_vote_support = 1;
+  cfg.hypotheses.tls_threshold = 2.5f;  // a support radius beyond the 3 x 3 bins searched
+  CHECK(validate(cfg) == Status::InvalidArgument);
 }

@@ -29,12 +29,83 @@ Status PoseHypotheses::bind(Arena& ar, uint32_t n, uint32_t k) {
   vote_order_ = ar.allocate<uint32_t>(n);
   bin_first_ = ar.allocate<uint32_t>(n);
   bin_weight_ = ar.allocate<float>(n);
+  bin_count_ = ar.allocate<uint32_t>(n);
+  bin_smooth_ = ar.allocate<float>(n);
+  bin_smooth_count_ = ar.allocate<uint32_t>(n);
+  bin_begin_ = ar.allocate<uint32_t>(size_t(n) + 1);
+  vote_t_ = ar.allocate<float>(size_t(n) * 2);
   if (ar.counting()) return Status::Ok;
   if (ar.overflowed()) return Status::BufferTooSmall;
   for (uint32_t i = 0; i < k; ++i) new (&hyps_[i]) PoseHypothesis();
   max_n_ = n;
   max_h_ = k;
   return Status::Ok;
+}
+
+uint32_t PoseHypotheses::rank_shift_bins(uint32_t bins, const float* w, const HypothesisConfig& c) {
+  auto key_of = [this](uint32_t k) { return vote_key_[bin_first_[k]]; };
+  // Bin of key `key` (bins are in key order), or UINT32_MAX.
+  auto find = [&](uint64_t key) {
+    uint32_t lo = 0, hi = bins;
+    while (lo < hi) {
+      const uint32_t mid = (lo + hi) / 2;
+      if (key_of(mid) < key) lo = mid + 1;
+      else hi = mid;
+    }
+    return lo < bins && key_of(lo) == key ? lo : UINT32_MAX;
+  };
+  // Support of each bin: the weight (and number) of votes within tls_threshold of the mean of its own
+  // votes. The radius is below a bin (validate: tls_threshold <= shift_bin), so only the 3 x 3 bins
+  // around it can hold them; keys are (kx << 21) | ky with both fields offset by 2^20.
+  const float r2 = c.tls_threshold * c.tls_threshold;
+  for (uint32_t k = 0; k < bins; ++k) {
+    if (!c.shift_vote_support) {
+      bin_smooth_[k] = bin_weight_[k];
+      bin_smooth_count_[k] = bin_count_[k];
+      continue;
+    }
+    float mx = 0.0f, my = 0.0f;
+    for (uint32_t e = bin_begin_[k]; e < bin_begin_[k + 1]; ++e) {
+      mx += vote_t_[2 * vote_order_[e]];
+      my += vote_t_[2 * vote_order_[e] + 1];
+    }
+    const float inv = 1.0f / static_cast<float>(bin_begin_[k + 1] - bin_begin_[k]);
+    mx *= inv;
+    my *= inv;
+    const uint64_t key = key_of(k);
+    const int64_t kx = int64_t(key >> 21), ky = int64_t(key & 0x1FFFFF);
+    float sw = 0.0f;
+    uint32_t sc = 0;
+    for (int64_t dx = -1; dx <= 1; ++dx)
+      for (int64_t dy = -1; dy <= 1; ++dy) {
+        const int64_t x = kx + dx, y = ky + dy;
+        if (x < 0 || y < 0 || x > 0x1FFFFF || y > 0x1FFFFF) continue;
+        const uint32_t j = (dx == 0 && dy == 0) ? k : find((uint64_t(x) << 21) | uint64_t(y));
+        if (j == UINT32_MAX) continue;
+        for (uint32_t e = bin_begin_[j]; e < bin_begin_[j + 1]; ++e) {
+          const uint32_t i = vote_order_[e];
+          const float ex = vote_t_[2 * i] - mx, ey = vote_t_[2 * i + 1] - my;
+          if (ex * ex + ey * ey > r2) continue;
+          sw += w[i];
+          ++sc;
+        }
+      }
+    bin_smooth_[k] = sw;
+    bin_smooth_count_[k] = sc;
+  }
+  // Rank classes, compacted in key order: 2 for a bin with min_inliers supporting votes, 1 for one with
+  // min_inliers votes of its own but less support (kept for free slots: no bin the plain ranking
+  // offered is lost), 0 dropped.
+  uint32_t kept = 0;
+  for (uint32_t k = 0; k < bins; ++k) {
+    const uint32_t rank = bin_smooth_count_[k] >= c.min_inliers ? 2u : (bin_count_[k] >= c.min_inliers ? 1u : 0u);
+    if (rank == 0) continue;
+    bin_first_[kept] = bin_first_[k];
+    bin_weight_[kept] = bin_smooth_[k];
+    bin_count_[kept] = rank;
+    ++kept;
+  }
+  return kept;
 }
 
 Status PoseHypotheses::generate(const float* a, const float* b, const float* w, uint32_t n, const HypothesisConfig& c,
@@ -209,7 +280,8 @@ Status PoseHypotheses::generate(const float* a, const float* b, const float* w, 
   // 2. Shift votes. In a repetitive layout the true answer is one translation among many that the
   // cliques' headings allow, and peeling may never form it. For each distinct heading found, every
   // correspondence votes for the translation b - R a (bins of shift_bin metres); the best-supported
-  // bins (ranked by summed weight, ties by bin key) become hypotheses until K are found.
+  // bins (rank_shift_bins: by the votes within tls_threshold of a bin's mean, ties by bin key) become
+  // hypotheses until K are found.
   const uint32_t peeled = count_;
   uint32_t total_headings = 0;
   for (uint32_t hp = 0; hp < peeled && total_headings < c.shift_headings; ++hp) total_headings += new_heading(hp);
@@ -232,32 +304,39 @@ Status PoseHypotheses::generate(const float* a, const float* b, const float* w, 
       const int64_t ky = static_cast<int64_t>(std::floor(t.y() / c.shift_bin)) + (1 << 20);
       vote_key_[i] = (uint64_t(kx & 0x1FFFFF) << 21) | uint64_t(ky & 0x1FFFFF);
       vote_order_[i] = i;
+      vote_t_[2 * i] = static_cast<float>(t.x());
+      vote_t_[2 * i + 1] = static_cast<float>(t.y());
     }
     std::sort(vote_order_, vote_order_ + n, [this](uint32_t x, uint32_t y) {
       return vote_key_[x] < vote_key_[y] || (vote_key_[x] == vote_key_[y] && x < y);
     });
-    // Runs of equal keys are the bins: compact them to (first entry, weight) in place of the order.
+    // Runs of equal keys are the bins: compact them to (first entry, weight, count), in key order.
     uint32_t bins = 0;
     for (uint32_t k = 0; k < n;) {
       uint32_t e = k;
       float weight = 0.0f;
       while (e < n && vote_key_[vote_order_[e]] == vote_key_[vote_order_[k]]) weight += w[vote_order_[e++]];
-      if (e - k >= c.min_inliers) {
-        bin_first_[bins] = vote_order_[k];
-        bin_weight_[bins] = weight;
-        ++bins;
-      }
+      bin_first_[bins] = vote_order_[k];
+      bin_weight_[bins] = weight;
+      bin_count_[bins] = e - k;
+      bin_begin_[bins] = k;
+      ++bins;
       k = e;
     }
-    // Best bins first (selection by weight; equal weights by key).
+    bin_begin_[bins] = n;
+    bins = rank_shift_bins(bins, w, c);
+    // Best bins first (selection by rank class, then weight; equal weights by key).
     for (uint32_t taken = 0; taken < bins && count_ < stop; ++taken) {
       uint32_t best = taken;
       for (uint32_t k = taken + 1; k < bins; ++k)
-        if (bin_weight_[k] > bin_weight_[best] ||
-            (bin_weight_[k] == bin_weight_[best] && vote_key_[bin_first_[k]] < vote_key_[bin_first_[best]]))
+        if (bin_count_[k] > bin_count_[best] ||
+            (bin_count_[k] == bin_count_[best] &&
+             (bin_weight_[k] > bin_weight_[best] ||
+              (bin_weight_[k] == bin_weight_[best] && vote_key_[bin_first_[k]] < vote_key_[bin_first_[best]]))))
           best = k;
       std::swap(bin_first_[taken], bin_first_[best]);
       std::swap(bin_weight_[taken], bin_weight_[best]);
+      std::swap(bin_count_[taken], bin_count_[best]);
       // Translation-only fit under the heading R: a bin holds a few correspondences, too few (and
       // too collinear) to re-estimate roll and pitch; the heading comes from a whole clique.
       const uint32_t i0 = bin_first_[taken];

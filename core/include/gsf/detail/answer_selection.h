@@ -60,7 +60,7 @@ class AnswerSelector {
   Eigen::Isometry3d* refined_pose_ = nullptr;  // refine_top: poses the pattern search chose
   uint32_t* refined_id_ = nullptr;             // refine_top: their hypotheses
   VerifyPoint* points_ = nullptr;              // max_voxels: the query voxels' bird's-eye copy (fill_verify_points)
-  uint32_t point_capacity_ = 0;  // max_voxels
+  uint32_t point_capacity_ = 0;                // max_voxels
   uint32_t refine_top_ = 0;
   uint32_t chosen_ = UINT32_MAX;
   float verify_weights_[kNumClasses] = {};

@@ -41,7 +41,13 @@ struct HypothesisConfig {
   // share one wrong heading, and the shift votes then never see the true one. 0 = off.
   uint32_t heading_cliques = 3;
   float heading_separation_deg = 15.0f;
-  float shift_bin = 2.0f;          // m; translation vote bins
+  float shift_bin = 2.0f;  // m; translation vote bins
+  // 1: shift-vote bins are ranked by their support, the weight of the votes within tls_threshold of
+  // the mean of the bin's own votes (they may lie in a neighbouring bin): a translation whose votes
+  // straddle a bin edge is then not outranked by a lattice's other shifts, and bins with fewer
+  // supporting votes than min_inliers but enough of their own still follow. 0: each bin on its own
+  // weight (before 2026-12-01).
+  uint32_t shift_vote_support = 1;
   uint64_t first_budget = 200000;  // branch-and-bound nodes for the first (maximum) clique
   uint64_t next_budget = 20000;    // nodes for each further clique
   float consistency_eps = 1.0f;    // m; | |a_i-a_j| - |b_i-b_j| | <= eps (Outram: 1.0 m)
@@ -96,6 +102,10 @@ class PoseHypotheses {
   bool in_clique(uint32_t h, uint32_t i) const { return owner_[i] == h + 1; }
 
  private:
+  // Shift votes: from `bins` bins in key order (bin_first_, bin_weight_, bin_count_, bin_begin_) keeps,
+  // in key order, those with min_inliers supporting votes (bin_count_ 2) and the others with min_inliers
+  // votes of their own (1), bin_weight_ then holding the support; returns how many.
+  uint32_t rank_shift_bins(uint32_t bins, const float* w, const HypothesisConfig& config);
   ConsistencyGraph graph_;
   MaxCliqueSolver solver_;
   FixedVector<uint32_t> clique_;
@@ -107,10 +117,15 @@ class PoseHypotheses {
   float* tls_w_ = nullptr;
   uint8_t* mask_ = nullptr;
   PoseHypothesis* hyps_ = nullptr;
-  uint64_t* vote_key_ = nullptr;    // n: translation bin of each correspondence (shift votes)
-  uint32_t* vote_order_ = nullptr;  // n
-  uint32_t* bin_first_ = nullptr;   // n: a correspondence of each bin
-  float* bin_weight_ = nullptr;     // n: the bin's summed weight
+  uint64_t* vote_key_ = nullptr;          // n: translation bin of each correspondence (shift votes)
+  uint32_t* vote_order_ = nullptr;        // n
+  uint32_t* bin_first_ = nullptr;         // n: a correspondence of each bin
+  float* bin_weight_ = nullptr;           // n: the bin's summed weight
+  uint32_t* bin_count_ = nullptr;         // n: the bin's correspondences
+  float* bin_smooth_ = nullptr;           // n: the bin's support (weight of the votes near its mean)
+  uint32_t* bin_smooth_count_ = nullptr;  // n: the supporting votes
+  uint32_t* bin_begin_ = nullptr;         // n + 1: a bin's votes are vote_order_[begin[k], begin[k + 1])
+  float* vote_t_ = nullptr;               // 2n: each correspondence's bird's-eye translation vote
   uint32_t max_n_ = 0, max_h_ = 0, count_ = 0;
 };
 
