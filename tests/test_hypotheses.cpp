@@ -225,19 +225,38 @@ Cloud lattice_scan(float sx, bool with_bush) {
 
 }  // namespace
 
-TEST_CASE("Verification picks the true lattice shift given one distinguishing bush") {
+namespace {
+
+// The lattice layer, a voxel layer for scans of it (min_range 0: they start at the sensor) and the
+// stability weights: what every verification test below starts from.
+struct LatticeVerification {
   LatticeLayer layer;
-  REQUIRE(layer.view.validate(kNumClasses) == Status::Ok);
-  VoxelConfig vc;
-  vc.min_range = 0.0f;
-  ArenaBuffer buf(VoxelLayer::required_bytes(vc));
+  VoxelConfig config;
+  ArenaBuffer buf;
   VoxelLayer voxels;
-  REQUIRE(voxels.bind(buf.arena, vc) == Status::Ok);
-  const float sensor_x = 24.0f;
-  const Cloud scan = lattice_scan(sensor_x, true);
-  REQUIRE(voxels.build(scan.view(), nullptr) == Status::Ok);
   float weights[kNumClasses];
-  stability_weights(weights);
+  LatticeVerification() : config(scan_config()), buf(VoxelLayer::required_bytes(config)) {
+    REQUIRE(voxels.bind(buf.arena, config) == Status::Ok);
+    stability_weights(weights);
+  }
+  void build(const Cloud& scan) { REQUIRE(voxels.build(scan.view(), nullptr) == Status::Ok); }
+  static VoxelConfig scan_config() {
+    VoxelConfig c;
+    c.min_range = 0.0f;
+    return c;
+  }
+};
+
+}  // namespace
+
+TEST_CASE("Verification picks the true lattice shift given one distinguishing bush") {
+  LatticeVerification fixture;
+  const LatticeLayer& layer = fixture.layer;
+  VoxelLayer& voxels = fixture.voxels;
+  const float* weights = fixture.weights;
+  REQUIRE(layer.view.validate(kNumClasses) == Status::Ok);
+  const float sensor_x = 24.0f;
+  fixture.build(lattice_scan(sensor_x, true));
   auto score_at = [&](float x) {
     Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
     T.translation() = Eigen::Vector3d(x, 0, 0);
@@ -267,16 +286,11 @@ TEST_CASE("Verification picks the true lattice shift given one distinguishing bu
 }
 
 TEST_CASE("The pattern search's sample sizes: defaults as before, coarse to fine, and no re-score when it stays") {
-  LatticeLayer layer;
-  VoxelConfig vc;
-  vc.min_range = 0.0f;
-  ArenaBuffer buf(VoxelLayer::required_bytes(vc));
-  VoxelLayer voxels;
-  REQUIRE(voxels.bind(buf.arena, vc) == Status::Ok);
-  const Cloud scan = lattice_scan(24.0f, true);
-  REQUIRE(voxels.build(scan.view(), nullptr) == Status::Ok);
-  float weights[kNumClasses];
-  stability_weights(weights);
+  LatticeVerification fixture;
+  const LatticeLayer& layer = fixture.layer;
+  const VoxelLayer& voxels = fixture.voxels;
+  const float* weights = fixture.weights;
+  fixture.build(lattice_scan(24.0f, true));
   Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
   T.translation() = Eigen::Vector3d(24.3, 0.2, 0);  // a fraction of a metre off the truth
   Eigen::Isometry3d a, b, c;
@@ -341,25 +355,21 @@ bool same_bits(const PoseVerification& a, const PoseVerification& b) {
 }  // namespace
 
 TEST_CASE("Verification's fast paths (compact points, exact reciprocals) give the plain rule's scores bit for bit") {
-  LatticeLayer layer;
-  VoxelConfig vc;
-  vc.min_range = 0.0f;
-  ArenaBuffer buf(VoxelLayer::required_bytes(vc));
-  VoxelLayer voxels;
-  REQUIRE(voxels.bind(buf.arena, vc) == Status::Ok);
-  const Cloud scan = lattice_scan(24.0f, true);
-  REQUIRE(voxels.build(scan.view(), nullptr) == Status::Ok);
+  LatticeVerification fixture;
+  const LatticeLayer& layer = fixture.layer;
+  VoxelLayer& voxels = fixture.voxels;
+  const float* weights = fixture.weights;
+  fixture.build(lattice_scan(24.0f, true));
   std::vector<VerifyPoint> points(voxels.size());
   fill_verify_points(voxels, points.data());
-  float weights[kNumClasses];
-  stability_weights(weights);
   // 1 m cells in 16 m tiles (powers of two: the multiply path) and 0.85 m cells (the division path).
   SemanticGridView odd = layer.view;
   odd.cell = 0.85f;
   std::mt19937 rng(7);
   std::uniform_real_distribution<double> pos(-10.0, 70.0), yaw(-3.2, 3.2), frac(0.0, 1.0);
   uint32_t compared = 0, with_disagreement = 0;
-  for (const SemanticGridView* g : {&layer.view, &odd}) {
+  const SemanticGridView* grids[] = {&layer.view, &odd};
+  for (const SemanticGridView* g : grids) {
     for (int k = 0; k < 60; ++k) {
       Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
       // Half the poses on whole or half metres, where a voxel can sit exactly on a cell or tile edge.
