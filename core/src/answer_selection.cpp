@@ -95,6 +95,14 @@ void AnswerSelector::choose(PoseHypotheses& hyps, const VoxelLayer& voxels, cons
     return compact ? verify_pose(points_, nv, semantic, T, max_points, w)
                    : verify_pose(voxels, semantic, T, max_points, w);
   };
+  auto search = [&](const Eigen::Isometry3d& T, Eigen::Isometry3d* refined, const PoseVerification* at_start) {
+    return compact ? verify_pose_refined(points_, nv, semantic, T, vc.max_points, verify_weights_, vc.refine_rounds,
+                                         vc.refine_step_m, vc.refine_step_deg, refined, vc.search_divisor,
+                                         vc.polish_divisor, at_start)
+                   : verify_pose_refined(voxels, semantic, T, vc.max_points, verify_weights_, vc.refine_rounds,
+                                         vc.refine_step_m, vc.refine_step_deg, refined, vc.search_divisor,
+                                         vc.polish_divisor, at_start);
+  };
   if (verify) {
     // Coarse score for every hypothesis, the full score for the best `full_top`, then the best
     // `refine_top` at their best local alignment. Each step ranks, then caps.
@@ -111,13 +119,7 @@ void AnswerSelector::choose(PoseHypotheses& hyps, const VoxelLayer& voxels, cons
     for (uint32_t k = 0; k < nt; ++k) {
       refined_id_[k] = top[k];
       const PoseVerification full = hyps[top[k]].verification;  // verify_pose at max_points, just above
-      hyps[top[k]].verification =
-          compact ? verify_pose_refined(points_, nv, semantic, hyps[top[k]].map_T_scan, vc.max_points, verify_weights_,
-                                        vc.refine_rounds, vc.refine_step_m, vc.refine_step_deg, &refined_pose_[k],
-                                        vc.search_divisor, vc.polish_divisor, &full)
-                  : verify_pose_refined(voxels, semantic, hyps[top[k]].map_T_scan, vc.max_points, verify_weights_,
-                                        vc.refine_rounds, vc.refine_step_m, vc.refine_step_deg, &refined_pose_[k],
-                                        vc.search_divisor, vc.polish_divisor, &full);
+      hyps[top[k]].verification = search(hyps[top[k]].map_T_scan, &refined_pose_[k], &full);
     }
     // The answer, and as runner-up the best fully scored hypothesis at another place or heading: a
     // near-twin of the answer (within same_pose_m and same_pose_deg in the bird's-eye view the

@@ -30,8 +30,8 @@ Status PoseHypotheses::bind(Arena& ar, uint32_t n, uint32_t k) {
   bin_first_ = ar.allocate<uint32_t>(n);
   bin_weight_ = ar.allocate<float>(n);
   bin_count_ = ar.allocate<uint32_t>(n);
-  bin_smooth_ = ar.allocate<float>(n);
-  bin_smooth_count_ = ar.allocate<uint32_t>(n);
+  bin_support_ = ar.allocate<float>(n);
+  bin_rank_ = ar.allocate<uint8_t>(n);
   bin_begin_ = ar.allocate<uint32_t>(size_t(n) + 1);
   vote_t_ = ar.allocate<float>(size_t(n) * 2);
   if (ar.counting()) return Status::Ok;
@@ -57,11 +57,17 @@ uint32_t PoseHypotheses::rank_shift_bins(uint32_t bins, const float* w, const Hy
   // Support of each bin: the weight (and number) of votes within tls_threshold of the mean of its own
   // votes. The radius is below a bin (validate: tls_threshold <= shift_bin), so only the 3 x 3 bins
   // around it can hold them; keys are (kx << 21) | ky with both fields offset by 2^20.
+  // Rank classes: 2 for a bin with min_inliers supporting votes, 1 for one with min_inliers votes of
+  // its own but less support (kept for free slots: no bin the plain ranking offered is lost), 0 dropped.
+  // All supports first, then the compaction: it overwrites bins a later bin's neighbour search reads.
   const float r2 = c.tls_threshold * c.tls_threshold;
+  auto rank = [&](uint32_t k, uint32_t support_count) {
+    bin_rank_[k] = support_count >= c.min_inliers ? 2 : (bin_count_[k] >= c.min_inliers ? 1 : 0);
+  };
   for (uint32_t k = 0; k < bins; ++k) {
     if (!c.shift_vote_support) {
-      bin_smooth_[k] = bin_weight_[k];
-      bin_smooth_count_[k] = bin_count_[k];
+      bin_support_[k] = bin_weight_[k];
+      rank(k, bin_count_[k]);
       continue;
     }
     float mx = 0.0f, my = 0.0f;
@@ -90,19 +96,16 @@ uint32_t PoseHypotheses::rank_shift_bins(uint32_t bins, const float* w, const Hy
           ++sc;
         }
       }
-    bin_smooth_[k] = sw;
-    bin_smooth_count_[k] = sc;
+    bin_support_[k] = sw;
+    rank(k, sc);
   }
-  // Rank classes, compacted in key order: 2 for a bin with min_inliers supporting votes, 1 for one with
-  // min_inliers votes of its own but less support (kept for free slots: no bin the plain ranking
-  // offered is lost), 0 dropped.
   uint32_t kept = 0;
   for (uint32_t k = 0; k < bins; ++k) {
-    const uint32_t rank = bin_smooth_count_[k] >= c.min_inliers ? 2u : (bin_count_[k] >= c.min_inliers ? 1u : 0u);
-    if (rank == 0) continue;
+    if (bin_rank_[k] == 0) continue;
     bin_first_[kept] = bin_first_[k];
-    bin_weight_[kept] = bin_smooth_[k];
-    bin_count_[kept] = rank;
+    bin_weight_[kept] = bin_support_[k];
+    bin_count_[kept] = bin_count_[k];
+    bin_rank_[kept] = bin_rank_[k];
     ++kept;
   }
   return kept;
@@ -329,14 +332,15 @@ Status PoseHypotheses::generate(const float* a, const float* b, const float* w, 
     for (uint32_t taken = 0; taken < bins && count_ < stop; ++taken) {
       uint32_t best = taken;
       for (uint32_t k = taken + 1; k < bins; ++k)
-        if (bin_count_[k] > bin_count_[best] ||
-            (bin_count_[k] == bin_count_[best] &&
+        if (bin_rank_[k] > bin_rank_[best] ||
+            (bin_rank_[k] == bin_rank_[best] &&
              (bin_weight_[k] > bin_weight_[best] ||
               (bin_weight_[k] == bin_weight_[best] && vote_key_[bin_first_[k]] < vote_key_[bin_first_[best]]))))
           best = k;
       std::swap(bin_first_[taken], bin_first_[best]);
       std::swap(bin_weight_[taken], bin_weight_[best]);
       std::swap(bin_count_[taken], bin_count_[best]);
+      std::swap(bin_rank_[taken], bin_rank_[best]);
       // Translation-only fit under the heading R: a bin holds a few correspondences, too few (and
       // too collinear) to re-estimate roll and pitch; the heading comes from a whole clique.
       const uint32_t i0 = bin_first_[taken];

@@ -103,7 +103,7 @@ class PoseHypotheses {
 
  private:
   // Shift votes: from `bins` bins in key order (bin_first_, bin_weight_, bin_count_, bin_begin_) keeps,
-  // in key order, those with min_inliers supporting votes (bin_count_ 2) and the others with min_inliers
+  // in key order, those with min_inliers supporting votes (bin_rank_ 2) and the others with min_inliers
   // votes of their own (1), bin_weight_ then holding the support; returns how many.
   uint32_t rank_shift_bins(uint32_t bins, const float* w, const HypothesisConfig& config);
   ConsistencyGraph graph_;
@@ -117,15 +117,15 @@ class PoseHypotheses {
   float* tls_w_ = nullptr;
   uint8_t* mask_ = nullptr;
   PoseHypothesis* hyps_ = nullptr;
-  uint64_t* vote_key_ = nullptr;          // n: translation bin of each correspondence (shift votes)
-  uint32_t* vote_order_ = nullptr;        // n
-  uint32_t* bin_first_ = nullptr;         // n: a correspondence of each bin
-  float* bin_weight_ = nullptr;           // n: the bin's summed weight
-  uint32_t* bin_count_ = nullptr;         // n: the bin's correspondences
-  float* bin_smooth_ = nullptr;           // n: the bin's support (weight of the votes near its mean)
-  uint32_t* bin_smooth_count_ = nullptr;  // n: the supporting votes
-  uint32_t* bin_begin_ = nullptr;         // n + 1: a bin's votes are vote_order_[begin[k], begin[k + 1])
-  float* vote_t_ = nullptr;               // 2n: each correspondence's bird's-eye translation vote
+  uint64_t* vote_key_ = nullptr;    // n: translation bin of each correspondence (shift votes)
+  uint32_t* vote_order_ = nullptr;  // n
+  uint32_t* bin_first_ = nullptr;   // n: a correspondence of each bin
+  float* bin_weight_ = nullptr;     // n: the bin's summed weight
+  uint32_t* bin_count_ = nullptr;   // n: the bin's correspondences
+  float* bin_support_ = nullptr;    // n: the bin's support (weight of the votes near its mean)
+  uint8_t* bin_rank_ = nullptr;     // n: rank class (rank_shift_bins)
+  uint32_t* bin_begin_ = nullptr;   // n + 1: a bin's votes are vote_order_[begin[k], begin[k + 1])
+  float* vote_t_ = nullptr;         // 2n: each correspondence's bird's-eye translation vote
   uint32_t max_n_ = 0, max_h_ = 0, count_ = 0;
 };
 
