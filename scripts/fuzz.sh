@@ -1,14 +1,14 @@
 #!/usr/bin/env bash
 # Builds the libFuzzer targets (fuzz preset, clang) and runs each one.
 #   scripts/fuzz.sh            60 s per target (override with GSF_FUZZ_SECONDS)
-#   scripts/fuzz.sh --ci       the short CI run (GSF_FUZZ_SECONDS, default 30 s per target)
+#   scripts/fuzz.sh --ci       the short CI run (GSF_FUZZ_SECONDS, default 20 s per target)
 #   scripts/fuzz.sh NAME SECS  one target for a long run, e.g. scripts/fuzz.sh fuzz_map_loader 3600
 # New inputs go to fuzz/corpus-work/<target>/ (git-ignored); crashes to fuzz/crashes/ - copy each crash
 # into fuzz/corpus/<target>/ and add a regression test.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 secs=${GSF_FUZZ_SECONDS:-60}
-if [ "${1:-}" = "--ci" ]; then secs=${GSF_FUZZ_SECONDS:-30}; fi
+if [ "${1:-}" = "--ci" ]; then secs=${GSF_FUZZ_SECONDS:-20}; fi
 only=""
 if [ "${1:-}" = "--ci" ]; then shift; elif [ -n "${1:-}" ]; then only=$1; secs=${2:-$secs}; fi
 cmake --preset fuzz >/dev/null

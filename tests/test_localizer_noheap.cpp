@@ -1,5 +1,7 @@
-// Zero heap allocations over >= 1,000 localize calls after init (counting allocator).
+// Zero heap allocations over 1,000 localize calls after init (counting allocator); 200 under qemu.
 #include <catch2/catch.hpp>
+
+#include <cstdlib>
 
 #include "alloc_counter.h"
 #include "gsf/localizer.h"
@@ -12,19 +14,22 @@ TEST_CASE("localize() never allocates after init") {
   std::vector<uint64_t> ws(Localizer::required_bytes(w.config) / 8 + 2);
   Localizer loc;
   REQUIRE(loc.init(w.config, w.map, ws.data(), ws.size() * 8) == Status::Ok);
+  // Under qemu (the aarch64 test preset sets GSF_UNDER_EMULATOR) a call costs ~30x the host's: the same
+  // paths (every query of the world, GSF on and off) run fewer times there; the host runs all 1,000.
+  const uint32_t target = std::getenv("GSF_UNDER_EMULATOR") ? 200 : 1000;
   LocalizeResult r;
   uint32_t calls = 0, ok = 0;
   gsf_test::AllocationScope scope;
-  while (calls < 1000) {
+  while (calls < target) {
     for (const auto& q : w.queries) {
       loc.set_use_gsf(calls % 2 == 0);
       ok += loc.localize(q.view(), &r) == Status::Ok;
-      if (++calls >= 1000) break;
+      if (++calls >= target) break;
     }
   }
   CHECK(scope.allocations() == 0);
-  CHECK(calls == 1000);
-  CHECK(ok > 500);  // the calls did real work
+  CHECK(calls == target);
+  CHECK(ok > target / 2);  // the calls did real work
 }
 
 // The other paths: refinement on (the tiny world), a lattice whose queries run the shift votes,
