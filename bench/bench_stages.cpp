@@ -141,6 +141,7 @@ void digest(Fnv& f, const LocalizeResult& r) {
   f.add(r.clique_searches);
   f.add(r.hypotheses);
   f.add(r.chosen_hypothesis);
+  f.add(r.height_votes);
   f.add(r.verified);
   f.add(r.clique_nodes);
   f.add(r.field_probes);

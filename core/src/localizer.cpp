@@ -4,6 +4,7 @@
 #include <cmath>
 #include <new>
 
+#include "gsf/detail/answer_height.h"
 #include "gsf/detail/answer_selection.h"
 #include "gsf/detail/correspondence_set.h"
 #include "gsf/detail/fixed_vector.h"
@@ -55,8 +56,9 @@ struct Localizer::Impl {
   float* gather_xyz = nullptr;
   float* gather_targets = nullptr;
   uint8_t* gather_labels = nullptr;
-  float weights[kNumClasses];   // stability weights of the label set
-  uint32_t instance_count = 0;  // query instances of the last call
+  HeightSample* height_samples = nullptr;  // C: the answer height's scratch
+  float weights[kNumClasses];              // stability weights of the label set
+  uint32_t instance_count = 0;             // query instances of the last call
 
   // The stages of localize(), in order (defined below, each with its comment).
   Status build_voxels(const ScanView& scan, LocalizeResult& out);
@@ -69,6 +71,7 @@ struct Localizer::Impl {
   uint32_t select_correspondences(const LocalizerConfig& cfg, const MapView& map, LocalizeResult& out);
   Status generate_hypotheses(const LocalizerConfig& cfg, uint32_t C, LocalizeResult& out);
   void choose_answer(const LocalizerConfig& cfg, LocalizeResult& out);
+  void settle_height(const LocalizerConfig& cfg, uint32_t C, LocalizeResult& out);
   void refine_answer(LocalizeResult& out);
 };
 
@@ -123,6 +126,7 @@ Status Localizer::bind_workspace(Arena& ar, const LocalizerConfig& config, Impl&
   if (im.hypotheses.bind(ar, C, config.hypotheses.max_hypotheses) != Status::Ok) return Status::InvalidArgument;
   if (im.answer.bind(ar, config.verify.refine_top, config.voxel.max_voxels) != Status::Ok && !ar.counting())
     return Status::InvalidArgument;
+  im.height_samples = ar.allocate<HeightSample>(C);
   record(&b.clique);
   if (config.refine.enabled && im.refiner.bind(ar, config.refine) != Status::Ok) return Status::InvalidArgument;
   record(&b.refine);
@@ -400,6 +404,15 @@ void Localizer::Impl::choose_answer(const LocalizerConfig& cfg, LocalizeResult& 
   answer.choose(hypotheses, voxels, semantic, weights, cfg.hypotheses, cfg.verify, out);
 }
 
+// 9b. The answer's height from every correspondence it explains (answer_height.h): verification chose
+// x, y and yaw but cannot see height.
+void Localizer::Impl::settle_height(const LocalizerConfig& cfg, uint32_t C, LocalizeResult& out) {
+  if (!cfg.hypotheses.height_consensus) return;
+  out.height_votes =
+      consensus_height(correspondences.query_xyz(), correspondences.map_xyz(), correspondences.weights(), C,
+                       cfg.hypotheses.tls_threshold, cfg.hypotheses.min_inliers, height_samples, &out.map_T_scan);
+}
+
 // 10. Refinement against the map's point layer (accepted only within its correction limit).
 void Localizer::Impl::refine_answer(LocalizeResult& out) {
   Eigen::Isometry3d refined;
@@ -458,6 +471,7 @@ Status Localizer::localize(const ScanView& scan, LocalizeResult* out_ptr) {
   lap(&out.times.clique);  // with the correspondence selection
   if (s != Status::Ok) return finish(Status::NoSolution);
   im.choose_answer(cfg, out);
+  im.settle_height(cfg, C, out);
   lap(&out.times.pose);
   if (cfg.refine.enabled && map_.counts.refine_points > 0) {
     im.refine_answer(out);

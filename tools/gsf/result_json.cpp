@@ -65,6 +65,7 @@ void write_result_diagnostics(JsonWriter& j, const LocalizeResult& x, const Quer
   j.field("field_comparisons", x.field_comparisons);
   j.field("verified", x.verified);
   j.field("chosen_hypothesis", x.chosen_hypothesis);
+  j.field("height_votes", x.height_votes);
   if (truth) {
     j.field("true_correspondences", truth->true_correspondences);
     j.field("repeatable_instances", truth->repeatable_instances);

@@ -65,6 +65,11 @@ struct HypothesisConfig {
   // road's grade (<= ~10%, 5.7 deg) plus mounting; clique poses of few mid-height centroids came out
   // tilted 8-12 deg at the right place. 0 disables.
   float max_tilt_deg = 8.0f;
+  // 1: the answer's height is the weighted median vertical offset of every correspondence that the
+  // answer places within tls_threshold in x and y (answer_height.h), not its hypothesis's own (for a
+  // shift vote, the mean of a few votes, each as high as the part of a trunk the scan saw). 0: the
+  // hypothesis's height (before 2026-12-01).
+  uint32_t height_consensus = 1;
 };
 
 struct PoseHypothesis {
