@@ -136,6 +136,7 @@ void digest(Fnv& f, const LocalizeResult& r) {
   f.add(r.headings_kept);
   f.add(r.heading_dropped);
   f.add(r.candidate_pairs);
+  f.add(r.below_gate_matches);
   f.add(r.candidate_pairs_dropped);
   f.add(r.correspondences_dropped);
   f.add(r.clique_searches);

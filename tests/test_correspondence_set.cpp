@@ -109,3 +109,43 @@ TEST_CASE("A full candidate set refuses new pairs but still counts votes for kno
   CHECK(cs.selected() == 0);
   CHECK(cs.add(1, 100, 1.0f));  // room again after clear
 }
+
+TEST_CASE("Pairs below the GSF gate (tier 0) rank after every pair that passed, and only fill a short set") {
+  ArenaBuffer buf(CorrespondenceSet::required_bytes(64, 8));
+  CorrespondenceSet cs;
+  REQUIRE(cs.bind(buf.arena, 64, 8) == Status::Ok);
+  // Tier 1: (0,10) 1 vote x 0.4 and (1,11) 2 x 0.5. Tier 0: (2,12) 9 votes x 0.25, more support than
+  // either, and (3,13), (4,14), (5,15) one vote each at 0.2, 0.15, 0.1.
+  REQUIRE(cs.add(0, 10, 0.4f, 1));
+  REQUIRE(cs.add(1, 11, 0.5f, 1));
+  REQUIRE(cs.add(1, 11, 0.3f, 1));
+  for (int k = 0; k < 9; ++k) REQUIRE(cs.add(2, 12, 0.25f, 0));
+  REQUIRE(cs.add(3, 13, 0.2f, 0));
+  REQUIRE(cs.add(4, 14, 0.15f, 0));
+  REQUIRE(cs.add(5, 15, 0.1f, 0));
+  // A tier-0 vote on a tier-1 pair is ignored: its votes and weight stay the filter's.
+  REQUIRE(cs.add(0, 10, 0.9f, 0));
+  // A tier-1 vote on a tier-0 pair restarts it at tier 1: (5,15) now 1 vote x 0.45, above (0,10).
+  REQUIRE(cs.add(5, 15, 0.45f, 1));
+  CHECK(cs.candidates() == 6);
+  const float query[6 * 3] = {};
+  const auto map = map_instances(16);
+  // fill_to 4: the three tier-1 pairs, then one tier-0 pair (the best supported) to make four.
+  REQUIRE(cs.select(8, query, map.data(), 4) == 4);
+  CHECK(cs.selected_pair(0).query == 1);
+  CHECK(cs.selected_pair(1).query == 5);
+  CHECK(cs.selected_pair(1).votes == 1);
+  CHECK(cs.selected_pair(1).tier == 1);
+  CHECK(cs.selected_pair(2).query == 0);
+  CHECK(cs.selected_pair(2).weight == 0.4f);
+  CHECK(cs.selected_pair(2).votes == 1);
+  CHECK(cs.selected_pair(3).query == 2);
+  CHECK(cs.selected_pair(3).tier == 0);
+  // No filling (fill_to 0 or below the tier-1 count): the tier-1 pairs alone.
+  CHECK(cs.select(8, query, map.data(), 0) == 3);
+  CHECK(cs.select(8, query, map.data(), 2) == 3);
+  // A large fill_to takes every pair, still within max_selected.
+  CHECK(cs.select(8, query, map.data(), 100) == 6);
+  CHECK(cs.select(5, query, map.data(), 100) == 5);
+  CHECK(cs.selected_pair(4).query == 3);
+}

@@ -2,6 +2,7 @@
 // the repetitive zone, invariance to a rigid transform of the scan, determinism, hostile input.
 #include <catch2/catch.hpp>
 
+#include <algorithm>
 #include <array>
 #include <cmath>
 #include <cstdio>
@@ -90,6 +91,41 @@ void run_gsf_vs_instance(const LocalizerConfig& cfg, bool paper) {
   // Declining works: answers below the ambiguity threshold are right at least 90% of the time.
   CHECK(confident >= 4);
   CHECK(confident_right * 10 >= confident * 9);
+}
+
+// A gate that no match passes (omegas are at most 1) leaves only the fill below it (match.fill_pairs):
+// without the fill nothing reaches the clique; with it the queries still localize, from tier-0 pairs.
+TEST_CASE("Matches below the GSF gate fill a short pair set and still localize") {
+  const auto& w = tiny_world();
+  LocalizerConfig cfg = w.config;
+  cfg.match.min_similarity = 1.5f;
+  const size_t n = std::min<size_t>(16, w.queries.size());
+  int gated_ok = 0, filled_ok = 0;
+  for (uint32_t fill : {0u, 64u}) {
+    cfg.match.fill_pairs = fill;
+    Workspace ws(cfg);
+    Localizer loc;
+    REQUIRE(loc.init(cfg, w.map, ws.data(), ws.bytes()) == Status::Ok);
+    for (size_t k = 0; k < n; ++k) {
+      const auto& q = w.queries[k];
+      LocalizeResult r;
+      loc.localize(q.view(), &r);
+      CHECK(r.gsf_survivors == 0);
+      const bool ok = r.status == Status::Ok && gsf_test::pose_ok(r.map_T_scan, q.truth);
+      if (fill == 0) {
+        CHECK(r.status == Status::NoSolution);
+        CHECK(r.below_gate_matches == 0);
+        gated_ok += ok;
+      } else {
+        CHECK(r.correspondences <= 64);
+        if (r.query_triangles > 0 && r.triangle_matches > r.heading_dropped) CHECK(r.below_gate_matches > 0);
+        filled_ok += ok;
+      }
+    }
+  }
+  INFO("gate alone " << gated_ok << ", with the fill " << filled_ok << " of " << n);
+  CHECK(gated_ok == 0);
+  CHECK(filled_ok * 2 >= int(n));
 }
 
 TEST_CASE("A rigidly transformed scan gives the correspondingly transformed pose") {

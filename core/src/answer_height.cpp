@@ -4,8 +4,8 @@
 
 namespace gsf {
 
-uint32_t consensus_height(const float* a, const float* b, const float* w, uint32_t n, float radius,
-                          uint32_t min_count, HeightSample* scratch, Eigen::Isometry3d* T) {
+uint32_t consensus_height(const float* a, const float* b, const float* w, uint32_t n, float radius, uint32_t min_count,
+                          HeightSample* scratch, Eigen::Isometry3d* T) {
   if (!T || !scratch || n == 0 || !(radius > 0.0f)) return 0;
   const Eigen::Matrix3d R = T->linear();
   const Eigen::Vector3d t = T->translation();

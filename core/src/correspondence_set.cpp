@@ -27,7 +27,7 @@ void CorrespondenceSet::clear() {
   count_ = selected_ = 0;
 }
 
-bool CorrespondenceSet::add(uint32_t query, uint32_t map, float omega) {
+bool CorrespondenceSet::add(uint32_t query, uint32_t map, float omega, uint32_t tier) {
   const uint64_t key = (uint64_t(query) << 32) | map;
   bool inserted = false;
   // The index and the pair array share one capacity, so the index refuses a new key (nullptr) exactly
@@ -36,20 +36,23 @@ bool CorrespondenceSet::add(uint32_t query, uint32_t map, float omega) {
   if (!id || (inserted && count_ >= capacity_)) return false;
   if (inserted) {
     *id = count_;
-    pairs_[count_++] = CandidatePair{query, map, 0.0f, 0};
+    pairs_[count_++] = CandidatePair{query, map, 0.0f, 0, tier};
   }
   CandidatePair& c = pairs_[*id];
+  if (tier < c.tier) return true;
+  if (tier > c.tier) c = CandidatePair{query, map, 0.0f, 0, tier};
   c.weight = std::max(c.weight, omega);
   c.votes += 1;
   return true;
 }
 
 uint32_t CorrespondenceSet::select(uint32_t max_selected, const float* query_centroids,
-                                   const MapInstance* map_instances) {
+                                   const MapInstance* map_instances, uint32_t fill_to) {
   const uint32_t total = count_;
   for (uint32_t i = 0; i < total; ++i) order_[i] = i;
   const CandidatePair* acc = pairs_;
   std::sort(order_, order_ + total, [acc](uint32_t x, uint32_t y) {
+    if (acc[x].tier != acc[y].tier) return acc[x].tier > acc[y].tier;
     const float sx = acc[x].weight * float(acc[x].votes), sy = acc[y].weight * float(acc[y].votes);
     if (sx != sy) return sx > sy;
     const uint64_t hx = mix64((uint64_t(acc[x].query) << 32) | acc[x].map);
@@ -57,7 +60,13 @@ uint32_t CorrespondenceSet::select(uint32_t max_selected, const float* query_cen
     if (hx != hy) return hx < hy;
     return x < y;
   });
-  const uint32_t C = std::min({total, max_selected, max_selected_});
+  uint32_t C = std::min({total, max_selected, max_selected_});
+  // Tier-0 pairs (sorted last) only while fewer than fill_to pairs are kept.
+  for (uint32_t i = 0; i < C; ++i)
+    if (acc[order_[i]].tier == 0) {
+      C = std::max(i, std::min(C, fill_to));
+      break;
+    }
   for (uint32_t i = 0; i < C; ++i) {
     const CandidatePair& c = pairs_[order_[i]];
     for (int d = 0; d < 3; ++d) {

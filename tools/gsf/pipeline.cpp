@@ -43,6 +43,7 @@ bool apply_override(LocalizerConfig* c, const std::string& a, std::string* error
       {"gsf.covariance_weight", &c->gsf.covariance_weight, nullptr},
       {"gsf.yaw_bins", nullptr, &c->gsf.yaw_bins},
       {"match.min_similarity", &c->match.min_similarity, nullptr},
+      {"match.fill_pairs", nullptr, &c->match.fill_pairs},
       {"match.vertex_tie_tolerance", &c->match.vertex_tie_tolerance, nullptr},
       {"match.max_correspondences", nullptr, &c->match.max_correspondences},
       {"match.max_matches_per_triangle", nullptr, &c->match.max_matches_per_triangle},

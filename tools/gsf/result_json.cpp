@@ -53,6 +53,7 @@ void write_result_diagnostics(JsonWriter& j, const LocalizeResult& x, const Quer
   j.field("triangle_matches", x.triangle_matches);
   j.field("gsf_survivors", x.gsf_survivors);
   j.field("candidate_pairs", x.candidate_pairs);
+  j.field("below_gate_matches", x.below_gate_matches);
   j.field("candidate_pairs_dropped", x.candidate_pairs_dropped);
   j.field("correspondences", x.correspondences);
   j.field("correspondences_dropped", x.correspondences_dropped);

@@ -34,7 +34,12 @@ struct MatchConfig {
   // triangles' matches; matches at other headings are dropped and counted. 0 = off.
   uint32_t heading_bins = 6;
   uint32_t heading_sample_triangles = 256;
-  float min_similarity = 0.3f;         // with GSF: a triangle match survives if all three omegas reach this
+  float min_similarity = 0.3f;  // with GSF: a triangle match survives if all three omegas reach this
+  // When the surviving matches give fewer than fill_pairs pairs, the matches below min_similarity fill
+  // the set up to fill_pairs, ranked after every surviving pair (localizer.cpp, step 6). A far, sparsely
+  // seen instance's field compares poorly even with itself, and the gate then dropped every true match
+  // of an approach road's scan. 0: the gate alone (before 2026-12-01).
+  uint32_t fill_pairs = 64;
   uint32_t max_candidates = 24000;     // distinct (query, map) instance pairs accumulated (capacity)
   uint32_t max_correspondences = 512;  // vertices of the consistency graph (best by votes x weight)
   uint32_t max_field_points = 4096;    // semantic points gathered per query instance field

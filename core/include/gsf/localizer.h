@@ -66,6 +66,7 @@ struct LocalizeResult {
   uint32_t headings_kept = 0;            // yaw bins the heading votes let through (match.heading_bins)
   uint32_t heading_dropped = 0;          // kept matches whose heading was not among them
   uint32_t candidate_pairs = 0;          // distinct (query, map) instance pairs from surviving matches
+  uint32_t below_gate_matches = 0;       // matches below the GSF gate that filled a short pair set
   uint32_t candidate_pairs_dropped = 0;  // pairs refused because match.max_candidates was full
   uint32_t correspondences_dropped = 0;  // pairs ranked out by match.max_correspondences
   uint32_t clique_searches = 0;

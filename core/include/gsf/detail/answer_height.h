@@ -26,7 +26,7 @@ struct HeightSample {
 // a, b: n x 3 query / map positions, w: n weights (> 0); scratch: n samples. Sets T's z to the weighted
 // median offset of the correspondences within `radius` of T in x and y if there are at least min_count
 // of them, and returns how many there were; 0: T unchanged (fewer than min_count).
-uint32_t consensus_height(const float* a, const float* b, const float* w, uint32_t n, float radius,
-                          uint32_t min_count, HeightSample* scratch, Eigen::Isometry3d* T);
+uint32_t consensus_height(const float* a, const float* b, const float* w, uint32_t n, float radius, uint32_t min_count,
+                          HeightSample* scratch, Eigen::Isometry3d* T);
 
 }  // namespace gsf
