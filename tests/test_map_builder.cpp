@@ -6,6 +6,7 @@
 #include <catch2/catch.hpp>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstdio>
 #include <cstring>
@@ -16,10 +17,14 @@
 
 #include <unistd.h>
 
+#include "arena_buffer.h"
 #include "gsf/class_table.h"
+#include "gsf/detail/fixed_vector.h"
+#include "gsf/detail/triangle.h"
 #include "gsf/map_format.h"
 #include "mapping/map_builder.h"
 #include "mapping/map_writer.h"
+#include "mapping/scan_triangles.h"
 #include "tiny_world.h"
 
 using namespace gsf;
@@ -401,11 +406,13 @@ TEST_CASE("count_detections counts same-label detections within the radius, acro
 TEST_CASE("Map triangles join only instances the query stages find in enough mapping scans") {
   mapping::MapBuildConfig all = single_tile();
   all.triangle_min_detections = 0;
+  all.scan_triangles = 0;  // the apex-K triangles alone (the scans' views add their own, tested below)
   const Built full = build(all, Eigen::Vector3d::Zero());
   REQUIRE(full.build == Status::Ok);
   CHECK(full.stats.triangle_instances == full.stats.instances);
   mapping::MapBuildConfig some = single_tile();
   some.triangle_min_detections = 2;
+  some.scan_triangles = 0;
   const Built det = build(some, Eigen::Vector3d::Zero());
   REQUIRE(det.build == Status::Ok);
   // Same instances and fields; only the triangles' vertex set shrinks.
@@ -424,6 +431,94 @@ TEST_CASE("Map triangles join only instances the query stages find in enough map
   uint32_t vertices = 0;
   for (bool v : vertex) vertices += v;
   CHECK(vertices <= det.stats.triangle_instances);
+}
+
+TEST_CASE("nearest_instances picks the nearest same-label instance within the radius, across cell borders") {
+  const float c[12] = {0.9f, 0.9f, 0.0f, 2.2f, 0.9f, 0.0f, 10.0f, 10.0f, 0.0f, 0.9f, 0.9f, 0.0f};
+  const uint8_t lab[4] = {3, 3, 3, 4};
+  std::vector<mapping::ScanDetection> d(4);
+  const float at[4][2] = {{1.8f, 0.9f}, {1.4f, 0.9f}, {10.0f, 12.5f}, {1.0f, 1.0f}};
+  const uint8_t dl[4] = {3, 3, 3, 4};
+  for (int k = 0; k < 4; ++k) {
+    d[k].xyz[0] = at[k][0];
+    d[k].xyz[1] = at[k][1];
+    d[k].label = dl[k];
+  }
+  const std::vector<uint32_t> n = mapping::nearest_instances(c, lab, 4, d, 2.0f);
+  CHECK(n == std::vector<uint32_t>{1, 0, UINT32_MAX, 3});  // 0.4 vs 0.9 m; 0.5 vs 0.8 m; 2.5 m: none; label 4
+}
+
+TEST_CASE("Scan triangles: what the query's builder forms over each scan's instances, once, crowded keys left out") {
+  // Eight instances on a line 7 m apart (label 2) and one bush (label 5). Scan 0 sees 0-3 and the bush,
+  // scan 1 sees 4-7 (its detections list instance 5 twice and one unassociated detection).
+  std::vector<float> c;
+  std::vector<uint8_t> lab;
+  for (int i = 0; i < 8; ++i) {
+    c.insert(c.end(), {7.0f * i, 0.37f * i * i, 0.0f});
+    lab.push_back(2);
+  }
+  c.insert(c.end(), {9.0f, 6.0f, 0.0f});
+  lab.push_back(5);
+  const std::vector<uint32_t> det = {0, 1, 2, 3, 8, 4, 5, 5, UINT32_MAX, 6, 7};
+  const std::vector<uint32_t> begin = {0, 5, 11};
+  TriangleConfig query;
+  query.neighbours = 3;
+  std::vector<Triangle> tris;
+  mapping::ScanTriangleStats st;
+  REQUIRE(mapping::add_scan_triangles(c.data(), lab.data(), 9, det, begin, query, 0, &tris, &st) == Status::Ok);
+  // The reference: the query's own builder over each scan's instances.
+  auto reference = [&](const std::vector<uint32_t>& ids) {
+    std::vector<float> x;
+    std::vector<uint8_t> l;
+    for (uint32_t i : ids) {
+      x.insert(x.end(), {c[3 * i], c[3 * i + 1], c[3 * i + 2]});
+      l.push_back(lab[i]);
+    }
+    gsf_test::ArenaBuffer buf(TriangleBuilder::required_bytes(query, 16) + 64 * sizeof(Triangle) + 256);
+    TriangleBuilder b;
+    FixedVector<Triangle> out;
+    REQUIRE(b.bind(buf.arena, query, 16) == Status::Ok);
+    REQUIRE(out.bind(buf.arena, 64));
+    REQUIRE(b.build(x.data(), 3, l.data(), static_cast<uint32_t>(ids.size()), out) == Status::Ok);
+    std::vector<std::array<uint32_t, 3>> sets;
+    for (uint32_t t = 0; t < out.size(); ++t) {
+      std::array<uint32_t, 3> v = {ids[out[t].v[0]], ids[out[t].v[1]], ids[out[t].v[2]]};
+      std::sort(v.begin(), v.end());
+      sets.push_back(v);
+    }
+    return sets;
+  };
+  auto sets_of = [](const std::vector<Triangle>& ts) {
+    std::vector<std::array<uint32_t, 3>> sets;
+    for (const Triangle& t : ts) {
+      std::array<uint32_t, 3> v = {t.v[0], t.v[1], t.v[2]};
+      std::sort(v.begin(), v.end());
+      sets.push_back(v);
+    }
+    return sets;
+  };
+  std::vector<std::array<uint32_t, 3>> want = reference({0, 1, 2, 3, 8});
+  const auto second = reference({4, 5, 6, 7});
+  want.insert(want.end(), second.begin(), second.end());
+  REQUIRE(want.size() >= 6);
+  CHECK(sets_of(tris) == want);  // scan order, each scan's builder order
+  CHECK(st.scans == 2);
+  CHECK(st.added == want.size());
+  CHECK(st.largest_scan == 5);
+  // No vertex set twice: adding the same scans again adds nothing.
+  std::vector<Triangle> again = tris;
+  REQUIRE(mapping::add_scan_triangles(c.data(), lab.data(), 9, det, begin, query, 0, &again, &st) == Status::Ok);
+  CHECK(again.size() == tris.size());
+  CHECK(st.added == 0);
+  // A key shared by max_key_share triangles takes no more: with a share of 1 each key appears once.
+  std::vector<Triangle> sparse;
+  REQUIRE(mapping::add_scan_triangles(c.data(), lab.data(), 9, det, begin, query, 1, &sparse, &st) == Status::Ok);
+  std::vector<uint64_t> keys;
+  for (const Triangle& t : sparse) keys.push_back(triangle_key(t, query.side_bin));
+  std::sort(keys.begin(), keys.end());
+  CHECK(std::adjacent_find(keys.begin(), keys.end()) == keys.end());
+  CHECK(st.added + st.crowded == want.size());
+  CHECK(st.crowded > 0);
 }
 
 TEST_CASE("A triangle vertex needs min(min_detections, nearby scans) detections") {

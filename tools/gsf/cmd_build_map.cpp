@@ -37,6 +37,14 @@ int cmd_build_map(int argc, char** argv) {
        "triangles only among map instances the query's instance stages find in at least this many mapping scans "
        "(0: all instances; default: the library's MapBuildConfig)",
        ""},
+      {"scan-triangles",
+       "1: also the triangles a query would form at each mapping scan's pose (0: only each apex's nearest map "
+       "instances; default: the library's MapBuildConfig)",
+       ""},
+      {"scan-triangle-share",
+       "a scan triangle is left out when this many map triangles already have its index key (0: no limit; "
+       "default: the library's MapBuildConfig)",
+       ""},
       {"quiet", "no progress on stderr", "", true},
   };
   if (wants_help(argc, argv)) {
@@ -80,6 +88,18 @@ int cmd_build_map(int argc, char** argv) {
       if (end == md.c_str() || *end != '\0' || d < 0 || d > 1000000)
         return usage_error("build-map", "--triangle-min-detections must be a count >= 0, got '" + md + "'");
       options.triangle_min_detections = static_cast<uint32_t>(d);
+    }
+    const std::string sc = args.get("scan-triangles");
+    if (!sc.empty()) {
+      if (sc != "0" && sc != "1") return usage_error("build-map", "--scan-triangles must be 0 or 1, got '" + sc + "'");
+      options.scan_triangles = sc == "1" ? 1u : 0u;
+    }
+    const std::string share = args.get("scan-triangle-share");
+    if (!share.empty()) {
+      const long k = std::strtol(share.c_str(), &end, 10);
+      if (end == share.c_str() || *end != '\0' || k < 0 || k > 1000000)
+        return usage_error("build-map", "--scan-triangle-share must be a count >= 0, got '" + share + "'");
+      options.scan_triangle_max_key_share = static_cast<uint32_t>(k);
     }
   }
   MapGeoreference probe;
@@ -140,6 +160,11 @@ int cmd_build_map(int argc, char** argv) {
         "  triangles over %u of %u instances (found by the query stages in >= %u of the scans' %llu detections)\n",
         st.triangle_instances, st.instances, options.triangle_min_detections,
         static_cast<unsigned long long>(st.scan_detections));
+  if (options.scan_triangles)
+    std::printf(
+        "  %u of the triangles from the mapping scans' views (what a query there forms; %u more left out: "
+        "their key was crowded)\n",
+        st.scan_triangles, st.scan_triangles_crowded);
   std::printf("  origin %.3f, %.3f, %.3f m in frame '%s' (map coordinates are relative to it)\n", st.georef.origin[0],
               st.georef.origin[1], st.georef.origin[2], st.georef.frame);
   if (st.instances_dropped > 0 || st.field_points_dropped > 0 || st.scan_points_dropped > 0)

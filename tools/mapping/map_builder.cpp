@@ -18,6 +18,7 @@
 #include "gsf/map_format.h"
 #include "mapping/map_writer.h"
 #include "mapping/refine_layer_builder.h"
+#include "mapping/scan_triangles.h"
 #include "mapping/tiled_stages.h"
 
 #if defined(__GLIBC__)
@@ -63,7 +64,7 @@ MapBuilder::MapBuilder(const MapBuildConfig& config)
   for (int k = 0; k < 3; ++k) georef_.origin[k] = options_.origin[k];
   georef_valid_ = georef_valid_ && valid_georeference(georef_);
   origin_fixed_ = options_.origin_given;
-  if (options_.triangle_min_detections > 0)
+  if (options_.triangle_min_detections > 0 || options_.scan_triangles)
     detector_ok_ = detector_.init(config_, config_.voxel.max_voxels) == Status::Ok;
 }
 
@@ -91,9 +92,10 @@ Status MapBuilder::add_scan(const ScanView& scan, const Eigen::Isometry3d& frame
   s = layer.build(scan, &vst);
   if (s != Status::Ok && s != Status::CapacityExceeded) return s;
   stats_.scan_points_dropped += vst.dropped_points;
-  if (options_.triangle_min_detections > 0) {
+  if (options_.triangle_min_detections > 0 || options_.scan_triangles) {
     if (!detector_ok_) return Status::InvalidArgument;
     const size_t before = detections_.size();
+    scan_detection_begin_.push_back(static_cast<uint32_t>(before));
     s = detector_.detect(layer, map_T_lidar, &detections_);
     if (s != Status::Ok) return s;
     stats_.scan_detections += detections_.size() - before;
@@ -235,19 +237,36 @@ Status MapBuilder::build(MapSink& sink, size_t* bytes_out, MapBuildStats* stats_
     s = all_vertices ? tb.build(content.centroids.data(), 3, content.labels.data(), ni, tris)
                      : tb.build(vertex_xyz.data(), 3, vertex_labels.data(), nv, tris);
     if (s != Status::Ok) return s;
-    const uint32_t nt = tris.size();
+    std::vector<Triangle> all(tris.data(), tris.data() + tris.size());
+    std::vector<uint64_t>().swap(tws.memory);  // `tris` is copied to `all`
+    if (options_.scan_triangles && !detections_.empty()) {
+      // What a query at each mapping scan's pose would form (scan_triangles.h), over the same vertices.
+      const float* vx = all_vertices ? content.centroids.data() : vertex_xyz.data();
+      const uint8_t* vl = all_vertices ? content.labels.data() : vertex_labels.data();
+      const std::vector<uint32_t> nearest = nearest_instances(vx, vl, nv, detections_, options_.detection_radius);
+      std::vector<uint32_t> begin = scan_detection_begin_;
+      begin.push_back(static_cast<uint32_t>(detections_.size()));
+      ScanTriangleStats sts;
+      const size_t before = all.size();
+      s = add_scan_triangles(vx, vl, nv, nearest, begin, config_.triangle, options_.scan_triangle_max_key_share, &all,
+                             &sts);
+      if (s != Status::Ok) return s;
+      st.scan_triangles = static_cast<uint32_t>(all.size() - before);
+      st.scan_triangles_crowded = sts.crowded;
+    }
+    const uint32_t nt = static_cast<uint32_t>(all.size());
     if (!all_vertices)
       for (uint32_t t = 0; t < nt; ++t)
-        for (int k = 0; k < 3; ++k) tris[t].v[k] = vertex_ids[tris[t].v[k]];
+        for (int k = 0; k < 3; ++k) all[t].v[k] = vertex_ids[all[t].v[k]];
     // The map stores its triangles in index-key order (format v5), so a key's bucket is a contiguous run.
     std::vector<Triangle> sorted(nt + 1);
     std::vector<uint64_t> ikeys(nt + 1), scratch(nt + 1);
     std::vector<uint32_t> offsets(nt + 2), ids(nt + 1);
     uint32_t key_count = 0;
-    s = build_triangle_index(tris.data(), nt, tc.side_bin, sorted.data(), ikeys.data(), offsets.data(), &key_count,
+    s = build_triangle_index(all.data(), nt, tc.side_bin, sorted.data(), ikeys.data(), offsets.data(), &key_count,
                              scratch.data(), ids.data());
     if (s != Status::Ok) return s;
-    std::vector<uint64_t>().swap(tws.memory);  // `tris` (copied to `sorted`) is not read after this
+    std::vector<Triangle>().swap(all);  // copied to `sorted`, not read after this
     std::vector<uint32_t>().swap(ids);
     std::vector<uint64_t>().swap(scratch);
     st.triangles = nt;

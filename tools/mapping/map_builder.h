@@ -46,8 +46,10 @@ struct MapBuildStats {
   uint64_t scan_points_dropped = 0;   // scan points in voxels beyond scan_max_voxels, over all scans
   uint32_t instances_by_class[kNumClasses] = {};
   uint32_t triangles = 0;
-  uint32_t triangle_instances = 0;  // instances the triangles are built over (triangle_min_detections)
-  uint64_t scan_detections = 0;     // instances the query stages found in the mapping scans, summed
+  uint32_t triangle_instances = 0;      // instances the triangles are built over (triangle_min_detections)
+  uint64_t scan_detections = 0;         // instances the query stages found in the mapping scans, summed
+  uint32_t scan_triangles = 0;          // triangles added from the mapping scans' views (scan_triangles)
+  uint32_t scan_triangles_crowded = 0;  // ... not added: their key was crowded (scan_triangle_max_key_share)
   uint32_t index_keys = 0;
   uint32_t refine_points = 0;
   uint32_t refine_tiles = 0;
@@ -126,6 +128,15 @@ struct MapBuildConfig {
   uint32_t triangle_min_detections = 2;
   float detection_radius = 2.0f;
   float detection_range = 80.0f;  // m, a scan's range (the simulated and nuScenes sensors see about 80 m)
+  // 1: the map also holds the triangles a query would form at each mapping scan's pose, among the
+  // instances that scan's detections are (scan_triangles.h), with the query's K and side limits. 0: only
+  // the triangles among each apex's nearest map instances (TriangleConfig::map_k).
+  uint32_t scan_triangles = 1;
+  // ... except those whose index key this many map triangles already have (0: no limit): in a lattice
+  // a scan's triangle among identical columns is one more twin of many, which only crowds the true match
+  // out of the query's per-triangle cap (held-out lattice zone 95.9% without scan triangles, 90.5% with
+  // all of them, 94.9% at 8, 95.9% at 2; docs/results.md).
+  uint32_t scan_triangle_max_key_share = 2;
 };
 
 class MapBuilder {
@@ -160,8 +171,9 @@ class MapBuilder {
   std::vector<std::pair<uint64_t, uint32_t>> scan_order_;  // per scan voxel: map voxel key, index
   ScanDetector detector_;                                  // with triangle_min_detections > 0
   bool detector_ok_ = false;
-  std::vector<ScanDetection> detections_;      // every mapping scan's instances, map-local frame
-  std::vector<ScanDetection> scan_positions_;  // every mapping scan's position (label kAnyLabel)
+  std::vector<ScanDetection> detections_;       // every mapping scan's instances, map-local frame
+  std::vector<ScanDetection> scan_positions_;   // every mapping scan's position (label kAnyLabel)
+  std::vector<uint32_t> scan_detection_begin_;  // per scan: its first detection in detections_
 };
 
 }  // namespace gsf::mapping
