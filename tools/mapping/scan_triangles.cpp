@@ -30,7 +30,8 @@ std::vector<uint32_t> nearest_instances(const float* centroids, const uint8_t* l
     return (uint64_t(cx + (int64_t(1) << 31)) << 32) | uint32_t(cy + (1u << 31));
   };
   std::vector<std::pair<uint64_t, uint32_t>> idx(n);
-  for (uint32_t i = 0; i < n; ++i) idx[i] = {key(cell(centroids[3 * size_t(i)]), cell(centroids[3 * size_t(i) + 1])), i};
+  for (uint32_t i = 0; i < n; ++i)
+    idx[i] = {key(cell(centroids[3 * size_t(i)]), cell(centroids[3 * size_t(i) + 1])), i};
   std::sort(idx.begin(), idx.end());
   const float r2 = radius * radius;
   for (size_t k = 0; k < detections.size(); ++k) {
@@ -80,12 +81,14 @@ Status add_scan_triangles(const float* centroids, const uint8_t* labels, uint32_
   TriangleConfig tc = query;
   tc.map_neighbours = 0;
   tc.max_triangles = largest * tc.neighbours * (tc.neighbours - 1) / 2 + 16;
-  std::vector<uint64_t> memory((TriangleBuilder::required_bytes(tc, largest) + size_t(tc.max_triangles) * sizeof(Triangle)) / 8 + 64);
+  std::vector<uint64_t> memory(
+      (TriangleBuilder::required_bytes(tc, largest) + size_t(tc.max_triangles) * sizeof(Triangle)) / 8 + 64);
   void* base = reinterpret_cast<void*>((reinterpret_cast<uintptr_t>(memory.data()) + 15) & ~uintptr_t(15));
   Arena arena(base, memory.size() * 8 - 16);
   TriangleBuilder builder;
   FixedVector<Triangle> local;
-  if (builder.bind(arena, tc, largest) != Status::Ok || !local.bind(arena, tc.max_triangles)) return Status::InvalidArgument;
+  if (builder.bind(arena, tc, largest) != Status::Ok || !local.bind(arena, tc.max_triangles))
+    return Status::InvalidArgument;
   std::vector<float> xyz;
   std::vector<uint8_t> lab;
   for (size_t s = 0; s + 1 < scan_begin.size(); ++s) {

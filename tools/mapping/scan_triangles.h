@@ -24,11 +24,11 @@ std::vector<uint32_t> nearest_instances(const float* centroids, const uint8_t* l
                                         const std::vector<ScanDetection>& detections, float radius);
 
 struct ScanTriangleStats {
-  uint32_t scans = 0;           // scans with at least three associated instances
-  uint64_t formed = 0;          // triangles formed over all scans (before removing repeats)
-  uint32_t added = 0;           // distinct triangles not already in `existing`
-  uint32_t largest_scan = 0;    // most instances one scan saw
-  uint32_t crowded = 0;         // not added: max_key_share map triangles already had their key
+  uint32_t scans = 0;         // scans with at least three associated instances
+  uint64_t formed = 0;        // triangles formed over all scans (before removing repeats)
+  uint32_t added = 0;         // distinct triangles not already in `existing`
+  uint32_t largest_scan = 0;  // most instances one scan saw
+  uint32_t crowded = 0;       // not added: max_key_share map triangles already had their key
 };
 
 // Per scan s (its detections are [scan_begin[s], scan_begin[s + 1]) of `instance_of_detection`, which
