@@ -137,26 +137,9 @@ Status TriangleBuilder::build(const float* c, uint32_t stride, const uint8_t* la
         Triangle t =
             make_triangle(a, b, d, c + size_t(a) * stride, c + size_t(b) * stride, c + size_t(d) * stride, labels);
         if (!(t.side[0] >= config_.min_side && t.side[2] <= config_.max_side)) continue;
-        uint32_t s0 = a, s1 = b, s2 = d;  // sorted vertex set for dedup
-        if (s0 > s1) {
-          const uint32_t tmp = s0;
-          s0 = s1;
-          s1 = tmp;
-        }
-        if (s1 > s2) {
-          const uint32_t tmp = s1;
-          s1 = s2;
-          s2 = tmp;
-        }
-        if (s0 > s1) {
-          const uint32_t tmp = s0;
-          s0 = s1;
-          s1 = tmp;
-        }
         bool inserted = false;
         if (out.size() >= cap) return Status::CapacityExceeded;
-        if (!seen_.find_or_insert((uint64_t(s0) << 42) | (uint64_t(s1) << 21) | s2, &inserted))
-          return Status::CapacityExceeded;
+        if (!seen_.find_or_insert(triangle_vertex_set_key(a, b, d), &inserted)) return Status::CapacityExceeded;
         if (!inserted) continue;
         out.push_back(t);
       }

@@ -58,6 +58,27 @@ inline uint64_t triangle_key(const uint8_t* labels, uint32_t q0, uint32_t q1, ui
 // negative, not finite or quantises above kTriangleKeyMaxBin.
 uint64_t triangle_key(const Triangle& t, float side_bin);
 
+// The key of a triangle's vertex set (ids below 2^21, in any order): the same three instances give the
+// same key whichever triangle (or vertex order) they came from. The builder emits each set once by it.
+inline uint64_t triangle_vertex_set_key(uint32_t a, uint32_t b, uint32_t c) {
+  if (a > b) {
+    const uint32_t t = a;
+    a = b;
+    b = t;
+  }
+  if (b > c) {
+    const uint32_t t = b;
+    b = c;
+    c = t;
+  }
+  if (a > b) {
+    const uint32_t t = a;
+    a = b;
+    b = t;
+  }
+  return (uint64_t(a) << 42) | (uint64_t(b) << 21) | c;
+}
+
 // Canonical triangle of three instances (ids a, b, c with positions pa, pb, pc).
 Triangle make_triangle(uint32_t a, uint32_t b, uint32_t c, const float* pa, const float* pb, const float* pc,
                        const uint8_t* labels);
