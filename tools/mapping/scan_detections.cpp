@@ -55,29 +55,16 @@ std::vector<uint32_t> count_detections(const float* centroids, const uint8_t* la
                                        const std::vector<ScanDetection>& detections, float radius) {
   std::vector<uint32_t> count(n, 0);
   if (detections.empty() || !(radius > 0.0f)) return count;
-  // Detections sorted by (cell x, cell y) of `radius` cells; an instance looks in its 3 x 3 cells.
-  auto cell = [radius](float v) { return static_cast<int64_t>(std::floor(v / radius)); };
-  auto key = [](int64_t cx, int64_t cy) {
-    return (uint64_t(cx + (int64_t(1) << 31)) << 32) | uint32_t(cy + (1u << 31));
-  };
-  std::vector<std::pair<uint64_t, uint32_t>> idx(detections.size());
-  for (size_t i = 0; i < detections.size(); ++i)
-    idx[i] = {key(cell(detections[i].xyz[0]), cell(detections[i].xyz[1])), static_cast<uint32_t>(i)};
-  std::sort(idx.begin(), idx.end());
+  const CellIndex cells(detections.size(), radius,
+                        [&](size_t i) { return std::make_pair(detections[i].xyz[0], detections[i].xyz[1]); });
   const float r2 = radius * radius;
   for (uint32_t i = 0; i < n; ++i) {
     const float* c = centroids + 3 * size_t(i);
-    const int64_t cx = cell(c[0]), cy = cell(c[1]);
-    for (int64_t dx = -1; dx <= 1; ++dx)
-      for (int64_t dy = -1; dy <= 1; ++dy) {
-        const uint64_t k = key(cx + dx, cy + dy);
-        auto it = std::lower_bound(idx.begin(), idx.end(), std::make_pair(k, uint32_t(0)));
-        for (; it != idx.end() && it->first == k; ++it) {
-          const ScanDetection& d = detections[it->second];
-          const float ex = d.xyz[0] - c[0], ey = d.xyz[1] - c[1];
-          if ((d.label == kAnyLabel || d.label == labels[i]) && ex * ex + ey * ey <= r2) ++count[i];
-        }
-      }
+    cells.for_each_near(c[0], c[1], [&](uint32_t k) {
+      const ScanDetection& d = detections[k];
+      const float ex = d.xyz[0] - c[0], ey = d.xyz[1] - c[1];
+      if ((d.label == kAnyLabel || d.label == labels[i]) && ex * ex + ey * ey <= r2) ++count[i];
+    });
   }
   return count;
 }

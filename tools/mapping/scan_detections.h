@@ -9,7 +9,10 @@
 // among those (MapBuildConfig::triangle_min_detections). Host side; memory grows with the drive's
 // detections (about 40 per scan, 16 bytes each).
 #pragma once
+#include <algorithm>
+#include <cmath>
 #include <cstdint>
+#include <utility>
 #include <vector>
 
 #include <Eigen/Geometry>
@@ -47,6 +50,40 @@ class ScanDetector {
 
 // Label of a ScanDetection that stands for a mapping scan's position (count_detections matches any).
 constexpr uint8_t kAnyLabel = 0xFF;
+
+// Points in square bird's-eye cells of `cell` m, sorted by cell: a point within `cell` m of (x, y) is in
+// the 3 x 3 cells around it. `xy(i)` gives point i's (x, y).
+class CellIndex {
+ public:
+  template <class XY>
+  CellIndex(size_t n, float cell, XY xy) : cell_(cell), idx_(n) {
+    for (size_t i = 0; i < n; ++i) {
+      const std::pair<float, float> p = xy(i);
+      idx_[i] = {key(coord(p.first), coord(p.second)), static_cast<uint32_t>(i)};
+    }
+    std::sort(idx_.begin(), idx_.end());
+  }
+  // f(i) for every point i in the 3 x 3 cells around (x, y).
+  template <class F>
+  void for_each_near(float x, float y, F&& f) const {
+    const int64_t cx = coord(x), cy = coord(y);
+    for (int64_t dx = -1; dx <= 1; ++dx)
+      for (int64_t dy = -1; dy <= 1; ++dy) {
+        const uint64_t k = key(cx + dx, cy + dy);
+        for (auto it = std::lower_bound(idx_.begin(), idx_.end(), std::make_pair(k, uint32_t(0)));
+             it != idx_.end() && it->first == k; ++it)
+          f(it->second);
+      }
+  }
+
+ private:
+  int64_t coord(float v) const { return static_cast<int64_t>(std::floor(v / cell_)); }
+  static uint64_t key(int64_t cx, int64_t cy) {
+    return (uint64_t(cx + (int64_t(1) << 31)) << 32) | uint32_t(cy + (1u << 31));
+  }
+  float cell_;
+  std::vector<std::pair<uint64_t, uint32_t>> idx_;
+};
 
 // Per map instance (centroids xyz, labels), the number of detections within `radius` m (bird's-eye) of
 // its label (or of any label: kAnyLabel detections). Deterministic; O((instances + detections) log)

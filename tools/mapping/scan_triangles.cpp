@@ -1,7 +1,6 @@
 #include "mapping/scan_triangles.h"
 
 #include <algorithm>
-#include <cmath>
 #include <unordered_map>
 #include <unordered_set>
 
@@ -9,50 +8,25 @@
 #include "gsf/detail/fixed_vector.h"
 
 namespace gsf::mapping {
-namespace {
-
-uint64_t vertex_set_key(uint32_t a, uint32_t b, uint32_t c) {
-  if (a > b) std::swap(a, b);
-  if (b > c) std::swap(b, c);
-  if (a > b) std::swap(a, b);
-  return (uint64_t(a) << 42) | (uint64_t(b) << 21) | c;
-}
-
-}  // namespace
 
 std::vector<uint32_t> nearest_instances(const float* centroids, const uint8_t* labels, uint32_t n,
                                         const std::vector<ScanDetection>& detections, float radius) {
   std::vector<uint32_t> out(detections.size(), UINT32_MAX);
   if (n == 0 || !(radius > 0.0f)) return out;
-  // Instances sorted by (cell x, cell y) of `radius` cells; a detection looks in its 3 x 3 cells.
-  auto cell = [radius](float v) { return static_cast<int64_t>(std::floor(v / radius)); };
-  auto key = [](int64_t cx, int64_t cy) {
-    return (uint64_t(cx + (int64_t(1) << 31)) << 32) | uint32_t(cy + (1u << 31));
-  };
-  std::vector<std::pair<uint64_t, uint32_t>> idx(n);
-  for (uint32_t i = 0; i < n; ++i)
-    idx[i] = {key(cell(centroids[3 * size_t(i)]), cell(centroids[3 * size_t(i) + 1])), i};
-  std::sort(idx.begin(), idx.end());
+  const CellIndex cells(n, radius, [&](size_t i) { return std::make_pair(centroids[3 * i], centroids[3 * i + 1]); });
   const float r2 = radius * radius;
   for (size_t k = 0; k < detections.size(); ++k) {
     const ScanDetection& d = detections[k];
-    const int64_t cx = cell(d.xyz[0]), cy = cell(d.xyz[1]);
     float best = r2;
-    for (int64_t dx = -1; dx <= 1; ++dx)
-      for (int64_t dy = -1; dy <= 1; ++dy) {
-        const uint64_t kk = key(cx + dx, cy + dy);
-        for (auto it = std::lower_bound(idx.begin(), idx.end(), std::make_pair(kk, uint32_t(0)));
-             it != idx.end() && it->first == kk; ++it) {
-          const uint32_t i = it->second;
-          if (labels[i] != d.label) continue;
-          const float ex = centroids[3 * size_t(i)] - d.xyz[0], ey = centroids[3 * size_t(i) + 1] - d.xyz[1];
-          const float e2 = ex * ex + ey * ey;
-          if (e2 < best || (e2 == best && e2 <= r2 && i < out[k])) {
-            best = e2;
-            out[k] = i;
-          }
-        }
+    cells.for_each_near(d.xyz[0], d.xyz[1], [&](uint32_t i) {
+      if (labels[i] != d.label) return;
+      const float ex = centroids[3 * size_t(i)] - d.xyz[0], ey = centroids[3 * size_t(i) + 1] - d.xyz[1];
+      const float e2 = ex * ex + ey * ey;
+      if (e2 < best || (e2 == best && e2 <= r2 && i < out[k])) {
+        best = e2;
+        out[k] = i;
       }
+    });
   }
   return out;
 }
@@ -67,7 +41,7 @@ Status add_scan_triangles(const float* centroids, const uint8_t* labels, uint32_
   present.reserve(triangles->size() * 2 + 16);
   std::unordered_map<uint64_t, uint32_t> key_share;
   for (const Triangle& t : *triangles) {
-    present.insert(vertex_set_key(t.v[0], t.v[1], t.v[2]));
+    present.insert(triangle_vertex_set_key(t.v[0], t.v[1], t.v[2]));
     if (max_key_share > 0) ++key_share[triangle_key(t, query.side_bin)];
   }
   // The largest scan's instance count sizes one builder for all scans.
@@ -113,7 +87,7 @@ Status add_scan_triangles(const float* centroids, const uint8_t* labels, uint32_
     for (uint32_t t = 0; t < local.size(); ++t) {
       Triangle tri = local[t];
       for (int k = 0; k < 3; ++k) tri.v[k] = ids[tri.v[k]];
-      if (present.count(vertex_set_key(tri.v[0], tri.v[1], tri.v[2]))) continue;
+      if (present.count(triangle_vertex_set_key(tri.v[0], tri.v[1], tri.v[2]))) continue;
       if (max_key_share > 0) {
         uint32_t& share = key_share[triangle_key(tri, query.side_bin)];
         if (share >= max_key_share) {
@@ -122,7 +96,7 @@ Status add_scan_triangles(const float* centroids, const uint8_t* labels, uint32_
         }
         ++share;
       }
-      present.insert(vertex_set_key(tri.v[0], tri.v[1], tri.v[2]));
+      present.insert(triangle_vertex_set_key(tri.v[0], tri.v[1], tri.v[2]));
       triangles->push_back(tri);
       ++st.added;
     }
