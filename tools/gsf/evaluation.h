@@ -3,6 +3,7 @@
 // means over successes; times are per query. Also the declining curve: precision (correct among
 // answered) against the share answered, when answers are ranked by the localizer's ambiguity.
 #pragma once
+#include <array>
 #include <cstdint>
 #include <string>
 #include <vector>
@@ -52,6 +53,9 @@ struct QueryRecord {
   uint32_t repeatable_instances = 0;  // query instances with a same-label map instance < 2 m under the truth
   uint32_t true_correspondences = 0;  // selected correspondences the ground truth agrees with (< 2 m)
   double truth_verified_score = 0;    // the ground-truth pose's whole-scan verification score
+  // Per true correspondence: its GSF weight (best omega) and its query instance's range in m (the gate's
+  // evidence, bench/true_pair_omega.py).
+  std::vector<std::array<float, 2>> true_pairs;
 };
 
 struct CurvePoint {

@@ -71,6 +71,17 @@ void write_result_diagnostics(JsonWriter& j, const LocalizeResult& x, const Quer
     j.field("true_correspondences", truth->true_correspondences);
     j.field("repeatable_instances", truth->repeatable_instances);
     j.field("truth_verified_score", truth->truth_verified_score);
+    if (truth->true_pairs) {
+      j.key("true_pairs");  // [GSF weight, query instance range m] of each true selected correspondence
+      j.begin_array();
+      for (const auto& p : *truth->true_pairs) {
+        j.begin_array();
+        j.value(double(p[0]));
+        j.value(double(p[1]));
+        j.end_array();
+      }
+      j.end_array();
+    }
   }
   write_stage_ms(j, "stage_ms", stage_ms(x.times));
   j.key("hypotheses");

@@ -37,6 +37,7 @@ void write_diagnostics(JsonWriter& j, const QueryRecord& r) {
   t.true_correspondences = r.true_correspondences;
   t.repeatable_instances = r.repeatable_instances;
   t.truth_verified_score = r.truth_verified_score;
+  t.true_pairs = &r.true_pairs;
   write_result_diagnostics(j, r.result, &t);
 }
 
@@ -306,7 +307,9 @@ int run_evaluation(const EvalOptions& o) {
         const Eigen::Vector3d qw =
             truth_local * Eigen::Vector3d(corr[k].query_xyz[0], corr[k].query_xyz[1], corr[k].query_xyz[2]);
         const float* m = map.instances[corr[k].map_instance].centroid;
-        if ((qw - Eigen::Vector3d(m[0], m[1], m[2])).norm() < 2.0) ++r.true_correspondences;
+        if ((qw - Eigen::Vector3d(m[0], m[1], m[2])).norm() >= 2.0) continue;
+        ++r.true_correspondences;
+        r.true_pairs.push_back({corr[k].weight, std::hypot(corr[k].query_xyz[0], corr[k].query_xyz[1])});
       }
       {
         float qxyz[3 * 1024];
