@@ -221,6 +221,54 @@ TEST_CASE("Tolerance joins and splits; classes never mix; size and extent rules 
   CHECK(t.clusters.instance(0).label == kPole);
 }
 
+TEST_CASE("A far pole hit by every few beams is one instance across the vertical gaps; a larger gap splits it") {
+  // A pole 40 m away seen by beams 1 deg apart: one voxel every 0.7 m of its height, two points each.
+  auto sparse_pole = [](Cloud& c, float x, float y, float z0, int beams, int obj) {
+    for (int k = 0; k < beams; ++k)
+      for (int p = 0; p < 2; ++p) c.add(x + 0.05f * p, y, z0 + 0.7f * k, 80u, obj);
+  };
+  Cloud one, split, side_by_side;
+  sparse_pole(one, 40.0f, 0.0f, -1.2f, 6, 0);
+  Scene s{VoxelConfig(), ClusterConfig()};
+  REQUIRE(ClusterConfig().vertical_tolerance[kPole] == 2.0f);
+  REQUIRE(s.run(one) == Status::Ok);
+  REQUIRE(s.clusters.size() == 1);
+  double m[3], d = 0;
+  one.mean(0, m);
+  REQUIRE(s.nearest(kPole, m, &d) == 0);
+  CHECK(d < 1e-3);
+  CHECK(s.clusters.instance(0).voxel_count == 6);
+
+  // The same pole with the spherical tolerance alone falls apart into six one-voxel pieces, all too small.
+  ClusterConfig spherical;
+  spherical.vertical_tolerance[kPole] = 0.0f;
+  Scene t{VoxelConfig(), spherical};
+  REQUIRE(t.run(one) == Status::Ok);
+  CHECK(t.clusters.size() == 0);
+  CHECK(t.cs.components == 6);
+  CHECK(t.cs.rejected_small == 6);
+
+  // A 2.8 m gap (four beams missing, e.g. a van in front) is beyond 2 m: two instances.
+  sparse_pole(split, 40.0f, 0.0f, -1.2f, 3, 0);
+  sparse_pole(split, 40.0f, 0.0f, 3.0f, 3, 1);
+  REQUIRE(s.run(split) == Status::Ok);
+  CHECK(s.clusters.size() == 2);
+  // Across, the tolerance stays 0.6 m: two poles 1 m apart stay two.
+  sparse_pole(side_by_side, 40.0f, 0.0f, -1.2f, 6, 0);
+  sparse_pole(side_by_side, 40.0f, 1.0f, -1.2f, 6, 1);
+  REQUIRE(s.run(side_by_side) == Status::Ok);
+  CHECK(s.clusters.size() == 2);
+
+  // A negative or huge vertical tolerance is refused at bind.
+  ClusterConfig bad;
+  bad.vertical_tolerance[kTrunk] = -1.0f;
+  ArenaBuffer buf(InstanceClustering::required_bytes(ClusterConfig(), 1000));
+  InstanceClustering c;
+  CHECK(c.bind(buf.arena, bad, 1000) == Status::InvalidArgument);
+  bad.vertical_tolerance[kTrunk] = 10.0f;
+  CHECK(c.bind(buf.arena, bad, 1000) == Status::InvalidArgument);
+}
+
 TEST_CASE("Instance overflow keeps the largest by point count, deterministically; the next scan is fine") {
   ClusterConfig cc;
   cc.max_instances = 5;

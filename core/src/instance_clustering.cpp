@@ -13,7 +13,8 @@ Status InstanceClustering::bind(Arena& arena, const ClusterConfig& config, uint3
   bound_ = false;
   if (config.max_instances == 0 || max_voxels == 0) return Status::InvalidArgument;
   for (int c = 0; c < kNumClasses; ++c)
-    if (!(config.tolerance[c] > 0.0f && config.tolerance[c] < 10.0f) || !(config.max_extent[c] > 0.0f))
+    if (!(config.tolerance[c] > 0.0f && config.tolerance[c] < 10.0f) || !(config.max_extent[c] > 0.0f) ||
+        !(config.vertical_tolerance[c] >= 0.0f && config.vertical_tolerance[c] < 10.0f))
       return Status::InvalidArgument;
   config_ = config;
   max_voxels_ = max_voxels;
@@ -48,6 +49,10 @@ Status InstanceClustering::build(const VoxelLayer& layer, ClusterStats* stats_ou
     const float tol = config_.tolerance[label];
     const float tol2 = tol * tol;
     const int32_t reach = static_cast<int32_t>(std::ceil(tol / vs));
+    // A vertical tolerance above tol: a cylinder (tol across, vtol up and down) instead of the sphere.
+    const float vtol = config_.vertical_tolerance[label];
+    const bool cylinder = vtol > tol;
+    const int32_t reach_z = cylinder ? static_cast<int32_t>(std::ceil(vtol / vs)) : reach;
     uint32_t head = 0, tail = 0;
     queue_[tail++] = seed;
     voxel_instance_[seed] = comp;
@@ -57,13 +62,14 @@ Status InstanceClustering::build(const VoxelLayer& layer, ClusterStats* stats_ou
       if (!layer.cell_of(vox[v].centroid, c)) continue;
       for (int32_t dx = -reach; dx <= reach; ++dx)
         for (int32_t dy = -reach; dy <= reach; ++dy)
-          for (int32_t dz = -reach; dz <= reach; ++dz) {
+          for (int32_t dz = -reach_z; dz <= reach_z; ++dz) {
             const uint32_t u = layer.find_cell(c[0] + dx, c[1] + dy, c[2] + dz);
             if (u == UINT32_MAX || voxel_instance_[u] != UINT32_MAX || vox[u].label != label) continue;
             const float ex = vox[u].centroid[0] - vox[v].centroid[0];
             const float ey = vox[u].centroid[1] - vox[v].centroid[1];
             const float ez = vox[u].centroid[2] - vox[v].centroid[2];
-            if (ex * ex + ey * ey + ez * ez > tol2) continue;
+            if (cylinder ? (ex * ex + ey * ey > tol2 || std::fabs(ez) > vtol) : (ex * ex + ey * ey + ez * ez > tol2))
+              continue;
             voxel_instance_[u] = comp;
             queue_[tail++] = u;  // each voxel enters once: tail <= n
           }

@@ -36,7 +36,10 @@ bool apply_override(LocalizerConfig* c, const std::string& a, std::string* error
     uint32_t* u;
   };
   uint32_t verify_enabled = c->verify.enabled ? 1 : 0;
+  // One value for the thin vertical classes (instance_clustering.h).
+  float thin_vertical_tolerance = c->cluster.vertical_tolerance[kPole];
   const F fields[] = {
+      {"cluster.vertical_tolerance", &thin_vertical_tolerance, nullptr},
       {"gsf.tau", &c->gsf.tau, nullptr},
       {"gsf.observed_variance", &c->gsf.observed_variance, nullptr},
       {"gsf.normalize_mass", &c->gsf.normalize_mass, nullptr},
@@ -86,6 +89,8 @@ bool apply_override(LocalizerConfig* c, const std::string& a, std::string* error
       {"field.grid_nx", nullptr, &c->field.grid_nx},
       {"field.grid_ny", nullptr, &c->field.grid_ny},
       {"triangle.relative_side_tolerance", &c->triangle.relative_side_tolerance, nullptr},
+      {"triangle.max_side", &c->triangle.max_side, nullptr},
+      {"triangle.min_side", &c->triangle.min_side, nullptr},
       {"triangle.neighbours", nullptr, &c->triangle.neighbours},
       {"triangle.map_neighbours", nullptr, &c->triangle.map_neighbours},
       {"voxel.voxel_size", &c->voxel.voxel_size, nullptr},
@@ -98,6 +103,8 @@ bool apply_override(LocalizerConfig* c, const std::string& a, std::string* error
         return false;
       } else *f.u = static_cast<uint32_t>(x);
       c->verify.enabled = verify_enabled != 0;
+      if (k == "cluster.vertical_tolerance")
+        for (int cls : {kPole, kTrunk, kTrafficSign}) c->cluster.vertical_tolerance[cls] = thin_vertical_tolerance;
       return true;
     }
   *error = "unknown config name '" + k + "'";
