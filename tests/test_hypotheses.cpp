@@ -578,3 +578,59 @@ TEST_CASE("Shift votes rank bins by their support: a translation split across a 
   cfg.hypotheses.tls_threshold = 2.5f;  // a support radius beyond the 3 x 3 bins searched
   CHECK(validate(cfg) == Status::InvalidArgument);
 }
+
+TEST_CASE("Shift votes over the pairs ranked out of the graph find the true shift the graph holds one pair of") {
+  // The graph's pairs: a clique of 8 at translation (100, 50), six lattice shifts with 3 pairs each, and
+  // one pair of the truth (160, 51). Ranked after them, outside the graph: 5 more pairs of the truth and
+  // 2 more of one lattice shift. In a lattice the graph's cap keeps a few true pairs of many.
+  std::vector<float> a, b;
+  auto add = [&](float x, float y, float z, float tx, float ty) {
+    a.insert(a.end(), {x, y, z});
+    b.insert(b.end(), {x + tx, y + ty, z});
+  };
+  const float clique_pts[8][2] = {{3, 1}, {-7, 4}, {12, -5}, {-2, -14}, {18, 9}, {-15, -3}, {6, 11}, {-11, 7}};
+  for (const auto& p : clique_pts) add(p[0], p[1], 0.5f, 100.0f, 50.0f);
+  float x = 30.0f;
+  for (int k = 1; k <= 6; ++k)
+    for (int j = 0; j < 3; ++j, x += 1.7f) add(x, -20.0f + 3.0f * j, 1.0f, 100.0f + 8.0f * k + 1.0f, 50.5f);
+  add(x, 25.0f, 1.0f, 160.0f, 51.0f);
+  const uint32_t n = static_cast<uint32_t>(a.size() / 3);
+  const float truth_dx[5] = {0.1f, -0.1f, 0.05f, -0.05f, 0.0f};
+  for (int j = 0; j < 5; ++j) add(x + 2.0f + 1.9f * j, 27.0f + 2.0f * j, 1.0f, 160.0f + truth_dx[j], 51.0f);
+  for (int j = 0; j < 2; ++j) add(x - 12.0f + 2.3f * j, -30.0f, 1.0f, 100.0f + 8.0f + 1.0f, 50.5f);
+  const uint32_t total = static_cast<uint32_t>(a.size() / 3);
+  std::vector<float> w(total, 1.0f);
+  HypothesisConfig hc;
+  hc.max_peeled = 1;
+  hc.heading_cliques = 0;
+  hc.max_hypotheses = 3;  // the clique and the two best shift bins
+  ArenaBuffer buf(PoseHypotheses::required_bytes(64, 8, 128));
+  PoseHypotheses hyp;
+  REQUIRE(hyp.bind(buf.arena, 64, 8, 128) == Status::Ok);
+  auto find_translation = [&](double tx, double ty) {
+    for (uint32_t h = 0; h < hyp.size(); ++h)
+      if ((hyp[h].map_T_scan.translation().head<2>() - Eigen::Vector2d(tx, ty)).norm() < 0.2) return int(h);
+    return -1;
+  };
+  HypothesisStats st;
+  // The graph's pairs alone: the truth has one vote, below min_inliers.
+  REQUIRE(hyp.generate(a.data(), b.data(), w.data(), n, hc, &st) == Status::Ok);
+  CHECK(st.vote_pairs == n);
+  CHECK(find_translation(100, 50) == 0);
+  CHECK(find_translation(160, 51) < 0);
+  // All of them: the truth's 6 pairs make the best shift bin, fitted on its own votes only (translation
+  // the mean of the six, exactly), and the cliques are unchanged.
+  REQUIRE(hyp.generate(a.data(), b.data(), w.data(), n, hc, &st, total) == Status::Ok);
+  CHECK(st.vote_pairs == total);
+  CHECK(find_translation(100, 50) == 0);
+  const int h = find_translation(160, 51);
+  REQUIRE(h == 1);
+  CHECK(hyp[uint32_t(h)].inliers == 6);
+  CHECK(std::fabs(hyp[uint32_t(h)].map_T_scan.translation().x() - 160.0) < 1e-4);
+  CHECK(hyp[uint32_t(h)].clique_size == 0);
+  // More votes than bound, or a graph larger than the votes' capacity: refused, nothing kept.
+  CHECK(hyp.generate(a.data(), b.data(), w.data(), n, hc, &st, 129) == Status::CapacityExceeded);
+  ArenaBuffer small(PoseHypotheses::required_bytes(64, 8, 128));
+  PoseHypotheses bad;
+  CHECK(bad.bind(small.arena, 64, 8, 32) == Status::InvalidArgument);
+}

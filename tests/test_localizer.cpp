@@ -323,13 +323,23 @@ TEST_CASE("The per-stage budget is the layout itself: its parts sum to required_
       CHECK(stage > 0);
     CHECK((b.refine > 0) == refine);
     // Growing one stage's capacity grows that stage's part and nothing else.
+    // The graph's capacity grows the clique stage; the selection holds the shift votes' pairs, which
+    // are more than the graph's, so it grows with those.
     LocalizerConfig more = cfg;
     more.match.max_correspondences *= 2;
+    REQUIRE(more.hypotheses.shift_vote_pairs > more.match.max_correspondences);
     const Localizer::Budget m = Localizer::budget(more);
-    CHECK(m.correspondence > b.correspondence);
+    CHECK(m.correspondence == b.correspondence);
     CHECK(m.clique > b.clique);
     CHECK(m.voxel == b.voxel);
     CHECK(m.total == Localizer::required_bytes(more));
+    LocalizerConfig votes = cfg;
+    votes.hypotheses.shift_vote_pairs *= 2;
+    const Localizer::Budget v = Localizer::budget(votes);
+    CHECK(v.correspondence > b.correspondence);
+    CHECK(v.clique > b.clique);
+    CHECK(v.voxel == b.voxel);
+    CHECK(v.total == Localizer::required_bytes(votes));
   }
   LocalizerConfig bad;
   bad.match.max_correspondences = 1;

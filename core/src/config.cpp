@@ -26,7 +26,8 @@ Status validate(const LocalizerConfig& c) {
       h.max_iterations == 0 || !(h.same_pose_m >= 0) || !(h.same_pose_deg >= 0) ||
       !(h.heading_separation_deg > 0.0f && h.heading_separation_deg < 90.0f) || h.max_peeled == 0 ||
       !(h.shift_bin > 0) || !(h.max_tilt_deg >= 0 && h.max_tilt_deg <= 180) || h.shift_vote_support > 1 ||
-      (h.shift_vote_support && h.tls_threshold > h.shift_bin) || h.height_consensus > 1)
+      (h.shift_vote_support && h.tls_threshold > h.shift_bin) || h.height_consensus > 1 ||
+      h.shift_vote_pairs > (1u << 20))
     return Status::InvalidArgument;
   if (c.verify.max_points == 0 || !(c.verify.margin_scale > 0) || !(c.verify.quality_high > c.verify.quality_low) ||
       c.verify.refine_top > 64 || c.verify.coarse_divisor == 0 || c.verify.search_divisor == 0 ||

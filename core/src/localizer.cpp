@@ -56,9 +56,10 @@ struct Localizer::Impl {
   float* gather_xyz = nullptr;
   float* gather_targets = nullptr;
   uint8_t* gather_labels = nullptr;
-  HeightSample* height_samples = nullptr;  // C: the answer height's scratch
-  float weights[kNumClasses];              // stability weights of the label set
-  uint32_t instance_count = 0;             // query instances of the last call
+  HeightSample* height_samples = nullptr;    // C: the answer height's scratch
+  float weights[kNumClasses];                // stability weights of the label set
+  uint32_t instance_count = 0;               // query instances of the last call
+  uint32_t vote_pairs = 0, graph_pairs = 0;  // selected pairs: for the shift votes, of them for the graph
 
   // The stages of localize(), in order (defined below, each with its comment).
   Status build_voxels(const ScanView& scan, LocalizeResult& out);
@@ -80,6 +81,7 @@ struct Localizer::Impl {
 Status Localizer::bind_workspace(Arena& ar, const LocalizerConfig& config, Impl& im, Budget* parts) {
   const uint32_t I = config.cluster.max_instances, M = config.field.inducing_points;
   const uint32_t C = config.match.max_correspondences, P = config.match.max_field_points;
+  const uint32_t V = std::max(C, config.hypotheses.shift_vote_pairs);  // pairs the shift votes see
   Budget b{};
   size_t mark = ar.used();
   auto record = [&](size_t* field) {
@@ -120,10 +122,10 @@ Status Localizer::bind_workspace(Arena& ar, const LocalizerConfig& config, Impl&
   if (im.gsf.bind(ar, config.gsf, config.field, &im.solver) != Status::Ok && !ar.counting())
     return Status::InvalidArgument;
   record(&b.gsf_cache);
-  if (im.correspondences.bind(ar, config.match.max_candidates, C) != Status::Ok && !ar.counting())
+  if (im.correspondences.bind(ar, config.match.max_candidates, V) != Status::Ok && !ar.counting())
     return Status::InvalidArgument;
   record(&b.correspondence);
-  if (im.hypotheses.bind(ar, C, config.hypotheses.max_hypotheses) != Status::Ok) return Status::InvalidArgument;
+  if (im.hypotheses.bind(ar, C, config.hypotheses.max_hypotheses, V) != Status::Ok) return Status::InvalidArgument;
   if (im.answer.bind(ar, config.verify.refine_top, config.voxel.max_voxels) != Status::Ok && !ar.counting())
     return Status::InvalidArgument;
   im.height_samples = ar.allocate<HeightSample>(C);
@@ -390,14 +392,19 @@ void Localizer::Impl::match_and_filter(const LocalizerConfig& cfg, const MapView
     out.capacity_truncated = true;
 }
 
-// 7. Keep the best-supported correspondences up to the clique capacity (correspondence_set.h).
+// 7. Keep the best-supported correspondences up to the clique capacity (correspondence_set.h), and the
+// next ones by the same ranking up to hypotheses.shift_vote_pairs for the shift votes.
 uint32_t Localizer::Impl::select_correspondences(const LocalizerConfig& cfg, const MapView& map, LocalizeResult& out) {
   const uint32_t total = correspondences.candidates();
-  const uint32_t C =
-      correspondences.select(cfg.match.max_correspondences, centroids, map.instances, cfg.match.fill_pairs);
+  const uint32_t V = std::max(cfg.match.max_correspondences, cfg.hypotheses.shift_vote_pairs);
+  vote_pairs = correspondences.select(V, centroids, map.instances, cfg.match.fill_pairs);
+  const uint32_t C = std::min(vote_pairs, cfg.match.max_correspondences);
   out.correspondences_dropped = total - C;
+  out.vote_pairs = vote_pairs;
+  out.vote_pairs_dropped = total - vote_pairs;
   if (total > C) out.capacity_truncated = true;
   out.correspondences = C;
+  graph_pairs = C;
   return C;
 }
 
@@ -405,7 +412,7 @@ uint32_t Localizer::Impl::select_correspondences(const LocalizerConfig& cfg, con
 Status Localizer::Impl::generate_hypotheses(const LocalizerConfig& cfg, uint32_t C, LocalizeResult& out) {
   HypothesisStats hs;
   const Status s = hypotheses.generate(correspondences.query_xyz(), correspondences.map_xyz(),
-                                       correspondences.weights(), C, cfg.hypotheses, &hs);
+                                       correspondences.weights(), C, cfg.hypotheses, &hs, vote_pairs);
   out.clique_nodes = hs.nodes;
   out.clique_searches = hs.searches;
   out.budget_exhausted = hs.budget_exhausted;
@@ -448,6 +455,7 @@ Status Localizer::localize(const ScanView& scan, LocalizeResult* out_ptr) {
   im.correspondences.forget_selection();  // match_and_filter clears the candidates
   im.answer.forget();
   im.instance_count = 0;
+  im.vote_pairs = im.graph_pairs = 0;
   const uint64_t t_start = now(clock_);
   uint64_t t = t_start;
   auto lap = [&](uint64_t* field) {
@@ -516,7 +524,7 @@ uint32_t Localizer::last_correspondences(Correspondence* out, uint32_t max) cons
   const Impl& im = *impl_;
   const CorrespondenceSet& cs = im.correspondences;
   const uint32_t chosen = im.answer.chosen();
-  for (uint32_t i = 0; i < cs.selected() && i < max; ++i) {
+  for (uint32_t i = 0; i < im.graph_pairs && i < max; ++i) {
     const CandidatePair& c = cs.selected_pair(i);
     out[i].query_instance = c.query;
     out[i].map_instance = c.map;
@@ -524,7 +532,7 @@ uint32_t Localizer::last_correspondences(Correspondence* out, uint32_t max) cons
     out[i].weight = c.weight;
     out[i].in_clique = chosen != UINT32_MAX && im.hypotheses.in_clique(chosen, i);
   }
-  return cs.selected();
+  return im.graph_pairs;
 }
 
 }  // namespace gsf

@@ -8,38 +8,54 @@
 
 namespace gsf {
 
-size_t PoseHypotheses::required_bytes(uint32_t max_correspondences, uint32_t max_hypotheses) {
-  return counted_bytes<PoseHypotheses>(max_correspondences, max_hypotheses);
+size_t PoseHypotheses::required_bytes(uint32_t max_correspondences, uint32_t max_hypotheses, uint32_t max_votes) {
+  return counted_bytes<PoseHypotheses>(max_correspondences, max_hypotheses, max_votes);
 }
 
-Status PoseHypotheses::bind(Arena& ar, uint32_t n, uint32_t k) {
-  max_n_ = max_h_ = count_ = 0;
-  if (n == 0 || n > 4096 || k == 0 || k > kMaxHypotheses) return Status::InvalidArgument;
+Status PoseHypotheses::bind(Arena& ar, uint32_t n, uint32_t k, uint32_t v) {
+  max_n_ = max_h_ = max_v_ = count_ = 0;
+  if (v == 0) v = n;
+  if (n == 0 || n > 4096 || k == 0 || k > kMaxHypotheses || v < n || v > (1u << 20)) return Status::InvalidArgument;
   if (graph_.bind(ar, n) != Status::Ok || solver_.bind(ar, n) != Status::Ok) return Status::InvalidArgument;
   clique_.bind(ar, n);
   allowed_ = ar.allocate<uint64_t>((n + 63) / 64);
   owner_ = ar.allocate<uint32_t>(n);
-  sub_a_ = ar.allocate<float>(size_t(n) * 3);
-  sub_b_ = ar.allocate<float>(size_t(n) * 3);
-  sub_w_ = ar.allocate<float>(n);
-  tls_w_ = ar.allocate<float>(n);
-  mask_ = ar.allocate<uint8_t>(n);
+  // The fits' scratch holds up to all the votes' pairs.
+  sub_a_ = ar.allocate<float>(size_t(v) * 3);
+  sub_b_ = ar.allocate<float>(size_t(v) * 3);
+  sub_w_ = ar.allocate<float>(v);
+  tls_w_ = ar.allocate<float>(v);
+  mask_ = ar.allocate<uint8_t>(v);
   hyps_ = ar.allocate<PoseHypothesis>(k);
-  vote_key_ = ar.allocate<uint64_t>(n);
-  vote_order_ = ar.allocate<uint32_t>(n);
-  bin_first_ = ar.allocate<uint32_t>(n);
-  bin_weight_ = ar.allocate<float>(n);
-  bin_count_ = ar.allocate<uint32_t>(n);
-  bin_support_ = ar.allocate<float>(n);
-  bin_rank_ = ar.allocate<uint8_t>(n);
-  bin_begin_ = ar.allocate<uint32_t>(size_t(n) + 1);
-  vote_t_ = ar.allocate<float>(size_t(n) * 2);
+  vote_key_ = ar.allocate<uint64_t>(v);
+  vote_order_ = ar.allocate<uint32_t>(v);
+  bin_first_ = ar.allocate<uint32_t>(v);
+  bin_weight_ = ar.allocate<float>(v);
+  bin_count_ = ar.allocate<uint32_t>(v);
+  bin_support_ = ar.allocate<float>(v);
+  bin_rank_ = ar.allocate<uint8_t>(v);
+  bin_begin_ = ar.allocate<uint32_t>(size_t(v) + 1);
+  vote_t_ = ar.allocate<float>(size_t(v) * 2);
+  sorted_key_ = ar.allocate<uint64_t>(v);
+  sorted_begin_ = ar.allocate<uint32_t>(size_t(v) + 1);
+  gather_ = ar.allocate<uint32_t>(v);
   if (ar.counting()) return Status::Ok;
   if (ar.overflowed()) return Status::BufferTooSmall;
   for (uint32_t i = 0; i < k; ++i) new (&hyps_[i]) PoseHypothesis();
   max_n_ = n;
   max_h_ = k;
+  max_v_ = v;
   return Status::Ok;
+}
+
+uint32_t PoseHypotheses::find_bin(uint64_t key, uint32_t bins) const {
+  uint32_t lo = 0, hi = bins;
+  while (lo < hi) {
+    const uint32_t mid = (lo + hi) / 2;
+    if (sorted_key_[mid] < key) lo = mid + 1;
+    else hi = mid;
+  }
+  return lo < bins && sorted_key_[lo] == key ? lo : UINT32_MAX;
 }
 
 uint32_t PoseHypotheses::rank_shift_bins(uint32_t bins, const float* w, const HypothesisConfig& c) {
@@ -112,11 +128,12 @@ uint32_t PoseHypotheses::rank_shift_bins(uint32_t bins, const float* w, const Hy
 }
 
 Status PoseHypotheses::generate(const float* a, const float* b, const float* w, uint32_t n, const HypothesisConfig& c,
-                                HypothesisStats* stats_out) {
+                                HypothesisStats* stats_out, uint32_t n_votes) {
   HypothesisStats st;
   count_ = 0;
   if (max_n_ == 0) return Status::NotInitialized;
-  if (n > max_n_) return Status::CapacityExceeded;
+  if (n_votes < n) n_votes = n;
+  if (n > max_n_ || n_votes > max_v_) return Status::CapacityExceeded;
   for (uint32_t i = 0; i < n; ++i) owner_[i] = 0;
   if (n < c.min_inliers) {
     if (stats_out) *stats_out = st;
@@ -301,7 +318,8 @@ Status PoseHypotheses::generate(const float* a, const float* b, const float* w, 
     // so a vote hypothesis must not inherit it.
     const Eigen::Matrix3d R =
         Eigen::AngleAxisd(yaw_of(hyps_[hp].map_T_scan), Eigen::Vector3d::UnitZ()).toRotationMatrix();
-    for (uint32_t i = 0; i < n; ++i) {
+    const uint32_t V = n_votes;
+    for (uint32_t i = 0; i < V; ++i) {
       const Eigen::Vector3d t = point(b, i) - R * point(a, i);
       const int64_t kx = static_cast<int64_t>(std::floor(t.x() / c.shift_bin)) + (1 << 20);
       const int64_t ky = static_cast<int64_t>(std::floor(t.y() / c.shift_bin)) + (1 << 20);
@@ -310,24 +328,47 @@ Status PoseHypotheses::generate(const float* a, const float* b, const float* w, 
       vote_t_[2 * i] = static_cast<float>(t.x());
       vote_t_[2 * i + 1] = static_cast<float>(t.y());
     }
-    std::sort(vote_order_, vote_order_ + n, [this](uint32_t x, uint32_t y) {
+    std::sort(vote_order_, vote_order_ + V, [this](uint32_t x, uint32_t y) {
       return vote_key_[x] < vote_key_[y] || (vote_key_[x] == vote_key_[y] && x < y);
     });
     // Runs of equal keys are the bins: compact them to (first entry, weight, count), in key order.
     uint32_t bins = 0;
-    for (uint32_t k = 0; k < n;) {
+    for (uint32_t k = 0; k < V;) {
       uint32_t e = k;
       float weight = 0.0f;
-      while (e < n && vote_key_[vote_order_[e]] == vote_key_[vote_order_[k]]) weight += w[vote_order_[e++]];
+      while (e < V && vote_key_[vote_order_[e]] == vote_key_[vote_order_[k]]) weight += w[vote_order_[e++]];
       bin_first_[bins] = vote_order_[k];
       bin_weight_[bins] = weight;
       bin_count_[bins] = e - k;
       bin_begin_[bins] = k;
+      sorted_key_[bins] = vote_key_[vote_order_[k]];
+      sorted_begin_[bins] = k;
       ++bins;
       k = e;
     }
-    bin_begin_[bins] = n;
+    bin_begin_[bins] = V;
+    sorted_begin_[bins] = V;
+    const uint32_t all_bins = bins;
     bins = rank_shift_bins(bins, w, c);
+    // The votes a fit around translation t within radius r can use: those in the bins covering the
+    // square around t, sorted into pair order, so the fit's sums are those of a pass over all pairs.
+    uint32_t* gather = gather_;
+    auto gather_votes = [&](const Eigen::Vector3d& t, double r) {
+      const int64_t x0 = static_cast<int64_t>(std::floor((t.x() - r) / c.shift_bin)) + (1 << 20);
+      const int64_t x1 = static_cast<int64_t>(std::floor((t.x() + r) / c.shift_bin)) + (1 << 20);
+      const int64_t y0 = static_cast<int64_t>(std::floor((t.y() - r) / c.shift_bin)) + (1 << 20);
+      const int64_t y1 = static_cast<int64_t>(std::floor((t.y() + r) / c.shift_bin)) + (1 << 20);
+      uint32_t g = 0;
+      for (int64_t x = x0; x <= x1; ++x)
+        for (int64_t y = y0; y <= y1; ++y) {
+          if (x < 0 || y < 0 || x > 0x1FFFFF || y > 0x1FFFFF) continue;
+          const uint32_t j = find_bin((uint64_t(x) << 21) | uint64_t(y), all_bins);
+          if (j == UINT32_MAX) continue;
+          for (uint32_t e = sorted_begin_[j]; e < sorted_begin_[j + 1]; ++e) gather[g++] = vote_order_[e];
+        }
+      std::sort(gather, gather + g);
+      return g;
+    };
     // Best bins first (selection by rank class, then weight; equal weights by key).
     for (uint32_t taken = 0; taken < bins && count_ < stop; ++taken) {
       uint32_t best = taken;
@@ -342,17 +383,21 @@ Status PoseHypotheses::generate(const float* a, const float* b, const float* w, 
       std::swap(bin_count_[taken], bin_count_[best]);
       std::swap(bin_rank_[taken], bin_rank_[best]);
       // Translation-only fit under the heading R: a bin holds a few correspondences, too few (and
-      // too collinear) to re-estimate roll and pitch; the heading comes from a whole clique.
+      // too collinear) to re-estimate roll and pitch; the heading comes from a whole clique. Each round
+      // reads only the votes of the bins around its translation (gather_votes), not all pairs.
       const uint32_t i0 = bin_first_[taken];
       Eigen::Vector3d t = point(b, i0) - R * point(a, i0);
       uint32_t m = 0;
       for (int it = 0; it < 3; ++it) {
+        const double r2 = it == 0 ? far2 : c2;
+        const uint32_t g = gather_votes(t, std::sqrt(r2));
         Eigen::Vector3d sum = Eigen::Vector3d::Zero();
         double wsum = 0.0;
         m = 0;
-        for (uint32_t i = 0; i < n; ++i) {
+        for (uint32_t e = 0; e < g; ++e) {
+          const uint32_t i = gather[e];
           const Eigen::Vector3d ti = point(b, i) - R * point(a, i);
-          if ((ti - t).squaredNorm() > (it == 0 ? far2 : c2)) continue;
+          if ((ti - t).squaredNorm() > r2) continue;
           copy_to_sub(m, i);
           mask_[m++] = 1;
           sum += double(sub_w_[m - 1]) * ti;
@@ -370,6 +415,7 @@ Status PoseHypotheses::generate(const float* a, const float* b, const float* w, 
       record(tls, 0, m);
     }
   }
+  st.vote_pairs = n_votes;
   if (stats_out) *stats_out = st;
   return count_ > 0 ? Status::Ok : Status::NoSolution;
 }

@@ -61,6 +61,7 @@ bool apply_override(LocalizerConfig* c, const std::string& a, std::string* error
       {"hypotheses.heading_separation_deg", &c->hypotheses.heading_separation_deg, nullptr},
       {"hypotheses.shift_bin", &c->hypotheses.shift_bin, nullptr},
       {"hypotheses.shift_vote_support", nullptr, &c->hypotheses.shift_vote_support},
+      {"hypotheses.shift_vote_pairs", nullptr, &c->hypotheses.shift_vote_pairs},
       {"hypotheses.height_consensus", nullptr, &c->hypotheses.height_consensus},
       {"hypotheses.max_tilt_deg", &c->hypotheses.max_tilt_deg, nullptr},
       {"hypotheses.consistency_eps", &c->hypotheses.consistency_eps, nullptr},

@@ -48,6 +48,13 @@ struct HypothesisConfig {
   // supporting votes than min_inliers but enough of their own still follow. 0: each bin on its own
   // weight (before 2026-12-01).
   uint32_t shift_vote_support = 1;
+  // Pairs the shift votes see: the consistency graph's max_correspondences best pairs and the next ones
+  // by the same ranking (correspondence_set.h), up to this many. In a lattice the graph's 512 can hold
+  // only 2-10 true pairs of the 5,000-10,000 candidates, because every lattice shift gathers as many
+  // triangle votes as the truth; a translation vote over all of them still finds the true shift among
+  // its peaks. Votes cost a sort per heading; a bin's fit reads only the bins around it. 0: the graph's
+  // pairs only (before 2026-12-02).
+  uint32_t shift_vote_pairs = 8192;
   uint64_t first_budget = 200000;  // branch-and-bound nodes for the first (maximum) clique
   uint64_t next_budget = 20000;    // nodes for each further clique
   float consistency_eps = 1.0f;    // m; | |a_i-a_j| - |b_i-b_j| | <= eps (Outram: 1.0 m)
@@ -88,29 +95,34 @@ struct HypothesisStats {
   uint32_t voted = 0;             // vote peaks that gave a pose
   uint32_t tilted = 0;            // poses the upright prior re-solved upright (max_tilt_deg)
   uint32_t heading_cliques = 0;   // hypotheses from heading-diverse clique searches
+  uint32_t vote_pairs = 0;        // pairs the shift votes saw
 };
 
 class PoseHypotheses {
  public:
   static constexpr uint32_t kMaxHypotheses = 256;
-  static size_t required_bytes(uint32_t max_correspondences, uint32_t max_hypotheses);
-  Status bind(Arena& arena, uint32_t max_correspondences, uint32_t max_hypotheses);
-  // a, b: n x 3 query / map positions; w: n weights (> 0). Fills the hypotheses in the order found
-  // (the first is the maximum clique's). NoSolution if no clique reaches min_inliers.
+  // max_votes: pairs the shift votes may see (>= max_correspondences; 0 = max_correspondences).
+  static size_t required_bytes(uint32_t max_correspondences, uint32_t max_hypotheses, uint32_t max_votes = 0);
+  Status bind(Arena& arena, uint32_t max_correspondences, uint32_t max_hypotheses, uint32_t max_votes = 0);
+  // a, b: n_votes x 3 query / map positions; w: n_votes weights (> 0), best first. The first n form the
+  // consistency graph (cliques); the shift votes use all n_votes (>= n; 0 = n). Fills the hypotheses in
+  // the order found (the first is the maximum clique's). NoSolution if no clique reaches min_inliers.
   Status generate(const float* a, const float* b, const float* w, uint32_t n, const HypothesisConfig& config,
-                  HypothesisStats* stats);
+                  HypothesisStats* stats, uint32_t n_votes = 0);
 
   uint32_t size() const { return count_; }
   PoseHypothesis& operator[](uint32_t i) { return hyps_[i]; }
   const PoseHypothesis& operator[](uint32_t i) const { return hyps_[i]; }
   // 1 for correspondences in hypothesis h's clique (h < size()); n entries.
-  bool in_clique(uint32_t h, uint32_t i) const { return owner_[i] == h + 1; }
+  bool in_clique(uint32_t h, uint32_t i) const { return i < max_n_ && owner_[i] == h + 1; }
 
  private:
   // Shift votes: from `bins` bins in key order (bin_first_, bin_weight_, bin_count_, bin_begin_) keeps,
   // in key order, those with min_inliers supporting votes (bin_rank_ 2) and the others with min_inliers
   // votes of their own (1), bin_weight_ then holding the support; returns how many.
   uint32_t rank_shift_bins(uint32_t bins, const float* w, const HypothesisConfig& config);
+  // Bin (in key order among `bins`) of key, or UINT32_MAX; valid while bin_first_ is in key order.
+  uint32_t find_bin(uint64_t key, uint32_t bins) const;
   ConsistencyGraph graph_;
   MaxCliqueSolver solver_;
   FixedVector<uint32_t> clique_;
@@ -131,7 +143,10 @@ class PoseHypotheses {
   uint8_t* bin_rank_ = nullptr;     // n: rank class (rank_shift_bins)
   uint32_t* bin_begin_ = nullptr;   // n + 1: a bin's votes are vote_order_[begin[k], begin[k + 1])
   float* vote_t_ = nullptr;         // 2n: each correspondence's bird's-eye translation vote
-  uint32_t max_n_ = 0, max_h_ = 0, count_ = 0;
+  uint64_t* sorted_key_ = nullptr;  // votes: the bins' keys in key order, for the fits' bin lookups
+  uint32_t* sorted_begin_ = nullptr;
+  uint32_t* gather_ = nullptr;  // v: the votes one translation fit reads
+  uint32_t max_n_ = 0, max_h_ = 0, max_v_ = 0, count_ = 0;
 };
 
 }  // namespace gsf
