@@ -124,6 +124,79 @@ TEST_CASE("Tied query sides are tried in both vertex orders") {
   CHECK(matcher.match(scalene, idx.view, idx.tris.data(), tc, 0.06f).orders == 1);
 }
 
+TEST_CASE("A mirror image has the same sides but the other sense: the matcher refuses it before the cap") {
+  // Map: a scalene triangle A and its mirror image B (y -> -y, moved 50 m); same sides, opposite senses.
+  std::vector<float> xyz = {0, 0, 0, 4, 0, 0, 1, 6, 0, 50, 0, 0, 54, 0, 0, 51, -6, 0};
+  const std::vector<uint8_t> labels(16, kPole);
+  std::vector<Triangle> map = {make_triangle(0, 1, 2, &xyz[0], &xyz[3], &xyz[6], labels.data()),
+                               make_triangle(3, 4, 5, &xyz[9], &xyz[12], &xyz[15], labels.data())};
+  REQUIRE(map[0].orientation != map[1].orientation);
+  REQUIRE((map[0].orientation == kOrientationCounterClockwise || map[0].orientation == kOrientationClockwise));
+  for (int k = 0; k < 3; ++k) REQUIRE(map[0].side[k] == Approx(map[1].side[k]));
+  Index idx(map, 1.0f);
+  const uint32_t id_a = idx.input(0) == 0 ? 0 : 1;  // stored position of A
+  TriangleConfig tc;
+  ArenaBuffer buf(TriangleMatcher::required_bytes(16));
+  TriangleMatcher matcher;
+  REQUIRE(matcher.bind(buf.arena, 16) == Status::Ok);
+  // The query sees A turned by any yaw and moved: it matches A only; its mirror image matches B only.
+  for (int deg = 0; deg < 360; deg += 15) {
+    const float c = std::cos(float(deg) * 0.0174533f), s = std::sin(float(deg) * 0.0174533f);
+    float q[9], m[9];
+    for (int v = 0; v < 3; ++v) {
+      const float x = xyz[3 * v], y = xyz[3 * v + 1];
+      q[3 * v] = c * x - s * y + 7.0f;
+      q[3 * v + 1] = s * x + c * y - 3.0f;
+      m[3 * v] = c * x + s * y;  // the mirror image (y -> -y), turned
+      m[3 * v + 1] = s * x - c * y;
+      q[3 * v + 2] = m[3 * v + 2] = 0.2f;
+    }
+    INFO("yaw " << deg);
+    const Triangle qt = make_triangle(10, 11, 12, q, q + 3, q + 6, labels.data());
+    TriangleMatchStats st = matcher.match(qt, idx.view, idx.tris.data(), tc, 0.0f);
+    CHECK(st.accepted == 1);
+    CHECK(st.mirrored == 1);
+    REQUIRE(matcher.size() == 1);
+    CHECK(matcher.match_at(0).map == id_a);
+    const Triangle mt = make_triangle(10, 11, 12, m, m + 3, m + 6, labels.data());
+    st = matcher.match(mt, idx.view, idx.tris.data(), tc, 0.0f);
+    CHECK(st.mirrored == 1);
+    REQUIRE(matcher.size() == 1);
+    CHECK(matcher.match_at(0).map == 1 - id_a);
+    // Without the check both are candidates, as they were before senses were recorded.
+    matcher.set_mirror_check(false);
+    st = matcher.match(qt, idx.view, idx.tris.data(), tc, 0.0f);
+    CHECK(st.accepted == 2);
+    CHECK(st.mirrored == 0);
+    matcher.set_mirror_check(true);
+  }
+  // A map without recorded senses (orientation 0: maps built before) and a near-collinear triangle
+  // (apex 0.5 m off its longest side: flat) are never refused.
+  std::vector<Triangle> old_map = map;
+  for (Triangle& t : old_map) t.orientation = kOrientationUnknown;
+  Index old_idx(old_map, 1.0f);
+  const Triangle qa = make_triangle(10, 11, 12, &xyz[0], &xyz[3], &xyz[6], labels.data());
+  CHECK(matcher.match(qa, old_idx.view, old_idx.tris.data(), tc, 0.0f).accepted == 2);
+  const float flat[9] = {0, 0, 0, 10, 0, 0, 5, 0.5f, 0};
+  CHECK(make_triangle(0, 1, 2, flat, flat + 3, flat + 6, labels.data()).orientation == kOrientationFlat);
+  CHECK(triangle_orientation(flat, flat + 3, flat + 6, 10.0f) == kOrientationFlat);
+  const float apex[9] = {0, 0, 0, 10, 0, 0, 5, 1.2f, 0};
+  CHECK(triangle_orientation(apex, apex + 3, apex + 6, 10.0f) == kOrientationCounterClockwise);
+  CHECK(triangle_orientation(apex, apex + 6, apex + 3, 10.0f) == kOrientationClockwise);
+  // An isosceles triangle is its own mirror image up to a turn: its vertex order with the tied sides
+  // swapped (an odd permutation) matches the mirror image with the senses agreeing.
+  const float iso[9] = {0, 0, 0, 4, 0, 0, 2, 7, 0}, iso_m[9] = {0, 0, 0, 4, 0, 0, 2, -7, 0};
+  std::vector<Triangle> iso_map = {make_triangle(0, 1, 2, iso, iso + 3, iso + 6, labels.data())};
+  Index iso_idx(iso_map, 1.0f);
+  const Triangle iq = make_triangle(10, 11, 12, iso_m, iso_m + 3, iso_m + 6, labels.data());
+  TriangleMatchStats st = matcher.match(iq, iso_idx.view, iso_idx.tris.data(), tc, 0.06f);
+  CHECK(st.orders == 2);
+  CHECK(st.mirrored == 1);
+  REQUIRE(matcher.size() == 1);
+  const uint8_t o = matcher.match_at(0).order;
+  CHECK((o >= 1 && o <= 3));
+}
+
 namespace {
 
 // A 1-D lattice of columns every 8 m along x; correspondences of 6 query columns to map columns shifted

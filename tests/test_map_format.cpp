@@ -303,6 +303,15 @@ TEST_CASE("Semantically invalid contents with valid CRCs are rejected") {
   REQUIRE(write_map(sm.view, blob.data(), size, nullptr) == Status::Ok);
   MapView v;
   CHECK(load_map(blob.data(), size, &v) == Status::CorruptData);
+  // A triangle orientation beyond the four senses (triangle.h); every sense itself loads.
+  for (uint8_t o = 0; o <= 4; ++o) {
+    SmallMap om;
+    om.tris[0].orientation = o;
+    Blob b2(size);
+    REQUIRE(write_map(om.view, b2.data(), size, nullptr) == Status::Ok);
+    INFO("orientation " << int(o));
+    CHECK(load_map(b2.data(), size, &v) == (o <= kOrientationFlat ? Status::Ok : Status::CorruptData));
+  }
 
   // Quantisation scales whose levels are not all finite (or variances below 0), behind valid CRCs.
   for (int which = 0; which < 4; ++which) {

@@ -14,7 +14,7 @@ Status validate(const LocalizerConfig& c) {
   if (m.max_matches_per_triangle == 0 || m.max_matches_per_triangle > (1u << 20) || !(m.min_similarity >= 0) ||
       !(m.vertex_tie_tolerance >= 0 && m.vertex_tie_tolerance < 1) || m.max_candidates < 3 ||
       m.max_candidates > (1u << 22) || m.max_correspondences < 3 || m.max_correspondences > 4096 ||
-      m.max_field_points == 0 || m.heading_sample_triangles == 0)
+      m.max_field_points == 0 || m.heading_sample_triangles == 0 || m.reject_mirrored > 1)
     return Status::InvalidArgument;
   const GsfFilterConfig& g = c.gsf;
   if (g.yaw_bins < 4 || g.yaw_bins > 4096 || g.probe_cache_slots == 0 || g.similarity_cache_slots == 0 ||

@@ -299,6 +299,7 @@ void Localizer::Impl::limit_matches(const LocalizerConfig& cfg) {
   if (cfg.match.max_matches_per_scan > 0 && T > 0 && cfg.match.max_matches_per_scan / T < cap)
     cap = cfg.match.max_matches_per_scan / T;
   matcher.set_limit(cap);
+  matcher.set_mirror_check(cfg.match.reject_mirrored != 0);
 }
 
 // 5a. Heading votes (heading_votes.h): only matches at the best-supported headings go on.
@@ -338,6 +339,7 @@ void Localizer::Impl::match_and_filter(const LocalizerConfig& cfg, const MapView
       if (pass == 0) {
         out.match_candidates += ms.accepted;
         out.match_dropped += ms.dropped();
+        out.mirrored_matches += ms.mirrored;
         out.triangle_matches += ms.kept;
         if (ms.orders > 1) ++out.tie_ordered_triangles;
       }

@@ -115,7 +115,8 @@ Status check_contents(const MapView& m) {
       if (tri.v[k] >= n) return Status::CorruptData;
       if (tri.label[k] != m.instances[tri.v[k]].label) return Status::CorruptData;
     }
-    if (!all_finite(tri.side, 3) || !(tri.side[0] <= tri.side[1] && tri.side[1] <= tri.side[2]) || tri.side[0] < 0)
+    if (!all_finite(tri.side, 3) || !(tri.side[0] <= tri.side[1] && tri.side[1] <= tri.side[2]) || tri.side[0] < 0 ||
+        tri.orientation > kOrientationFlat)
       return Status::CorruptData;
   }
   // CSR index over the triangles (stored in key order): strictly increasing keys, monotone offsets

@@ -26,6 +26,13 @@ Status validate(const TriangleConfig& c) {
   return Status::Ok;
 }
 
+uint8_t triangle_orientation(const float* p0, const float* p1, const float* p2, float longest_side) {
+  const float cross = (p1[0] - p0[0]) * (p2[1] - p0[1]) - (p1[1] - p0[1]) * (p2[0] - p0[0]);
+  // |cross| is twice the bird's-eye area: the apex's height over the longest side times its length.
+  if (!(std::fabs(cross) >= kOrientationMinHeight * longest_side)) return kOrientationFlat;
+  return cross > 0.0f ? kOrientationCounterClockwise : kOrientationClockwise;
+}
+
 uint64_t triangle_key(const Triangle& t, float bin) {
   uint32_t q[3];
   for (int k = 0; k < 3; ++k) {
@@ -75,7 +82,7 @@ Triangle make_triangle(uint32_t a, uint32_t b, uint32_t c, const float* pa, cons
   t.label[0] = labels[id[v0]];
   t.label[1] = labels[id[v1]];
   t.label[2] = labels[id[v2]];
-  t.pad = 0;
+  t.orientation = triangle_orientation(p[v0], p[v1], p[v2], t.side[2]);
   return t;
 }
 

@@ -82,6 +82,8 @@ TriangleMatchStats TriangleMatcher::match(const Triangle& q, const TriangleIndex
                    side[1] <= side[2] * (1.0f + tie_tolerance)))
       continue;
     ++st.orders;
+    // Orders 1-3 swap two vertices (odd permutations): the query's sense in them is reversed.
+    const bool flip = o >= 1 && o <= 3;
     int32_t qk[3];
     for (int i = 0; i < 3; ++i) qk[i] = static_cast<int32_t>(std::floor(side[i] / config.side_bin));
     // The 27 neighbouring keys (q0 +- 1, q1 +- 1, q2 +- 1) of this label triple as 9 key ranges: q2 is the
@@ -113,6 +115,10 @@ TriangleMatchStats TriangleMatcher::match(const Triangle& q, const TriangleIndex
             residual = rel > residual ? rel : residual;
           }
           if (!ok) continue;
+          if (mirror_check_ && orientations_contradict(q.orientation, m.orientation, flip)) {
+            ++st.mirrored;
+            continue;
+          }
           ++st.accepted;
           RankedTriangleMatch c{};
           c.map = mid;

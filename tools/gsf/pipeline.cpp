@@ -47,6 +47,7 @@ bool apply_override(LocalizerConfig* c, const std::string& a, std::string* error
       {"gsf.yaw_bins", nullptr, &c->gsf.yaw_bins},
       {"match.min_similarity", &c->match.min_similarity, nullptr},
       {"match.fill_pairs", nullptr, &c->match.fill_pairs},
+      {"match.reject_mirrored", nullptr, &c->match.reject_mirrored},
       {"match.vertex_tie_tolerance", &c->match.vertex_tie_tolerance, nullptr},
       {"match.max_correspondences", nullptr, &c->match.max_correspondences},
       {"match.max_matches_per_triangle", nullptr, &c->match.max_matches_per_triangle},

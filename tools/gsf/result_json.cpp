@@ -57,6 +57,7 @@ void write_result_diagnostics(JsonWriter& j, const LocalizeResult& x, const Quer
   j.field("candidate_pairs_dropped", x.candidate_pairs_dropped);
   j.field("correspondences", x.correspondences);
   j.field("correspondences_dropped", x.correspondences_dropped);
+  j.field("mirrored_matches", x.mirrored_matches);
   j.field("vote_pairs", x.vote_pairs);
   j.field("vote_pairs_dropped", x.vote_pairs_dropped);
   j.field("clique_size", x.clique_size);

@@ -29,6 +29,10 @@ struct MatchConfig {
   // and counted in match_dropped. 0: no scan budget.
   uint32_t max_matches_per_scan = 0;
   float vertex_tie_tolerance = 0.06f;  // relative; query sides closer than this are tried in both orders
+  // 1: a map triangle whose bird's-eye sense contradicts the query triangle's is no match (a mirror
+  // image: same sides; triangle.h, TriangleOrientation). Vehicles are upright, so their scans map to the
+  // map by turns about the vertical, which keep the sense. 0: sides alone (before 2026-12-02).
+  uint32_t reject_mirrored = 1;
   // Heading votes (localizer.cpp, step 5a): the best `heading_bins` yaw bins (gsf.yaw_bins of them,
   // each with its two neighbours) by the votes of an even sample of `heading_sample_triangles` query
   // triangles' matches; matches at other headings are dropped and counted. 0 = off.

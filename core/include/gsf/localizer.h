@@ -69,6 +69,7 @@ struct LocalizeResult {
   uint32_t below_gate_matches = 0;       // matches below the GSF gate that filled a short pair set
   uint32_t candidate_pairs_dropped = 0;  // pairs refused because match.max_candidates was full
   uint32_t correspondences_dropped = 0;  // pairs ranked out by match.max_correspondences
+  uint32_t mirrored_matches = 0;         // triangle matches refused as mirror images (match.reject_mirrored)
   uint32_t vote_pairs = 0;               // pairs the shift votes saw (hypotheses.shift_vote_pairs)
   uint32_t vote_pairs_dropped = 0;       // ... and pairs ranked out of them
   uint32_t clique_searches = 0;

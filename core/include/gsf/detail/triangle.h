@@ -32,15 +32,41 @@ struct TriangleConfig {
   uint32_t max_triangles = 4096;          // per scan (capacity)
 };
 
+// Bird's-eye turning sense of a triangle's vertices in canonical order (v0 -> v1 -> v2). A rotation about
+// the vertical keeps it and a mirror image reverses it, and the side lengths cannot tell the two apart: in
+// a symmetric layout (a hall's rows, a lattice) a triangle's mirror twin matches it as well as the true
+// one, and a clique of such matches fits an upside-down pose. The matcher rejects a match whose senses
+// are both known and disagree (triangle_matcher.h). A triangle whose apex lies within
+// kOrientationMinHeight of its longest side's line has no reliable sense (centroids are ~0.3 m noisy).
+enum TriangleOrientation : uint8_t {
+  kOrientationUnknown = 0,  // not recorded (maps built before 2026-12-02: the record's padding byte)
+  kOrientationCounterClockwise = 1,
+  kOrientationClockwise = 2,
+  kOrientationFlat = 3,  // near-collinear: either sense
+};
+constexpr float kOrientationMinHeight = 1.0f;  // m
+
 struct Triangle {  // also the on-disk map record (map_format.h)
   uint32_t v[3];
   float side[3];
   uint8_t label[3];
-  uint8_t pad;
+  uint8_t orientation;  // TriangleOrientation
 };
 static_assert(sizeof(Triangle) == 28, "map record layout");
 
 Status validate(const TriangleConfig& config);
+
+// The sense of p0 -> p1 -> p2 seen from above (x, y; TriangleOrientation), flat when the apex is within
+// kOrientationMinHeight of the line through the longest side (of length longest_side).
+uint8_t triangle_orientation(const float* p0, const float* p1, const float* p2, float longest_side);
+// Whether two senses contradict each other (both reliable and opposite), `flip` reversing the first (a
+// vertex order that is an odd permutation of the canonical one).
+inline bool orientations_contradict(uint8_t a, uint8_t b, bool flip) {
+  if ((a != kOrientationCounterClockwise && a != kOrientationClockwise) ||
+      (b != kOrientationCounterClockwise && b != kOrientationClockwise))
+    return false;
+  return (a == b) == flip;
+}
 
 // The index key (map format v5, docs/map-format.md): bits 62..48 the three labels in vertex order (5 bits
 // each), then the quantised sides q_k = floor(side_k / side_bin), 16 bits each (47..32 q0, 31..16 q1, 15..0

@@ -15,6 +15,12 @@
 // tie tolerance (isosceles triangles are the rule in lattices) the order, and with it the vertex
 // correspondence, is ambiguous. Every vertex order whose sides are sorted up to that tolerance is tried;
 // each candidate records the order it matched in.
+//
+// Mirror images: equal sides do not make equal triangles; a triangle and its mirror image have the same
+// sides and opposite senses (triangle.h, TriangleOrientation). With the mirror check on, a candidate whose
+// sense contradicts the query's in the order tried is no candidate (counted in `mirrored`), before the
+// cap: in a symmetric hall or lattice half the candidates are mirror twins, and a clique of them fits an
+// upside-down pose that crowds out the true one. Maps without recorded senses are never rejected.
 #pragma once
 #include <cstdint>
 
@@ -40,6 +46,7 @@ struct TriangleMatchStats {
   uint32_t accepted = 0;  // candidates passing labels and sides (all vertex orders)
   uint32_t kept = 0;      // after the cap
   uint32_t orders = 0;    // vertex orders tried for this query triangle (1 without side ties)
+  uint32_t mirrored = 0;  // candidates of the right sides refused as mirror images (mirror check)
   uint32_t dropped() const { return accepted - kept; }
 };
 
@@ -59,6 +66,8 @@ class TriangleMatcher {
     limit_ = n == 0 ? 1 : (n < cap_ ? n : cap_);
     return limit_;
   }
+  // Refuse mirror-image candidates from the next match() on (default on).
+  void set_mirror_check(bool on) { mirror_check_ = on; }
   const RankedTriangleMatch& match_at(uint32_t i) const { return heap_[i]; }
   // The query triangle's vertex (instance id) at matched position j for the order of match i.
   static uint32_t query_vertex(const Triangle& q, uint8_t order, int j) { return q.v[kTriangleVertexOrders[order][j]]; }
@@ -69,6 +78,7 @@ class TriangleMatcher {
   uint32_t cap_ = 0;
   uint32_t limit_ = 0;  // <= cap_: what match() keeps (set_limit)
   uint32_t size_ = 0;
+  bool mirror_check_ = true;
 };
 
 }  // namespace gsf
