@@ -604,21 +604,37 @@ TEST_CASE("Removing the edges at a heading removes exactly the pairs that turn b
   CHECK(g.adjacent(0, 3));  // (0,3) turns by 0 deg
 }
 
-TEST_CASE("Shift votes rank bins by their support: a translation split across a bin edge still becomes a hypothesis") {
-  // One heading (the first clique's: 8 correspondences at translation (100, 50)), lattice shifts with
-  // 3 votes each in one bin, and the truth with 4 votes that straddle the bin edge at x = 160 (2 + 2).
+namespace {
+
+// Correspondences for the shift-vote tests: one heading (the first clique's: 8 correspondences at
+// translation (100, 50)), then six lattice shifts 8 m apart with 3 votes each in one bin; `x` is where
+// the next query point goes.
+struct ShiftVoteScene {
   std::vector<float> a, b;
-  auto add = [&](float x, float y, float z, float tx, float ty) {
-    a.insert(a.end(), {x, y, z});
-    b.insert(b.end(), {x + tx, y + ty, z});
-  };
-  const float clique_pts[8][2] = {{3, 1}, {-7, 4}, {12, -5}, {-2, -14}, {18, 9}, {-15, -3}, {6, 11}, {-11, 7}};
-  for (const auto& p : clique_pts) add(p[0], p[1], 0.5f, 100.0f, 50.0f);
   float x = 30.0f;
-  for (int k = 1; k <= 6; ++k)  // lattice shifts 8 m apart, bins well inside
-    for (int j = 0; j < 3; ++j, x += 1.7f) add(x, -20.0f + 3.0f * j, 1.0f, 100.0f + 8.0f * k + 1.0f, 50.0f + 0.5f);
-  for (int j = 0; j < 4; ++j, x += 1.9f) add(x, 25.0f + 2.0f * j, 1.0f, 160.0f + (j % 2 ? 0.05f : -0.05f), 51.0f);
-  const uint32_t n = static_cast<uint32_t>(a.size() / 3);
+  void add(float qx, float qy, float qz, float tx, float ty) {
+    a.insert(a.end(), {qx, qy, qz});
+    b.insert(b.end(), {qx + tx, qy + ty, qz});
+  }
+  ShiftVoteScene() {
+    const float clique_pts[8][2] = {{3, 1}, {-7, 4}, {12, -5}, {-2, -14}, {18, 9}, {-15, -3}, {6, 11}, {-11, 7}};
+    for (const auto& p : clique_pts) add(p[0], p[1], 0.5f, 100.0f, 50.0f);
+    for (int k = 1; k <= 6; ++k)  // bins well inside
+      for (int j = 0; j < 3; ++j, x += 1.7f) add(x, -20.0f + 3.0f * j, 1.0f, 100.0f + 8.0f * k + 1.0f, 50.5f);
+  }
+  uint32_t size() const { return static_cast<uint32_t>(a.size() / 3); }
+};
+
+}  // namespace
+
+TEST_CASE("Shift votes rank bins by their support: a translation split across a bin edge still becomes a hypothesis") {
+  // The clique and the lattice shifts (ShiftVoteScene), and the truth with 4 votes that straddle the
+  // bin edge at x = 160 (2 + 2).
+  ShiftVoteScene sc;
+  for (int j = 0; j < 4; ++j, sc.x += 1.9f)
+    sc.add(sc.x, 25.0f + 2.0f * j, 1.0f, 160.0f + (j % 2 ? 0.05f : -0.05f), 51.0f);
+  const std::vector<float>&a = sc.a, &b = sc.b;
+  const uint32_t n = sc.size();
   std::vector<float> w(n, 1.0f);
   HypothesisConfig hc;
   hc.max_peeled = 1;
@@ -656,22 +672,15 @@ TEST_CASE("Shift votes over the pairs ranked out of the graph find the true shif
   // The graph's pairs: a clique of 8 at translation (100, 50), six lattice shifts with 3 pairs each, and
   // one pair of the truth (160, 51). Ranked after them, outside the graph: 5 more pairs of the truth and
   // 2 more of one lattice shift. In a lattice the graph's cap keeps a few true pairs of many.
-  std::vector<float> a, b;
-  auto add = [&](float x, float y, float z, float tx, float ty) {
-    a.insert(a.end(), {x, y, z});
-    b.insert(b.end(), {x + tx, y + ty, z});
-  };
-  const float clique_pts[8][2] = {{3, 1}, {-7, 4}, {12, -5}, {-2, -14}, {18, 9}, {-15, -3}, {6, 11}, {-11, 7}};
-  for (const auto& p : clique_pts) add(p[0], p[1], 0.5f, 100.0f, 50.0f);
-  float x = 30.0f;
-  for (int k = 1; k <= 6; ++k)
-    for (int j = 0; j < 3; ++j, x += 1.7f) add(x, -20.0f + 3.0f * j, 1.0f, 100.0f + 8.0f * k + 1.0f, 50.5f);
-  add(x, 25.0f, 1.0f, 160.0f, 51.0f);
-  const uint32_t n = static_cast<uint32_t>(a.size() / 3);
+  ShiftVoteScene sc;
+  const float x = sc.x;
+  sc.add(x, 25.0f, 1.0f, 160.0f, 51.0f);
+  const uint32_t n = sc.size();
   const float truth_dx[5] = {0.1f, -0.1f, 0.05f, -0.05f, 0.0f};
-  for (int j = 0; j < 5; ++j) add(x + 2.0f + 1.9f * j, 27.0f + 2.0f * j, 1.0f, 160.0f + truth_dx[j], 51.0f);
-  for (int j = 0; j < 2; ++j) add(x - 12.0f + 2.3f * j, -30.0f, 1.0f, 100.0f + 8.0f + 1.0f, 50.5f);
-  const uint32_t total = static_cast<uint32_t>(a.size() / 3);
+  for (int j = 0; j < 5; ++j) sc.add(x + 2.0f + 1.9f * j, 27.0f + 2.0f * j, 1.0f, 160.0f + truth_dx[j], 51.0f);
+  for (int j = 0; j < 2; ++j) sc.add(x - 12.0f + 2.3f * j, -30.0f, 1.0f, 100.0f + 8.0f + 1.0f, 50.5f);
+  const std::vector<float>&a = sc.a, &b = sc.b;
+  const uint32_t total = sc.size();
   std::vector<float> w(total, 1.0f);
   HypothesisConfig hc;
   hc.max_peeled = 1;
