@@ -269,6 +269,61 @@ TEST_CASE("A far pole hit by every few beams is one instance across the vertical
   CHECK(c.bind(buf.arena, bad, 1000) == Status::InvalidArgument);
 }
 
+TEST_CASE("Clustering's cell search finds exactly the components of the all-pairs connection rule") {
+  // Random poles (cylinder rule) and cars (sphere rule, 1 m) at random positions and densities: the
+  // components clustering reports equal those of joining every pair of same-label voxels within the
+  // rule (union-find over all pairs), so the cells the search skips never hold a neighbour.
+  std::mt19937 rng(11);
+  std::uniform_real_distribution<float> u(0.0f, 1.0f);
+  ClusterConfig cc;
+  for (int c = 0; c < kNumClasses; ++c) {
+    cc.min_voxels[c] = 1;
+    cc.max_extent[c] = 100.0f;
+  }
+  cc.max_instances = 4000;
+  for (int trial = 0; trial < 6; ++trial) {
+    Cloud cloud;
+    const int n = 400 + 300 * trial;
+    const float span = 6.0f + 2.0f * float(trial);
+    for (int k = 0; k < n; ++k) {
+      const bool pole = u(rng) < 0.6f;
+      cloud.add(-3.0f + span * u(rng), 20.0f + span * u(rng), -1.0f + 4.0f * u(rng), pole ? 80u : 10u);
+    }
+    VoxelConfig vc;
+    vc.min_range = 0.0f;
+    Scene s{vc, cc};
+    REQUIRE(s.run(cloud) == Status::Ok);
+    const uint32_t nv = s.layer.size();
+    std::vector<uint32_t> parent(nv);
+    for (uint32_t i = 0; i < nv; ++i) parent[i] = i;
+    auto root = [&](uint32_t i) {
+      while (parent[i] != i) i = parent[i] = parent[parent[i]];
+      return i;
+    };
+    for (uint32_t i = 0; i < nv; ++i)
+      for (uint32_t j = i + 1; j < nv; ++j) {
+        const Voxel &a = s.layer.voxel(i), &b = s.layer.voxel(j);
+        if (a.label != b.label || !(kDefaultInstanceClasses & class_bit(a.label))) continue;
+        const float ex = a.centroid[0] - b.centroid[0], ey = a.centroid[1] - b.centroid[1],
+                    ez = a.centroid[2] - b.centroid[2];
+        const float tol = cc.tolerance[a.label], vtol = cc.vertical_tolerance[a.label];
+        const bool joined = vtol > tol ? (ex * ex + ey * ey <= tol * tol && std::fabs(ez) <= vtol)
+                                       : (ex * ex + ey * ey + ez * ez <= tol * tol);
+        if (joined) parent[root(i)] = root(j);
+      }
+    const uint32_t* vi = s.clusters.voxel_instance();
+    INFO("trial " << trial << ": " << nv << " voxels, " << s.clusters.size() << " instances");
+    uint32_t mismatches = 0;
+    for (uint32_t i = 0; i < nv; ++i)
+      for (uint32_t j = i + 1; j < nv; ++j) {
+        if (vi[i] == UINT32_MAX || vi[j] == UINT32_MAX) continue;
+        mismatches += (vi[i] == vi[j]) != (root(i) == root(j));
+      }
+    CHECK(mismatches == 0);
+    CHECK(s.clusters.size() > 10);
+  }
+}
+
 TEST_CASE("Instance overflow keeps the largest by point count, deterministically; the next scan is fine") {
   ClusterConfig cc;
   cc.max_instances = 5;

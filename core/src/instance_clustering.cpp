@@ -59,20 +59,45 @@ Status InstanceClustering::build(const VoxelLayer& layer, ClusterStats* stats_ou
     while (head < tail) {
       const uint32_t v = queue_[head++];
       int32_t c[3];
-      if (!layer.cell_of(vox[v].centroid, c)) continue;
-      for (int32_t dx = -reach; dx <= reach; ++dx)
-        for (int32_t dy = -reach; dy <= reach; ++dy)
-          for (int32_t dz = -reach_z; dz <= reach_z; ++dz) {
+      const float* p = vox[v].centroid;
+      if (!layer.cell_of(p, c)) continue;
+      // Only the cells a centroid within the tolerance can lie in: [p - tol, p + tol] per axis (a 1 mm
+      // margin for the rounding of a centroid at its cell's edge), inside the fixed reach, and of those
+      // across only the ones whose nearest point is within tol. A centroid lies in its voxel's cell, so
+      // the skipped cells hold no neighbour and the components are the same: 4 x 4 (less the corners)
+      // x 4 lookups a voxel instead of 5 x 5 x 5 at the defaults.
+      const float margin = 1e-3f;
+      auto lo = [&](int axis, float r, int32_t rc) {
+        const int32_t k = static_cast<int32_t>(std::floor((p[axis] - r - margin) / vs)) - c[axis];
+        return k > -rc ? k : -rc;
+      };
+      auto hi = [&](int axis, float r, int32_t rc) {
+        const int32_t k = static_cast<int32_t>(std::floor((p[axis] + r + margin) / vs)) - c[axis];
+        return k < rc ? k : rc;
+      };
+      const float rz = cylinder ? vtol : tol;
+      const int32_t x0 = lo(0, tol, reach), x1 = hi(0, tol, reach), y0 = lo(1, tol, reach), y1 = hi(1, tol, reach);
+      const int32_t z0 = lo(2, rz, reach_z), z1 = hi(2, rz, reach_z);
+      const float reach2 = (tol + margin) * (tol + margin);
+      for (int32_t dx = x0; dx <= x1; ++dx)
+        for (int32_t dy = y0; dy <= y1; ++dy) {
+          // Distance from p to the cell (c + (dx, dy)) across: beyond tol, none of its voxels can connect.
+          const float cx0 = float(c[0] + dx) * vs, cy0 = float(c[1] + dy) * vs;
+          const float gx = p[0] < cx0 ? cx0 - p[0] : (p[0] > cx0 + vs ? p[0] - cx0 - vs : 0.0f);
+          const float gy = p[1] < cy0 ? cy0 - p[1] : (p[1] > cy0 + vs ? p[1] - cy0 - vs : 0.0f);
+          if (gx * gx + gy * gy > reach2) continue;
+          for (int32_t dz = z0; dz <= z1; ++dz) {
             const uint32_t u = layer.find_cell(c[0] + dx, c[1] + dy, c[2] + dz);
             if (u == UINT32_MAX || voxel_instance_[u] != UINT32_MAX || vox[u].label != label) continue;
-            const float ex = vox[u].centroid[0] - vox[v].centroid[0];
-            const float ey = vox[u].centroid[1] - vox[v].centroid[1];
-            const float ez = vox[u].centroid[2] - vox[v].centroid[2];
+            const float ex = vox[u].centroid[0] - p[0];
+            const float ey = vox[u].centroid[1] - p[1];
+            const float ez = vox[u].centroid[2] - p[2];
             if (cylinder ? (ex * ex + ey * ey > tol2 || std::fabs(ez) > vtol) : (ex * ex + ey * ey + ez * ez > tol2))
               continue;
             voxel_instance_[u] = comp;
             queue_[tail++] = u;  // each voxel enters once: tail <= n
           }
+        }
     }
     component_to_instance_[comp] = UINT32_MAX;
     // Describe the component.
