@@ -8,6 +8,15 @@
 
 namespace gsf {
 
+namespace {
+
+// Shift-vote bins: a coordinate's bin index offset by 2^20, and the key (x << 21) | y of a bin, both
+// fields masked to 21 bits (callers that step to neighbouring bins check the range first).
+int64_t shift_coord(double v, float bin) { return static_cast<int64_t>(std::floor(v / bin)) + (1 << 20); }
+uint64_t shift_key(int64_t x, int64_t y) { return (uint64_t(x & 0x1FFFFF) << 21) | uint64_t(y & 0x1FFFFF); }
+
+}  // namespace
+
 size_t PoseHypotheses::required_bytes(uint32_t max_correspondences, uint32_t max_hypotheses, uint32_t max_votes) {
   return counted_bytes<PoseHypotheses>(max_correspondences, max_hypotheses, max_votes);
 }
@@ -36,8 +45,7 @@ Status PoseHypotheses::bind(Arena& ar, uint32_t n, uint32_t k, uint32_t v) {
   bin_rank_ = ar.allocate<uint8_t>(v);
   bin_begin_ = ar.allocate<uint32_t>(size_t(v) + 1);
   vote_t_ = ar.allocate<float>(size_t(v) * 2);
-  sorted_key_ = ar.allocate<uint64_t>(v);
-  sorted_begin_ = ar.allocate<uint32_t>(size_t(v) + 1);
+  bin_key_ = ar.allocate<uint64_t>(v);
   gather_ = ar.allocate<uint32_t>(v);
   if (ar.counting()) return Status::Ok;
   if (ar.overflowed()) return Status::BufferTooSmall;
@@ -52,24 +60,13 @@ uint32_t PoseHypotheses::find_bin(uint64_t key, uint32_t bins) const {
   uint32_t lo = 0, hi = bins;
   while (lo < hi) {
     const uint32_t mid = (lo + hi) / 2;
-    if (sorted_key_[mid] < key) lo = mid + 1;
+    if (bin_key_[mid] < key) lo = mid + 1;
     else hi = mid;
   }
-  return lo < bins && sorted_key_[lo] == key ? lo : UINT32_MAX;
+  return lo < bins && bin_key_[lo] == key ? lo : UINT32_MAX;
 }
 
 uint32_t PoseHypotheses::rank_shift_bins(uint32_t bins, const float* w, const HypothesisConfig& c) {
-  auto key_of = [this](uint32_t k) { return vote_key_[bin_first_[k]]; };
-  // Bin of key `key` (bins are in key order), or UINT32_MAX.
-  auto find = [&](uint64_t key) {
-    uint32_t lo = 0, hi = bins;
-    while (lo < hi) {
-      const uint32_t mid = (lo + hi) / 2;
-      if (key_of(mid) < key) lo = mid + 1;
-      else hi = mid;
-    }
-    return lo < bins && key_of(lo) == key ? lo : UINT32_MAX;
-  };
   // Support of each bin: the weight (and number) of votes within tls_threshold of the mean of its own
   // votes. The radius is below a bin (validate: tls_threshold <= shift_bin), so only the 3 x 3 bins
   // around it can hold them; keys are (kx << 21) | ky with both fields offset by 2^20.
@@ -94,7 +91,7 @@ uint32_t PoseHypotheses::rank_shift_bins(uint32_t bins, const float* w, const Hy
     const float inv = 1.0f / static_cast<float>(bin_begin_[k + 1] - bin_begin_[k]);
     mx *= inv;
     my *= inv;
-    const uint64_t key = key_of(k);
+    const uint64_t key = bin_key_[k];
     const int64_t kx = int64_t(key >> 21), ky = int64_t(key & 0x1FFFFF);
     float sw = 0.0f;
     uint32_t sc = 0;
@@ -102,7 +99,7 @@ uint32_t PoseHypotheses::rank_shift_bins(uint32_t bins, const float* w, const Hy
       for (int64_t dy = -1; dy <= 1; ++dy) {
         const int64_t x = kx + dx, y = ky + dy;
         if (x < 0 || y < 0 || x > 0x1FFFFF || y > 0x1FFFFF) continue;
-        const uint32_t j = (dx == 0 && dy == 0) ? k : find((uint64_t(x) << 21) | uint64_t(y));
+        const uint32_t j = (dx == 0 && dy == 0) ? k : find_bin(shift_key(x, y), bins);
         if (j == UINT32_MAX) continue;
         for (uint32_t e = bin_begin_[j]; e < bin_begin_[j + 1]; ++e) {
           const uint32_t i = vote_order_[e];
@@ -321,9 +318,7 @@ Status PoseHypotheses::generate(const float* a, const float* b, const float* w, 
     const uint32_t V = n_votes;
     for (uint32_t i = 0; i < V; ++i) {
       const Eigen::Vector3d t = point(b, i) - R * point(a, i);
-      const int64_t kx = static_cast<int64_t>(std::floor(t.x() / c.shift_bin)) + (1 << 20);
-      const int64_t ky = static_cast<int64_t>(std::floor(t.y() / c.shift_bin)) + (1 << 20);
-      vote_key_[i] = (uint64_t(kx & 0x1FFFFF) << 21) | uint64_t(ky & 0x1FFFFF);
+      vote_key_[i] = shift_key(shift_coord(t.x(), c.shift_bin), shift_coord(t.y(), c.shift_bin));
       vote_order_[i] = i;
       vote_t_[2 * i] = static_cast<float>(t.x());
       vote_t_[2 * i + 1] = static_cast<float>(t.y());
@@ -341,30 +336,26 @@ Status PoseHypotheses::generate(const float* a, const float* b, const float* w, 
       bin_weight_[bins] = weight;
       bin_count_[bins] = e - k;
       bin_begin_[bins] = k;
-      sorted_key_[bins] = vote_key_[vote_order_[k]];
-      sorted_begin_[bins] = k;
+      bin_key_[bins] = vote_key_[vote_order_[k]];
       ++bins;
       k = e;
     }
     bin_begin_[bins] = V;
-    sorted_begin_[bins] = V;
     const uint32_t all_bins = bins;
     bins = rank_shift_bins(bins, w, c);
     // The votes a fit around translation t within radius r can use: those in the bins covering the
     // square around t, sorted into pair order, so the fit's sums are those of a pass over all pairs.
     uint32_t* gather = gather_;
     auto gather_votes = [&](const Eigen::Vector3d& t, double r) {
-      const int64_t x0 = static_cast<int64_t>(std::floor((t.x() - r) / c.shift_bin)) + (1 << 20);
-      const int64_t x1 = static_cast<int64_t>(std::floor((t.x() + r) / c.shift_bin)) + (1 << 20);
-      const int64_t y0 = static_cast<int64_t>(std::floor((t.y() - r) / c.shift_bin)) + (1 << 20);
-      const int64_t y1 = static_cast<int64_t>(std::floor((t.y() + r) / c.shift_bin)) + (1 << 20);
+      const int64_t x0 = shift_coord(t.x() - r, c.shift_bin), x1 = shift_coord(t.x() + r, c.shift_bin);
+      const int64_t y0 = shift_coord(t.y() - r, c.shift_bin), y1 = shift_coord(t.y() + r, c.shift_bin);
       uint32_t g = 0;
       for (int64_t x = x0; x <= x1; ++x)
         for (int64_t y = y0; y <= y1; ++y) {
           if (x < 0 || y < 0 || x > 0x1FFFFF || y > 0x1FFFFF) continue;
-          const uint32_t j = find_bin((uint64_t(x) << 21) | uint64_t(y), all_bins);
+          const uint32_t j = find_bin(shift_key(x, y), all_bins);
           if (j == UINT32_MAX) continue;
-          for (uint32_t e = sorted_begin_[j]; e < sorted_begin_[j + 1]; ++e) gather[g++] = vote_order_[e];
+          for (uint32_t e = bin_begin_[j]; e < bin_begin_[j + 1]; ++e) gather[g++] = vote_order_[e];
         }
       std::sort(gather, gather + g);
       return g;

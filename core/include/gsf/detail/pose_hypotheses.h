@@ -117,11 +117,11 @@ class PoseHypotheses {
   bool in_clique(uint32_t h, uint32_t i) const { return i < max_n_ && owner_[i] == h + 1; }
 
  private:
-  // Shift votes: from `bins` bins in key order (bin_first_, bin_weight_, bin_count_, bin_begin_) keeps,
+  // Shift votes: from `bins` bins in key order (bin_key_, bin_first_, bin_weight_, bin_count_, bin_begin_) keeps,
   // in key order, those with min_inliers supporting votes (bin_rank_ 2) and the others with min_inliers
   // votes of their own (1), bin_weight_ then holding the support; returns how many.
   uint32_t rank_shift_bins(uint32_t bins, const float* w, const HypothesisConfig& config);
-  // Bin (in key order among `bins`) of key, or UINT32_MAX; valid while bin_first_ is in key order.
+  // Bin (among the first `bins` of bin_key_, in key order) of key, or UINT32_MAX.
   uint32_t find_bin(uint64_t key, uint32_t bins) const;
   ConsistencyGraph graph_;
   MaxCliqueSolver solver_;
@@ -143,9 +143,8 @@ class PoseHypotheses {
   uint8_t* bin_rank_ = nullptr;     // n: rank class (rank_shift_bins)
   uint32_t* bin_begin_ = nullptr;   // n + 1: a bin's votes are vote_order_[begin[k], begin[k + 1])
   float* vote_t_ = nullptr;         // 2n: each correspondence's bird's-eye translation vote
-  uint64_t* sorted_key_ = nullptr;  // votes: the bins' keys in key order, for the fits' bin lookups
-  uint32_t* sorted_begin_ = nullptr;
-  uint32_t* gather_ = nullptr;  // v: the votes one translation fit reads
+  uint64_t* bin_key_ = nullptr;     // n: each bin's key, in key order (not compacted: the fits look bins up)
+  uint32_t* gather_ = nullptr;      // v: the votes one translation fit reads
   uint32_t max_n_ = 0, max_h_ = 0, max_v_ = 0, count_ = 0;
 };
 
