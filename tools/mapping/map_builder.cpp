@@ -20,6 +20,7 @@
 #include "mapping/refine_layer_builder.h"
 #include "mapping/scan_triangles.h"
 #include "mapping/tiled_stages.h"
+#include "mapping/workspace.h"
 
 #if defined(__GLIBC__)
 #include <malloc.h>
@@ -31,13 +32,6 @@ namespace {
 double seconds_since(std::chrono::steady_clock::time_point t0) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
 }
-
-// Arena-backed stage objects sized for a whole map.
-struct Workspace {
-  std::vector<uint64_t> memory;
-  Arena arena;
-  explicit Workspace(size_t bytes) : memory(bytes / 8 + 2), arena(memory.data(), memory.size() * 8) {}
-};
 
 TileStoreConfig tile_store_config(const MapBuildConfig& config) {
   TileStoreConfig t;
@@ -82,8 +76,7 @@ Status MapBuilder::add_scan(const ScanView& scan, const Eigen::Isometry3d& frame
   // Into the map-local frame in double, before anything becomes float.
   const Eigen::Isometry3d map_T_lidar = to_map_local(georef_, frame_T_lidar);
   if (map_T_lidar.translation().cwiseAbs().maxCoeff() > kMaxMapLocalCoordinate) return Status::InvalidInput;
-  void* base = reinterpret_cast<void*>((reinterpret_cast<uintptr_t>(scan_arena_.data()) + 15) & ~uintptr_t(15));
-  Arena arena(base, scan_arena_.size() - 16);
+  Arena arena = aligned_arena(scan_arena_.data(), scan_arena_.size());
   VoxelLayer layer;
   Status s = layer.bind(arena, config_.voxel);
   if (s != Status::Ok) return s;

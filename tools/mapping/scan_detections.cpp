@@ -4,6 +4,7 @@
 #include <cmath>
 
 #include "gsf/detail/arena.h"
+#include "mapping/workspace.h"
 
 namespace gsf::mapping {
 
@@ -16,8 +17,7 @@ Status ScanDetector::init(const LocalizerConfig& stages, uint32_t max_voxels) {
   size_t bytes = InstanceClustering::required_bytes(cluster, max_voxels) + 256;
   if (poles_on_) bytes += PoleExtraction::required_bytes(poles, max_voxels) + 256;
   memory_.assign(bytes / 8 + 4, 0);
-  void* base = reinterpret_cast<void*>((reinterpret_cast<uintptr_t>(memory_.data()) + 15) & ~uintptr_t(15));
-  Arena arena(base, memory_.size() * 8 - 16);
+  Arena arena = aligned_arena(memory_.data(), memory_.size() * 8);
   if (clusters_.bind(arena, cluster, max_voxels) != Status::Ok) return Status::InvalidArgument;
   clusters_.set_classes(stages.classes);
   if (poles_on_) {

@@ -6,6 +6,7 @@
 
 #include "gsf/detail/arena.h"
 #include "gsf/detail/fixed_vector.h"
+#include "mapping/workspace.h"
 
 namespace gsf::mapping {
 
@@ -55,13 +56,10 @@ Status add_scan_triangles(const float* centroids, const uint8_t* labels, uint32_
   TriangleConfig tc = query;
   tc.map_neighbours = 0;
   tc.max_triangles = largest * tc.neighbours * (tc.neighbours - 1) / 2 + 16;
-  std::vector<uint64_t> memory(
-      (TriangleBuilder::required_bytes(tc, largest) + size_t(tc.max_triangles) * sizeof(Triangle)) / 8 + 64);
-  void* base = reinterpret_cast<void*>((reinterpret_cast<uintptr_t>(memory.data()) + 15) & ~uintptr_t(15));
-  Arena arena(base, memory.size() * 8 - 16);
+  Workspace ws(TriangleBuilder::required_bytes(tc, largest) + size_t(tc.max_triangles) * sizeof(Triangle) + 512);
   TriangleBuilder builder;
   FixedVector<Triangle> local;
-  if (builder.bind(arena, tc, largest) != Status::Ok || !local.bind(arena, tc.max_triangles))
+  if (builder.bind(ws.arena, tc, largest) != Status::Ok || !local.bind(ws.arena, tc.max_triangles))
     return Status::InvalidArgument;
   std::vector<float> xyz;
   std::vector<uint8_t> lab;
@@ -87,7 +85,8 @@ Status add_scan_triangles(const float* centroids, const uint8_t* labels, uint32_
     for (uint32_t t = 0; t < local.size(); ++t) {
       Triangle tri = local[t];
       for (int k = 0; k < 3; ++k) tri.v[k] = ids[tri.v[k]];
-      if (present.count(triangle_vertex_set_key(tri.v[0], tri.v[1], tri.v[2]))) continue;
+      const uint64_t vertex_set = triangle_vertex_set_key(tri.v[0], tri.v[1], tri.v[2]);
+      if (present.count(vertex_set)) continue;
       if (max_key_share > 0) {
         uint32_t& share = key_share[triangle_key(tri, query.side_bin)];
         if (share >= max_key_share) {
@@ -96,7 +95,7 @@ Status add_scan_triangles(const float* centroids, const uint8_t* labels, uint32_
         }
         ++share;
       }
-      present.insert(triangle_vertex_set_key(tri.v[0], tri.v[1], tri.v[2]));
+      present.insert(vertex_set);
       triangles->push_back(tri);
       ++st.added;
     }

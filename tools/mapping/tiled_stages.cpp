@@ -17,6 +17,7 @@
 #include "gsf/detail/map_quantization.h"
 #include "gsf/detail/pole_extraction.h"
 #include "gsf/detail/voxel_layer.h"
+#include "mapping/workspace.h"
 
 namespace gsf::mapping {
 namespace {
@@ -26,13 +27,6 @@ double seconds_since(std::chrono::steady_clock::time_point t0) {
 }
 
 int32_t floor_div(int64_t a, int64_t b) { return static_cast<int32_t>(a >= 0 ? a / b : -((-a + b - 1) / b)); }
-
-// Arena-backed stage objects sized for one tile and its halo.
-struct Workspace {
-  std::vector<uint64_t> memory;
-  Arena arena;
-  explicit Workspace(size_t bytes) : memory(bytes / 8 + 2), arena(memory.data(), memory.size() * 8) {}
-};
 
 // An instance a tile owns, before the whole-map capacities and order are applied.
 struct Candidate {
