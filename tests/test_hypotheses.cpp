@@ -623,6 +623,14 @@ struct ShiftVoteScene {
       for (int j = 0; j < 3; ++j, x += 1.7f) add(x, -20.0f + 3.0f * j, 1.0f, 100.0f + 8.0f * k + 1.0f, 50.5f);
   }
   uint32_t size() const { return static_cast<uint32_t>(a.size() / 3); }
+  // One peeled clique, no heading-diverse search: the hypotheses are the clique and its shift votes.
+  static HypothesisConfig one_heading(uint32_t max_hypotheses) {
+    HypothesisConfig hc;
+    hc.max_peeled = 1;
+    hc.heading_cliques = 0;
+    hc.max_hypotheses = max_hypotheses;
+    return hc;
+  }
 };
 
 }  // namespace
@@ -636,10 +644,7 @@ TEST_CASE("Shift votes rank bins by their support: a translation split across a 
   const std::vector<float>&a = sc.a, &b = sc.b;
   const uint32_t n = sc.size();
   std::vector<float> w(n, 1.0f);
-  HypothesisConfig hc;
-  hc.max_peeled = 1;
-  hc.heading_cliques = 0;
-  hc.max_hypotheses = 4;  // the clique and 3 shift votes
+  HypothesisConfig hc = ShiftVoteScene::one_heading(4);  // the clique and 3 shift votes
   ArenaBuffer buf(PoseHypotheses::required_bytes(64, 8));
   PoseHypotheses hyp;
   REQUIRE(hyp.bind(buf.arena, 64, 8) == Status::Ok);
@@ -682,10 +687,7 @@ TEST_CASE("Shift votes over the pairs ranked out of the graph find the true shif
   const std::vector<float>&a = sc.a, &b = sc.b;
   const uint32_t total = sc.size();
   std::vector<float> w(total, 1.0f);
-  HypothesisConfig hc;
-  hc.max_peeled = 1;
-  hc.heading_cliques = 0;
-  hc.max_hypotheses = 3;  // the clique and the two best shift bins
+  HypothesisConfig hc = ShiftVoteScene::one_heading(3);  // the clique and the two best shift bins
   ArenaBuffer buf(PoseHypotheses::required_bytes(64, 8, 128));
   PoseHypotheses hyp;
   REQUIRE(hyp.bind(buf.arena, 64, 8, 128) == Status::Ok);
