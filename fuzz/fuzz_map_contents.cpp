@@ -51,7 +51,15 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   uint32_t hint = 0;
   const gsf::SemanticGridView grid = view.semantic_grid();
   for (float x = -3; x < 3; x += 0.7f)
-    for (float y = -3; y < 40; y += 0.9f) sink = sink + float(grid.cell_at(x, y, &hint) & 0xFF);
+    for (float y = -3; y < 40; y += 0.9f)
+      sink = sink + float((grid.cell_at(x, y, &hint) ^ grid.neighbours_at(x, y)) & 0xFF);
+  // The verification scorer follows every palette index a cell names into the masks and neighbour masks.
+  gsf::VerifyPoint points[64];
+  float weights[gsf::kNumClasses];
+  for (int c = 0; c < gsf::kNumClasses; ++c) weights[c] = 1.0f;
+  for (uint32_t i = 0; i < 64; ++i)
+    points[i] = gsf::VerifyPoint{float(i % 8) * 0.5f - 1.0f, float(i / 8) * 0.5f - 1.0f, i % gsf::kNumClasses};
+  sink = sink + gsf::verify_pose(points, 64, grid, Eigen::Isometry3d::Identity(), 64, weights).score;
   for (uint32_t i = 0; i < view.counts.instances; ++i)
     if (view.instances[i].label >= gsf::kNumClasses) __builtin_trap();
   const gsf::RefineLayerView refine = view.refine_layer();

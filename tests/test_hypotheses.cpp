@@ -2,11 +2,13 @@
 // the stages that let a query in a lattice of identical columns find the right lattice shift.
 #include <catch2/catch.hpp>
 
+#include <algorithm>
 #include <cmath>
 #include <random>
 #include <vector>
 
 #include "arena_buffer.h"
+#include "fuzz_seed_map.h"
 #include "gsf/config.h"
 #include "gsf/detail/max_clique.h"
 #include "gsf/detail/pose_hypotheses.h"
@@ -15,6 +17,7 @@
 #include "gsf/detail/triangle_matcher.h"
 #include "gsf/detail/voxel_layer.h"
 #include "gsf/detail/wasserstein.h"
+#include "gsf/map_format.h"
 #include "mapping/semantic_layer.h"
 #include "test_cloud.h"
 
@@ -245,7 +248,7 @@ namespace {
 // and ONE bush (vegetation) beside the column at x = 24.
 struct LatticeLayer {
   std::vector<uint32_t> keys, cells;  // cells: dense masks, stored with a palette per tile as the map does
-  std::vector<uint32_t> palette_offsets, palette;
+  std::vector<uint32_t> palette_offsets, palette, neighbours;
   std::vector<uint8_t> indices;
   SemanticGridView view;
   LatticeLayer() {
@@ -267,10 +270,12 @@ struct LatticeLayer {
       for (float y = 2.0f; y < 4.5f; y += 1.0f) set(x, y, class_bit(kVegetation));
     REQUIRE(mapping::palette_semantic_layer(cells, view.tile_count, T, &palette_offsets, &palette, &indices) ==
             Status::Ok);
+    REQUIRE(mapping::add_semantic_neighbours(keys, T, &palette_offsets, &palette, &indices, &neighbours) == Status::Ok);
     view.palette_count = static_cast<uint32_t>(palette.size());
     view.palette_offsets = palette_offsets.data();
     view.palette = palette.data();
     view.cells = indices.data();
+    view.neighbours = neighbours.data();
   }
   void set(float x, float y, uint32_t bits) {
     const int tx = static_cast<int>(std::floor(x / 16)), ty = static_cast<int>(std::floor(y / 16));
@@ -518,9 +523,86 @@ TEST_CASE("Semantic layer validation rejects unsorted keys, foreign bits and bad
   v = layer.view;
   v.cell = std::nanf("");
   CHECK(v.validate(kNumClasses) == Status::CorruptData);
+  v = layer.view;
+  std::vector<uint32_t> near = layer.neighbours;
+  near[2] |= 1u << 25;  // a neighbour mask with no class 25 either
+  v.neighbours = near.data();
+  CHECK(v.validate(kNumClasses) == Status::CorruptData);
+  v = layer.view;
+  v.neighbours = nullptr;  // a layer without its neighbour masks (format v6 requires them)
+  CHECK(v.validate(kNumClasses) == Status::CorruptData);
   uint32_t k;
   CHECK_FALSE(semantic_tile_key(40000, 0, &k));
   CHECK(semantic_tile_key(-32767, 32767, &k));
+}
+
+TEST_CASE("Each palette entry's neighbour mask is the union of its cell's four edge neighbours, across tiles") {
+  // A random layer of 1 m cells in 16 m tiles with holes (tiles not stored), written densely, then
+  // paletted and given neighbour masks as the map builder does; every cell's neighbour mask must equal
+  // the union of cell_at at the four neighbour cells' centres, and its own mask must be unchanged.
+  std::mt19937 rng(11);
+  std::vector<uint32_t> keys;
+  for (int tx = -2; tx < 2; ++tx)
+    for (int ty = -1; ty < 2; ++ty) {
+      if ((tx + 2) * 3 + ty == 4) continue;  // a hole in the middle: tile (-1, 0)
+      uint32_t key;
+      REQUIRE(semantic_tile_key(tx, ty, &key));
+      keys.push_back(key);
+    }
+  std::sort(keys.begin(), keys.end());
+  const uint32_t T = 16,
+                 kinds[] = {0u, kCellObserved, kCellObserved | class_bit(kRoad), kCellObserved | class_bit(kPole),
+                            kCellObserved | class_bit(kVegetation) | class_bit(kTerrain)};
+  std::vector<uint32_t> dense(keys.size() * T * T);
+  for (uint32_t& m : dense) m = kinds[rng() % 5];
+  std::vector<uint32_t> offsets, palette, near;
+  std::vector<uint8_t> indices;
+  REQUIRE(mapping::palette_semantic_layer(dense, uint32_t(keys.size()), T, &offsets, &palette, &indices) == Status::Ok);
+  const uint32_t masks_only = uint32_t(palette.size());
+  REQUIRE(mapping::add_semantic_neighbours(keys, T, &offsets, &palette, &indices, &near) == Status::Ok);
+  REQUIRE(near.size() == palette.size());
+  CHECK(palette.size() > masks_only);  // pairs: more entries than distinct masks
+  SemanticGridView g;
+  g.cell = 1.0f;
+  g.tile_cells = T;
+  g.tile_count = uint32_t(keys.size());
+  g.palette_count = uint32_t(palette.size());
+  g.tile_keys = keys.data();
+  g.palette_offsets = offsets.data();
+  g.palette = palette.data();
+  g.cells = indices.data();
+  g.neighbours = near.data();
+  REQUIRE(g.validate(kNumClasses) == Status::Ok);
+  uint32_t checked = 0, with_hole = 0;
+  for (size_t t = 0; t < keys.size(); ++t) {
+    const float tx = float(int(keys[t] >> 16) - 32768), ty = float(int(keys[t] & 0xFFFF) - 32768);
+    for (uint32_t c = 0; c < T * T; ++c) {
+      const float x = tx * 16.0f + float(c % T) + 0.5f, y = ty * 16.0f + float(c / T) + 0.5f;
+      CHECK(g.cell_at(x, y, nullptr) == dense[t * T * T + c]);
+      const uint32_t expect = g.cell_at(x - 1, y, nullptr) | g.cell_at(x + 1, y, nullptr) |
+                              g.cell_at(x, y - 1, nullptr) | g.cell_at(x, y + 1, nullptr);
+      CHECK(g.neighbours_at(x, y) == expect);
+      ++checked;
+      with_hole += (x == -16.5f || x == 0.5f) && y > 0.0f && y < 16.0f;
+    }
+  }
+  CHECK(checked == keys.size() * 256);
+  CHECK(with_hole == 32);  // the cells beside the hole were among them
+  // The fuzz seed map's hand-written neighbour masks are what the builder computes.
+  size_t seed_bytes = 0;
+  const std::vector<uint64_t> seed = gsf_test::fuzz_seed_map(&seed_bytes);
+  MapView sv;
+  REQUIRE(load_map(seed.data(), seed_bytes, &sv) == Status::Ok);
+  const uint32_t st = sv.counts.semantic_tiles, stc = sv.params.semantic_tile_cells;
+  std::vector<uint32_t> skeys(sv.semantic_tile_keys, sv.semantic_tile_keys + st);
+  std::vector<uint32_t> soff(sv.semantic_palette_offsets, sv.semantic_palette_offsets + st + 1);
+  std::vector<uint32_t> spal(sv.semantic_palette, sv.semantic_palette + sv.counts.semantic_palette);
+  std::vector<uint8_t> scells(sv.semantic_cells, sv.semantic_cells + size_t(st) * stc * stc);
+  std::vector<uint32_t> snear;
+  REQUIRE(mapping::add_semantic_neighbours(skeys, stc, &soff, &spal, &scells, &snear) == Status::Ok);
+  CHECK(std::equal(snear.begin(), snear.end(), sv.semantic_neighbours));
+  CHECK(std::equal(spal.begin(), spal.end(), sv.semantic_palette));
+  CHECK(std::equal(scells.begin(), scells.end(), sv.semantic_cells));
 }
 
 TEST_CASE("Heading-diverse cliques give the true heading a hypothesis when the largest cliques share a wrong one") {

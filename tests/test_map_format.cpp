@@ -130,6 +130,7 @@ bool same_semantic_layer(const MapView& a, const MapView& b) {
   return std::memcmp(a.semantic_tile_keys, b.semantic_tile_keys, tiles * 4) == 0 &&
          std::memcmp(a.semantic_palette_offsets, b.semantic_palette_offsets, (tiles + 1) * 4) == 0 &&
          std::memcmp(a.semantic_palette, b.semantic_palette, a.counts.semantic_palette * 4) == 0 &&
+         std::memcmp(a.semantic_neighbours, b.semantic_neighbours, a.counts.semantic_palette * 4) == 0 &&
          std::memcmp(a.semantic_cells, b.semantic_cells, tiles * tc * tc) == 0;
 }
 
@@ -368,7 +369,16 @@ TEST_CASE("Semantically invalid contents with valid CRCs are rejected") {
   CHECK(write_map(fine.view, b5.data(), size, nullptr) == Status::InvalidArgument);
 }
 
-TEST_CASE("Version 1 to 4 maps are refused as VersionMismatch, real v2, v3 and v4 files included") {
+TEST_CASE("Version 1 to 5 maps are refused as VersionMismatch, real v2, v3, v4 and v5 files included") {
+  // tests/data/map_v5_small.gsfmap: the fuzz seed map as format version 5 wrote it (12 sections, a
+  // palette of masks without their neighbour masks).
+  const std::vector<uint8_t> v5 = read_file(std::string(GSF_SOURCE_DIR) + "/tests/data/map_v5_small.gsfmap");
+  REQUIRE(v5.size() == 1376);
+  Blob old5(v5.size());
+  std::memcpy(old5.data(), v5.data(), v5.size());
+  MapView v5view;
+  CHECK(load_map(old5.data(), v5.size(), &v5view) == Status::VersionMismatch);
+  CHECK(v5view.instances == nullptr);
   // tests/data/map_v4_small.gsfmap: the fuzz seed map as format version 4 wrote it (13 sections, an
   // IndexEntries section, triangles in build order, keys without labels).
   const std::vector<uint8_t> v4 = read_file(std::string(GSF_SOURCE_DIR) + "/tests/data/map_v4_small.gsfmap");
@@ -398,7 +408,7 @@ TEST_CASE("Version 1 to 4 maps are refused as VersionMismatch, real v2, v3 and v
   // A current map relabelled as an older version (header CRC re-sealed): the version decides, not the CRC.
   SmallMap sm;
   const size_t size = map_serialized_size(sm.view);
-  for (uint32_t version : {1u, 2u, 3u, 4u}) {
+  for (uint32_t version : {1u, 2u, 3u, 4u, 5u}) {
     Blob b(size);
     REQUIRE(write_map(sm.view, b.data(), size, nullptr) == Status::Ok);
     reseal_header(b.data(), [&](MapHeader* h) { h->version = version; });

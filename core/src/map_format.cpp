@@ -47,6 +47,7 @@ bool section_specs(const MapView& m, SectionSpec* s) {
   s[9] = {MapSection::SemanticPaletteOffsets, sizeof(uint32_t), tiles ? tiles + 1 : 0, m.semantic_palette_offsets};
   s[10] = {MapSection::SemanticPalette, sizeof(uint32_t), m.counts.semantic_palette, m.semantic_palette};
   s[11] = {MapSection::SemanticCells, sizeof(uint8_t), tiles * tc * tc, m.semantic_cells};
+  s[12] = {MapSection::SemanticNeighbours, sizeof(uint32_t), m.counts.semantic_palette, m.semantic_neighbours};
   return true;
 }
 
@@ -289,6 +290,7 @@ Status load_map(const void* data, size_t bytes, MapView* out) {
   m.semantic_palette_offsets = m.counts.semantic_tiles ? static_cast<const uint32_t*>(ptr[9]) : nullptr;
   m.semantic_palette = m.counts.semantic_tiles ? static_cast<const uint32_t*>(ptr[10]) : nullptr;
   m.semantic_cells = m.counts.semantic_tiles ? static_cast<const uint8_t*>(ptr[11]) : nullptr;
+  m.semantic_neighbours = m.counts.semantic_tiles ? static_cast<const uint32_t*>(ptr[12]) : nullptr;
   const Status cs = check_contents(m);
   if (cs != Status::Ok) return cs;
   *out = m;

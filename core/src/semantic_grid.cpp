@@ -93,57 +93,74 @@ inline GridAxis grid_axis(const GridConstants& k, float x) {
   return {tile, c};
 }
 
-// cell_at(x, y) from the two axes, with the tile found through `cache` (identical results).
-inline uint32_t cell_at_axes(const SemanticGridView& g, const GridConstants& k, GridAxis ax, GridAxis ay,
-                             TileCache& cache) {
-  if (!k.usable || ax.tile == kOutsideTiles || ay.tile == kOutsideTiles) return 0;
+// Index into g.palette (and g.neighbours) of the cell at the two axes, the tile found through `cache`
+// (the cell cell_at finds); kNoCell outside the stored tiles.
+constexpr uint32_t kNoCell = UINT32_MAX;
+inline uint32_t palette_index_at_axes(const SemanticGridView& g, const GridConstants& k, GridAxis ax, GridAxis ay,
+                                      TileCache& cache) {
+  if (!k.usable || ax.tile == kOutsideTiles || ay.tile == kOutsideTiles) return kNoCell;
   const uint32_t key = (uint32_t(ax.tile + 32768) << 16) | uint32_t(ay.tile + 32768);
   const uint32_t e = static_cast<uint32_t>((key * 0x9E3779B1u) >> 26);  // 64 entries
   uint32_t t;
   if (cache.value[e] != 0 && cache.key[e] == key) {
-    if (cache.value[e] == 1) return 0;
+    if (cache.value[e] == 1) return kNoCell;
     t = cache.value[e] - 2;
   } else {
     const uint32_t lo = tile_lower_bound(g.tile_keys, g.tile_count, key);
     const bool found = lo < g.tile_count && g.tile_keys[lo] == key;
     cache.key[e] = key;
     cache.value[e] = found ? lo + 2 : 1;
-    if (!found) return 0;
+    if (!found) return kNoCell;
     t = lo;
   }
   const size_t n = g.tile_cells;
-  return g.palette[g.palette_offsets[t] + g.cells[size_t(t) * n * n + size_t(ay.cell) * n + size_t(ax.cell)]];
+  return g.palette_offsets[t] + g.cells[size_t(t) * n * n + size_t(ay.cell) * n + size_t(ax.cell)];
+}
+
+}  // namespace
+
+namespace {
+
+// Index into g.palette of the cell at (x, y) (cell_at's plain arithmetic); kNoCell outside the tiles.
+uint32_t palette_index_at(const SemanticGridView& g, float x, float y, uint32_t* hint) {
+  if (g.tile_count == 0 || !(g.cell > 0.0f)) return kNoCell;
+  const float tile = g.cell * static_cast<float>(g.tile_cells);
+  const float fx = std::floor(x / tile), fy = std::floor(y / tile);
+  if (!(std::fabs(fx) < 32768.0f && std::fabs(fy) < 32768.0f)) return kNoCell;  // also rejects NaN
+  uint32_t key;
+  if (!semantic_tile_key(static_cast<int64_t>(fx), static_cast<int64_t>(fy), &key)) return kNoCell;
+  uint32_t t;
+  if (hint && *hint < g.tile_count && g.tile_keys[*hint] == key) {
+    t = *hint;
+  } else {
+    const uint32_t lo = tile_lower_bound(g.tile_keys, g.tile_count, key);
+    if (lo >= g.tile_count || g.tile_keys[lo] != key) return kNoCell;
+    t = lo;
+    if (hint) *hint = t;
+  }
+  int32_t cx = static_cast<int32_t>((x - fx * tile) / g.cell), cy = static_cast<int32_t>((y - fy * tile) / g.cell);
+  const int32_t n = static_cast<int32_t>(g.tile_cells);
+  cx = cx < 0 ? 0 : (cx >= n ? n - 1 : cx);  // float rounding at the tile's far edge
+  cy = cy < 0 ? 0 : (cy >= n ? n - 1 : cy);
+  return g.palette_offsets[t] +
+         g.cells[size_t(t) * g.tile_cells * g.tile_cells + size_t(cy) * g.tile_cells + size_t(cx)];
 }
 
 }  // namespace
 
 uint32_t SemanticGridView::cell_at(float x, float y, uint32_t* hint) const {
-  if (tile_count == 0 || !(cell > 0.0f)) return 0;
-  const float tile = cell * static_cast<float>(tile_cells);
-  const float fx = std::floor(x / tile), fy = std::floor(y / tile);
-  if (!(std::fabs(fx) < 32768.0f && std::fabs(fy) < 32768.0f)) return 0;  // also rejects NaN
-  uint32_t key;
-  if (!semantic_tile_key(static_cast<int64_t>(fx), static_cast<int64_t>(fy), &key)) return 0;
-  uint32_t t;
-  if (hint && *hint < tile_count && tile_keys[*hint] == key) {
-    t = *hint;
-  } else {
-    const uint32_t lo = tile_lower_bound(tile_keys, tile_count, key);
-    if (lo >= tile_count || tile_keys[lo] != key) return 0;
-    t = lo;
-    if (hint) *hint = t;
-  }
-  int32_t cx = static_cast<int32_t>((x - fx * tile) / cell), cy = static_cast<int32_t>((y - fy * tile) / cell);
-  const int32_t n = static_cast<int32_t>(tile_cells);
-  cx = cx < 0 ? 0 : (cx >= n ? n - 1 : cx);  // float rounding at the tile's far edge
-  cy = cy < 0 ? 0 : (cy >= n ? n - 1 : cy);
-  return palette[palette_offsets[t] +
-                 cells[size_t(t) * tile_cells * tile_cells + size_t(cy) * tile_cells + size_t(cx)]];
+  const uint32_t i = palette_index_at(*this, x, y, hint);
+  return i == kNoCell ? 0u : palette[i];
+}
+
+uint32_t SemanticGridView::neighbours_at(float x, float y) const {
+  const uint32_t i = palette_index_at(*this, x, y, nullptr);
+  return i == kNoCell || neighbours == nullptr ? 0u : neighbours[i];
 }
 
 Status SemanticGridView::validate(uint32_t num_classes) const {
   if (tile_count == 0) return Status::Ok;
-  if (!tile_keys || !cells || !palette_offsets || !palette) return Status::CorruptData;
+  if (!tile_keys || !cells || !palette_offsets || !palette || !neighbours) return Status::CorruptData;
   if (!(cell > 0.0f) || !std::isfinite(cell) || tile_cells == 0 || tile_cells > kMaxSemanticTileCells)
     return Status::CorruptData;
   const uint32_t allowed = kCellObserved | (num_classes >= 31 ? 0x7FFFFFFFu : ((1u << num_classes) - 1));
@@ -157,8 +174,9 @@ Status SemanticGridView::validate(uint32_t num_classes) const {
     for (uint32_t c = 0; c < per_tile; ++c)
       if (cells[size_t(t) * per_tile + c] >= hi - lo) return Status::CorruptData;
   }
+  if (!neighbours) return Status::CorruptData;
   for (uint32_t i = 0; i < palette_count; ++i)
-    if (palette[i] & ~allowed) return Status::CorruptData;
+    if ((palette[i] | neighbours[i]) & ~allowed) return Status::CorruptData;
   return Status::Ok;
 }
 
@@ -206,7 +224,8 @@ PoseVerification score_samples(const Source& src, const SemanticGridView& grid, 
     uint8_t label;
     const Eigen::Vector2f p = src.at(i, R, t, &label);
     const GridAxis ax = grid_axis<kExactInverse>(k, p.x()), ay = grid_axis<kExactInverse>(k, p.y());
-    const uint32_t mask = cell_at_axes(grid, k, ax, ay, cache);
+    const uint32_t at = palette_index_at_axes(grid, k, ax, ay, cache);
+    const uint32_t mask = at == kNoCell ? 0u : grid.palette[at];
     const uint32_t bit = class_bit(label);
     const float w = weights[label];
     int verdict = 0;  // +1 agree, -1 disagree, 0 unknown
@@ -215,17 +234,10 @@ PoseVerification score_samples(const Source& src, const SemanticGridView& grid, 
     } else if (mask & kCellObserved) {
       verdict = (mask & bit) ? 1 : -1;
     }
-    if (verdict < 0) {
-      // A hypothesis pose is good to about a cell: the class in a 4-neighbour cell still agrees (a
-      // lattice shift moves cues by metres, far beyond this tolerance). A neighbour shares one axis
-      // with p, so only the other is computed again.
-      const float c = grid.cell;
-      if ((cell_at_axes(grid, k, grid_axis<kExactInverse>(k, p.x() - c), ay, cache) & bit) ||
-          (cell_at_axes(grid, k, grid_axis<kExactInverse>(k, p.x() + c), ay, cache) & bit) ||
-          (cell_at_axes(grid, k, ax, grid_axis<kExactInverse>(k, p.y() - c), cache) & bit) ||
-          (cell_at_axes(grid, k, ax, grid_axis<kExactInverse>(k, p.y() + c), cache) & bit))
-        verdict = 1;
-    }
+    // A hypothesis pose is good to about a cell: the class in a 4-neighbour cell still agrees (a
+    // lattice shift moves cues by metres, far beyond this tolerance). A disagreeing voxel's cell is in
+    // a stored tile, so its palette entry's neighbour mask is there.
+    if (verdict < 0 && (grid.neighbours[at] & bit)) verdict = 1;
     if (verdict == 0) {
       ++v.unknown;
       continue;
@@ -242,7 +254,7 @@ template <class Source>
 PoseVerification score_pose(const Source& src, const SemanticGridView& grid, const Eigen::Isometry3d& T,
                             uint32_t max_points, const float* weights) {
   const uint32_t n = src.size();
-  if (n == 0 || max_points == 0 || grid.empty()) return PoseVerification();
+  if (n == 0 || max_points == 0 || grid.empty() || grid.neighbours == nullptr) return PoseVerification();
   const uint32_t stride = (n + max_points - 1) / max_points;
   const GridConstants k = grid_constants(grid);
   return k.exact_inverse ? score_samples<true>(src, grid, k, T, stride, weights)

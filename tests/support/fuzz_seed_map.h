@@ -86,21 +86,22 @@ inline std::vector<uint64_t> fuzz_seed_map(size_t* bytes) {
   p.semantic_cell = 1.0f;
   p.semantic_tile_cells = 2;
   static uint32_t tile_keys[2] = {(32768u << 16) | 32768u, (32768u << 16) | 32769u};
-  // Tile 0: road, (none), pole, observed-empty; tile 1: (none), terrain, (none), (none) - as palettes.
-  static uint32_t palette_offsets[3] = {0, 4, 6};
-  static uint32_t palette[6] = {gsf::kCellObserved | gsf::class_bit(gsf::kRoad),
-                                0,
-                                gsf::kCellObserved | gsf::class_bit(gsf::kPole),
-                                gsf::kCellObserved,
-                                0,
-                                gsf::kCellObserved | gsf::class_bit(gsf::kTerrain)};
-  static uint8_t cells[8] = {0, 1, 2, 3, 0, 1, 0, 0};
+  // Tile (0, 0): road, (none) / pole, observed-empty; tile (0, 1) above it: (none), terrain / (none),
+  // (none) - rows of increasing y, as palettes of (mask, 4-neighbour mask) pairs (format v6).
+  constexpr uint32_t R = gsf::kCellObserved | gsf::class_bit(gsf::kRoad), O = gsf::kCellObserved;
+  constexpr uint32_t P = gsf::kCellObserved | gsf::class_bit(gsf::kPole);
+  constexpr uint32_t T = gsf::kCellObserved | gsf::class_bit(gsf::kTerrain);
+  static uint32_t palette_offsets[3] = {0, 4, 8};
+  static uint32_t palette[8] = {R, 0, P, O, 0, T, 0, 0};
+  static uint32_t neighbours[8] = {P, R | O, R | O, P | T, P | T, O, 0, T};
+  static uint8_t cells[8] = {0, 1, 2, 3, 0, 1, 2, 3};
   v.counts.semantic_tiles = 2;
-  v.counts.semantic_palette = 6;
+  v.counts.semantic_palette = 8;
   v.semantic_tile_keys = tile_keys;
   v.semantic_palette_offsets = palette_offsets;
   v.semantic_palette = palette;
   v.semantic_cells = cells;
+  v.semantic_neighbours = neighbours;
   *bytes = map_serialized_size(v);
   std::vector<uint64_t> buf(*bytes / 8 + 2);
   write_map(v, buf.data(), *bytes, nullptr);

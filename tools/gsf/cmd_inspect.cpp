@@ -95,8 +95,8 @@ int cmd_inspect(int argc, char** argv) {
       uint64_t(map.counts.semantic_tiles) * map.params.semantic_tile_cells * map.params.semantic_tile_cells;
   // Tile keys and palette offsets (4 B each), the palettes' masks (4 B), a byte a cell.
   const uint64_t sem_bytes = uint64_t(map.counts.semantic_tiles) * 8 + (map.counts.semantic_tiles ? 4 : 0) +
-                             uint64_t(map.counts.semantic_palette) * 4 + sem_cells;
-  std::printf("  semantic layer  %u tiles of %ux%u cells @ %.2f m, %u palette masks (%.2f MB)\n",
+                             uint64_t(map.counts.semantic_palette) * 8 + sem_cells;  // mask + neighbour mask
+  std::printf("  semantic layer  %u tiles of %ux%u cells @ %.2f m, %u palette entries (%.2f MB)\n",
               map.counts.semantic_tiles, map.params.semantic_tile_cells, map.params.semantic_tile_cells,
               map.params.semantic_cell, map.counts.semantic_palette, sem_bytes / 1e6);
   // Bytes per section (format v5: docs/map-format.md), so the size can be traced to what it stores.

@@ -300,6 +300,8 @@ Status MapBuilder::build(MapSink& sink, size_t* bytes_out, MapBuildStats* stats_
   write(MapSection::SemanticPalette, content.semantic_palette.data(), content.semantic_palette.size(),
         sizeof(uint32_t));
   write(MapSection::SemanticCells, content.semantic_cells.data(), content.semantic_cells.size(), sizeof(uint8_t));
+  write(MapSection::SemanticNeighbours, content.semantic_neighbours.data(), content.semantic_neighbours.size(),
+        sizeof(uint32_t));
   if (s != Status::Ok) return s;
   content = MapContent();
 

@@ -76,4 +76,54 @@ Status palette_semantic_layer(const std::vector<uint32_t>& cells, uint32_t tile_
   return Status::Ok;
 }
 
+Status add_semantic_neighbours(const std::vector<uint32_t>& keys, uint32_t tile_cells,
+                               std::vector<uint32_t>* palette_offsets, std::vector<uint32_t>* palette,
+                               std::vector<uint8_t>* indices, std::vector<uint32_t>* neighbours) {
+  neighbours->clear();
+  if (tile_cells == 0 || tile_cells > kMaxSemanticTileCells) return Status::InvalidArgument;
+  const size_t n = keys.size(), per_tile = size_t(tile_cells) * tile_cells;
+  if (n == 0) return palette->empty() && indices->empty() ? Status::Ok : Status::InvalidArgument;
+  if (palette_offsets->size() != n + 1 || indices->size() != n * per_tile || palette_offsets->back() != palette->size())
+    return Status::InvalidArgument;
+  const int64_t T = tile_cells;
+  // The mask of global cell (gx, gy) = (tile x * T + cell x, tile y * T + cell y); 0 outside the tiles.
+  auto mask_at = [&](int64_t gx, int64_t gy) -> uint32_t {
+    const int64_t tx = gx >= 0 ? gx / T : -((-gx + T - 1) / T), ty = gy >= 0 ? gy / T : -((-gy + T - 1) / T);
+    uint32_t key;
+    if (!semantic_tile_key(tx, ty, &key)) return 0;
+    const auto it = std::lower_bound(keys.begin(), keys.end(), key);
+    if (it == keys.end() || *it != key) return 0;
+    const size_t t = size_t(it - keys.begin());
+    const size_t c = size_t(gy - ty * T) * size_t(T) + size_t(gx - tx * T);
+    return (*palette)[(*palette_offsets)[t] + (*indices)[t * per_tile + c]];
+  };
+  std::vector<uint32_t> offsets, masks, near;
+  std::vector<uint8_t> cells(indices->size());
+  offsets.reserve(n + 1);
+  offsets.push_back(0);
+  for (size_t t = 0; t < n; ++t) {
+    const int64_t tx = int64_t(keys[t] >> 16) - 32768, ty = int64_t(keys[t] & 0xFFFFu) - 32768;
+    const size_t first = masks.size();
+    for (int64_t cy = 0; cy < T; ++cy)
+      for (int64_t cx = 0; cx < T; ++cx) {
+        const int64_t gx = tx * T + cx, gy = ty * T + cy;
+        const uint32_t m = mask_at(gx, gy);
+        const uint32_t nb = mask_at(gx - 1, gy) | mask_at(gx + 1, gy) | mask_at(gx, gy - 1) | mask_at(gx, gy + 1);
+        size_t k = first;
+        while (k < masks.size() && !(masks[k] == m && near[k] == nb)) ++k;  // <= 256 pairs a tile
+        if (k == masks.size()) {
+          masks.push_back(m);
+          near.push_back(nb);
+        }
+        cells[t * per_tile + size_t(cy) * size_t(T) + size_t(cx)] = static_cast<uint8_t>(k - first);
+      }
+    offsets.push_back(static_cast<uint32_t>(masks.size()));
+  }
+  *palette_offsets = std::move(offsets);
+  *palette = std::move(masks);
+  *neighbours = std::move(near);
+  *indices = std::move(cells);
+  return Status::Ok;
+}
+
 }  // namespace gsf::mapping

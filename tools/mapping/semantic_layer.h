@@ -32,4 +32,15 @@ Status palette_semantic_layer(const std::vector<uint32_t>& cells, uint32_t tile_
                               std::vector<uint32_t>* palette_offsets, std::vector<uint32_t>* palette,
                               std::vector<uint8_t>* indices);
 
+// Format v6: gives every palette entry its neighbour mask, the union of the masks of the four cells
+// sharing an edge with its cell (across tile edges; a side in a tile that is not stored adds nothing),
+// and re-palettes each tile over (mask, neighbour mask) pairs in order of first appearance (at most
+// one pair a cell, so at most 256 a tile). In: the paletted layer of palette_semantic_layer (keys
+// sorted); out: palette_offsets, palette and indices rewritten, neighbours of palette's length. Needs
+// the whole layer (a border cell's neighbours are in the next tile), so it runs once, after the tiles.
+// InvalidArgument for inconsistent sizes or tile_cells out of range.
+Status add_semantic_neighbours(const std::vector<uint32_t>& keys, uint32_t tile_cells,
+                               std::vector<uint32_t>* palette_offsets, std::vector<uint32_t>* palette,
+                               std::vector<uint8_t>* indices, std::vector<uint32_t>* neighbours);
+
 }  // namespace gsf::mapping

@@ -444,6 +444,11 @@ Status build_map_content(TileStore& store, const LocalizerConfig& config, const 
                                chunk.cells.begin() + size_t(k + 1) * semantic_tile_size);
   }
   std::vector<SemanticChunk>().swap(semantic_chunks);
+  // The neighbour masks read across tile edges, so they come once the layer is whole.
+  const Status ns =
+      add_semantic_neighbours(out->semantic_keys, options.semantic_layer.tile_cells, &out->semantic_palette_offsets,
+                              &out->semantic_palette, &out->semantic_cells, &out->semantic_neighbours);
+  if (ns != Status::Ok) return ns;
   out->semantic_palette.shrink_to_fit();
   st->semantic_tiles = static_cast<uint32_t>(out->semantic_keys.size());
   return Status::Ok;

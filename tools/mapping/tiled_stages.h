@@ -42,6 +42,7 @@ struct MapContent {
   std::vector<std::vector<float>> refine;  // x, y, z per point, in chunks (refine_layer_builder.h)
   std::vector<uint32_t> semantic_keys, semantic_palette_offsets, semantic_palette;  // semantic_grid.h
   std::vector<uint8_t> semantic_cells;                                              // palette indices
+  std::vector<uint32_t> semantic_neighbours;  // per palette entry (add_semantic_neighbours)
 };
 
 // Halo (m) around a map tile that the tile's stages read beyond it (see above).

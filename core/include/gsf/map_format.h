@@ -23,8 +23,9 @@ constexpr char kMapMagic[8] = {'G', 'S', 'F', 'M', 'A', 'P', '\r', '\n'};
 // 2: semantic layer for hypothesis verification; 3: georeference (origin + frame) and the class table id;
 // 4: compact - only what the localizer reads, grids quantised, the refinement layer stored in its grid
 // with normals; 5: triangles stored in index-key order, the key carries the labels, no IndexEntries
-// section. Older maps -> VersionMismatch (rebuild with gsf build-map).
-constexpr uint32_t kMapVersion = 5;
+// section; 6: each semantic palette entry carries its cells' 4-neighbour mask (SemanticNeighbours), so
+// verification's neighbour test is one load. Older maps -> VersionMismatch (rebuild with gsf build-map).
+constexpr uint32_t kMapVersion = 6;
 
 // Parameters the map was built with that a localizer must agree with (checked by the Localizer).
 struct MapParams {
@@ -56,7 +57,7 @@ struct MapCounts {
   float bounds_max[3];
   uint32_t semantic_tiles;    // tiles of the semantic layer (0: no layer; verification is then off)
   uint32_t refine_tiles;      // tiles of the refinement layer (0 when refine_points is 0)
-  uint32_t semantic_palette;  // class masks over all semantic tiles' palettes (0 without the layer)
+  uint32_t semantic_palette;  // palette entries over all semantic tiles (0 without the layer)
   uint32_t reserved[2];       // 0
 };
 static_assert(sizeof(MapCounts) == 64, "on-disk layout (docs/map-format.md)");
@@ -88,8 +89,9 @@ enum class MapSection : uint32_t {
   SemanticPaletteOffsets,  // uint32 x (semantic_tiles + 1; 0 without the layer): each tile's palette
   SemanticPalette,         // uint32 x semantic_palette (class masks)
   SemanticCells,           // uint8 x semantic_tiles x semantic_tile_cells^2 (indices into the tile's palette)
+  SemanticNeighbours,      // uint32 x semantic_palette (per palette entry: its cells' 4-neighbour mask)
 };
-constexpr uint32_t kMapSectionCount = 12;
+constexpr uint32_t kMapSectionCount = 13;
 
 struct SectionEntry {
   uint32_t id;
@@ -137,6 +139,7 @@ struct MapView {
   const uint32_t* semantic_palette_offsets = nullptr;
   const uint32_t* semantic_palette = nullptr;
   const uint8_t* semantic_cells = nullptr;
+  const uint32_t* semantic_neighbours = nullptr;
   size_t total_bytes = 0;
 
   uint32_t grid_points() const { return params.grid_nx * params.grid_ny * params.grid_layers; }
@@ -150,6 +153,7 @@ struct MapView {
     g.palette_offsets = semantic_palette_offsets;
     g.palette = semantic_palette;
     g.cells = semantic_cells;
+    g.neighbours = semantic_neighbours;
     return g;
   }
   RefineLayerView refine_layer() const {

@@ -9,7 +9,10 @@
 // ground classes) or of its above-ground voxels (other classes); bit 31 marks a cell the map observed.
 // Stored with a palette per tile (format v4): a tile lists its distinct masks once (a road tile has a
 // handful) and each cell is a 1-byte index into that list, so a 16 x 16 tile is 256 B + 4 B a mask
-// instead of 1 KiB; tile_cells is therefore at most 16 (at most 256 distinct masks a tile).
+// instead of 1 KiB; tile_cells is therefore at most 16 (at most 256 distinct masks a tile). Since format
+// v6 a palette entry is a pair: the cell's mask and its neighbour mask, the union of the masks of the
+// four cells sharing an edge with it (0 for a side in a tile not stored), so a tile lists its distinct
+// pairs (still at most 256: one per cell) and the neighbour test below costs one more load.
 //
 // Verification: every sampled voxel of the query scan (stuff included: terrain, vegetation, fences,
 // walls, not only instances) is moved by the hypothesis into the map and compared with its cell:
@@ -18,6 +21,8 @@
 //   other voxel:        agrees if the cell has that class; disagrees if the cell was observed without it
 //                       (the map saw that spot and it held something else or nothing above ground);
 //                       unknown if the cell was never observed.
+//   either, disagreeing: agrees after all if one of the cell's four edge neighbours has the class (a
+//                       hypothesis pose is good to about a cell).
 // score = sum of stability weights of agreeing voxels - the same sum over disagreeing voxels. In a
 // lattice every shift of the columns agrees on the columns and the roads; the hedge, the terrain
 // island, the fence 30 m away are what separate the shifts, and they are in the score.
@@ -49,14 +54,18 @@ struct SemanticGridView {
   const uint32_t* tile_keys = nullptr;        // tile_count, strictly increasing
   const uint32_t* palette_offsets = nullptr;  // tile_count + 1: tile t's masks are palette[off[t] .. off[t+1])
   const uint32_t* palette = nullptr;          // palette_count class masks
-  const uint8_t* cells = nullptr;  // tile_count x tile_cells^2 indices into the tile's palette, row-major (y, x)
+  const uint8_t* cells = nullptr;        // tile_count x tile_cells^2 indices into the tile's palette, row-major (y, x)
+  const uint32_t* neighbours = nullptr;  // palette_count: each entry's 4-neighbour mask (see above)
 
   bool empty() const { return tile_count == 0; }
   // Cell mask at (x, y) in the map frame; 0 outside stored tiles. *tile_hint caches the last tile index.
   uint32_t cell_at(float x, float y, uint32_t* tile_hint) const;
+  // The cell's neighbour mask at (x, y) (the union of its four edge neighbours' masks); 0 outside.
+  uint32_t neighbours_at(float x, float y) const;
   // Structural checks for untrusted arrays: parameters, keys strictly increasing, palette offsets
-  // monotone from 0 to palette_count with 1..256 masks a tile, every cell's index inside its tile's
-  // palette, masks use only class bits below num_classes and the observed bit.
+  // monotone from 0 to palette_count with 1..256 entries a tile, every cell's index inside its tile's
+  // palette, masks and neighbour masks (present with any tile) use only class bits below num_classes
+  // and the observed bit.
   Status validate(uint32_t num_classes) const;
 };
 
@@ -90,7 +99,7 @@ PoseVerification verify_pose(const VoxelLayer& voxels, const SemanticGridView& g
 // polish_divisor. *refined (optional) receives the best pose found. at_start (optional):
 // verify_pose(map_T_scan, max_points) already computed by the caller, returned as is when the search
 // does not move. Cost: at most (12 (rounds - 1) + 1) x max_points / search_divisor + 13 x max_points /
-// polish_divisor + max_points cell lookups (and up to 4 more per disagreeing voxel).
+// polish_divisor + max_points cell lookups.
 PoseVerification verify_pose_refined(const VoxelLayer& voxels, const SemanticGridView& grid,
                                      const Eigen::Isometry3d& map_T_scan, uint32_t max_points, const float* weights,
                                      uint32_t rounds, float step_m, float step_deg, Eigen::Isometry3d* refined,
