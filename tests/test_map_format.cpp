@@ -370,41 +370,28 @@ TEST_CASE("Semantically invalid contents with valid CRCs are rejected") {
 }
 
 TEST_CASE("Version 1 to 5 maps are refused as VersionMismatch, real v2, v3, v4 and v5 files included") {
-  // tests/data/map_v5_small.gsfmap: the fuzz seed map as format version 5 wrote it (12 sections, a
-  // palette of masks without their neighbour masks).
-  const std::vector<uint8_t> v5 = read_file(std::string(GSF_SOURCE_DIR) + "/tests/data/map_v5_small.gsfmap");
-  REQUIRE(v5.size() == 1376);
-  Blob old5(v5.size());
-  std::memcpy(old5.data(), v5.data(), v5.size());
-  MapView v5view;
-  CHECK(load_map(old5.data(), v5.size(), &v5view) == Status::VersionMismatch);
-  CHECK(v5view.instances == nullptr);
-  // tests/data/map_v4_small.gsfmap: the fuzz seed map as format version 4 wrote it (13 sections, an
-  // IndexEntries section, triangles in build order, keys without labels).
-  const std::vector<uint8_t> v4 = read_file(std::string(GSF_SOURCE_DIR) + "/tests/data/map_v4_small.gsfmap");
-  REQUIRE(v4.size() == 1424);
-  Blob old4(v4.size());
-  std::memcpy(old4.data(), v4.data(), v4.size());
-  MapView v4view;
-  CHECK(load_map(old4.data(), v4.size(), &v4view) == Status::VersionMismatch);
-  CHECK(v4view.instances == nullptr);
-  // tests/data/map_v3_small.gsfmap: the fuzz seed map as format version 3 wrote it (240-byte header,
-  // float grids, inducing inputs and alpha, raw refinement points).
-  const std::vector<uint8_t> v3 = read_file(std::string(GSF_SOURCE_DIR) + "/tests/data/map_v3_small.gsfmap");
-  REQUIRE(v3.size() == 2928);
-  Blob old3(v3.size());
-  std::memcpy(old3.data(), v3.data(), v3.size());
-  MapView v3view;
-  CHECK(load_map(old3.data(), v3.size(), &v3view) == Status::VersionMismatch);
-  CHECK(v3view.instances == nullptr);
-  // tests/data/map_v2_small.gsfmap: the fuzz seed map as format version 2 wrote it (184-byte header).
-  const std::vector<uint8_t> v2 = read_file(std::string(GSF_SOURCE_DIR) + "/tests/data/map_v2_small.gsfmap");
-  REQUIRE(v2.size() == 2880);
-  Blob old(v2.size());
-  std::memcpy(old.data(), v2.data(), v2.size());
+  // Real files: the fuzz seed map as each older format version wrote it.
+  struct OldFile {
+    const char* name;
+    size_t bytes;
+  };
+  const OldFile files[] = {
+      {"map_v5_small.gsfmap", 1376},  // 12 sections, a palette of masks without their neighbour masks
+      {"map_v4_small.gsfmap", 1424},  // 13 sections, an IndexEntries section, triangles in build order
+      {"map_v3_small.gsfmap", 2928},  // 240-byte header, float grids, inducing inputs and alpha
+      {"map_v2_small.gsfmap", 2880},  // 184-byte header
+  };
   MapView v;
-  CHECK(load_map(old.data(), v2.size(), &v) == Status::VersionMismatch);
-  CHECK(v.instances == nullptr);
+  for (const OldFile& f : files) {
+    const std::vector<uint8_t> bytes = read_file(std::string(GSF_SOURCE_DIR) + "/tests/data/" + f.name);
+    INFO(f.name);
+    REQUIRE(bytes.size() == f.bytes);
+    Blob old(bytes.size());
+    std::memcpy(old.data(), bytes.data(), bytes.size());
+    v.instances = reinterpret_cast<const MapInstance*>(&f);  // load_map must clear it
+    CHECK(load_map(old.data(), bytes.size(), &v) == Status::VersionMismatch);
+    CHECK(v.instances == nullptr);
+  }
   // A current map relabelled as an older version (header CRC re-sealed): the version decides, not the CRC.
   SmallMap sm;
   const size_t size = map_serialized_size(sm.view);
