@@ -29,8 +29,9 @@ struct MatchConfig {
   // and counted in match_dropped. 0: no scan budget (the default before 2026-12-02). 65,536: the
   // suite's p95 query time halves (87.7 -> 47.4 ms held out, 66.4 -> 38.2 ms seeds 1-5) for -0.1
   // points of GSF success (instance-only +0.3 / +0.4); a true pair lost by one triangle's cap still
-  // comes from the other triangles it is a vertex of (docs/results.md).
-  uint32_t max_matches_per_scan = 65536;
+  // comes from the other triangles it is a vertex of. 32,768 (map format v6): p95 -15% again, the
+  // slowest world 52 -> 44 ms held out, success within 0.2 points either way (docs/results.md).
+  uint32_t max_matches_per_scan = 32768;
   float vertex_tie_tolerance = 0.06f;  // relative; query sides closer than this are tried in both orders
   // 1: a map triangle whose bird's-eye sense contradicts the query triangle's is no match (a mirror
   // image: same sides; triangle.h, TriangleOrientation). Vehicles are upright, so their scans map to the
