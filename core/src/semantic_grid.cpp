@@ -174,7 +174,6 @@ Status SemanticGridView::validate(uint32_t num_classes) const {
     for (uint32_t c = 0; c < per_tile; ++c)
       if (cells[size_t(t) * per_tile + c] >= hi - lo) return Status::CorruptData;
   }
-  if (!neighbours) return Status::CorruptData;
   for (uint32_t i = 0; i < palette_count; ++i)
     if ((palette[i] | neighbours[i]) & ~allowed) return Status::CorruptData;
   return Status::Ok;
