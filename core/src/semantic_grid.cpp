@@ -117,10 +117,6 @@ inline uint32_t palette_index_at_axes(const SemanticGridView& g, const GridConst
   return g.palette_offsets[t] + g.cells[size_t(t) * n * n + size_t(ay.cell) * n + size_t(ax.cell)];
 }
 
-}  // namespace
-
-namespace {
-
 // Index into g.palette of the cell at (x, y) (cell_at's plain arithmetic); kNoCell outside the tiles.
 uint32_t palette_index_at(const SemanticGridView& g, float x, float y, uint32_t* hint) {
   if (g.tile_count == 0 || !(g.cell > 0.0f)) return kNoCell;

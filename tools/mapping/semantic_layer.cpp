@@ -6,6 +6,7 @@
 #include <map>
 
 #include "gsf/detail/semantic_grid.h"
+#include "mapping/floor_div.h"
 
 namespace gsf::mapping {
 
@@ -86,16 +87,16 @@ Status add_semantic_neighbours(const std::vector<uint32_t>& keys, uint32_t tile_
   if (palette_offsets->size() != n + 1 || indices->size() != n * per_tile || palette_offsets->back() != palette->size())
     return Status::InvalidArgument;
   const int64_t T = tile_cells;
-  // The mask of global cell (gx, gy) = (tile x * T + cell x, tile y * T + cell y); 0 outside the tiles.
+  // The mask of cell c of tile t, and of global cell (gx, gy) = (tile x * T + cell x, tile y * T + cell
+  // y), 0 outside the tiles.
+  auto mask_of = [&](size_t t, size_t c) { return (*palette)[(*palette_offsets)[t] + (*indices)[t * per_tile + c]]; };
   auto mask_at = [&](int64_t gx, int64_t gy) -> uint32_t {
-    const int64_t tx = gx >= 0 ? gx / T : -((-gx + T - 1) / T), ty = gy >= 0 ? gy / T : -((-gy + T - 1) / T);
+    const int64_t tx = floor_div(gx, T), ty = floor_div(gy, T);
     uint32_t key;
     if (!semantic_tile_key(tx, ty, &key)) return 0;
     const auto it = std::lower_bound(keys.begin(), keys.end(), key);
     if (it == keys.end() || *it != key) return 0;
-    const size_t t = size_t(it - keys.begin());
-    const size_t c = size_t(gy - ty * T) * size_t(T) + size_t(gx - tx * T);
-    return (*palette)[(*palette_offsets)[t] + (*indices)[t * per_tile + c]];
+    return mask_of(size_t(it - keys.begin()), size_t(gy - ty * T) * size_t(T) + size_t(gx - tx * T));
   };
   std::vector<uint32_t> offsets, masks, near;
   std::vector<uint8_t> cells(indices->size());
@@ -107,7 +108,7 @@ Status add_semantic_neighbours(const std::vector<uint32_t>& keys, uint32_t tile_
     for (int64_t cy = 0; cy < T; ++cy)
       for (int64_t cx = 0; cx < T; ++cx) {
         const int64_t gx = tx * T + cx, gy = ty * T + cy;
-        const uint32_t m = mask_at(gx, gy);
+        const uint32_t m = mask_of(t, size_t(cy) * size_t(T) + size_t(cx));
         const uint32_t nb = mask_at(gx - 1, gy) | mask_at(gx + 1, gy) | mask_at(gx, gy - 1) | mask_at(gx, gy + 1);
         size_t k = first;
         while (k < masks.size() && !(masks[k] == m && near[k] == nb)) ++k;  // <= 256 pairs a tile

@@ -1,5 +1,7 @@
 #include "mapping/tile_store.h"
 
+#include "mapping/floor_div.h"
+
 #include <algorithm>
 #include <cstdlib>
 #include <cstring>
@@ -12,8 +14,6 @@ namespace {
 // One spilled voxel: its key and raw accumulator (host byte order; the file never outlives the process).
 constexpr size_t kRecordBytes = sizeof(uint64_t) + sizeof(VoxelAccum);
 constexpr size_t kIoChunkRecords = 4096;
-
-int32_t floor_div(int32_t a, int32_t b) { return a >= 0 ? a / b : -((-a + b - 1) / b); }
 
 }  // namespace
 
@@ -29,8 +29,8 @@ TileStore::~TileStore() {
 
 uint64_t TileStore::tile_of(uint64_t voxel_key) const {
   if (config_.tile_voxels == 0) return tile_id(0, 0);
-  return tile_id(floor_div(voxel_key_x(voxel_key), config_.tile_voxels),
-                 floor_div(voxel_key_y(voxel_key), config_.tile_voxels));
+  return tile_id(static_cast<int32_t>(floor_div(voxel_key_x(voxel_key), config_.tile_voxels)),
+                 static_cast<int32_t>(floor_div(voxel_key_y(voxel_key), config_.tile_voxels)));
 }
 
 std::vector<uint64_t> TileStore::tile_ids() const {

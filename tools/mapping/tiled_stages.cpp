@@ -17,6 +17,7 @@
 #include "gsf/detail/map_quantization.h"
 #include "gsf/detail/pole_extraction.h"
 #include "gsf/detail/voxel_layer.h"
+#include "mapping/floor_div.h"
 #include "mapping/workspace.h"
 
 namespace gsf::mapping {
@@ -25,8 +26,6 @@ namespace {
 double seconds_since(std::chrono::steady_clock::time_point t0) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
 }
-
-int32_t floor_div(int64_t a, int64_t b) { return static_cast<int32_t>(a >= 0 ? a / b : -((-a + b - 1) / b)); }
 
 // An instance a tile owns, before the whole-map capacities and order are applied.
 struct Candidate {
@@ -323,10 +322,10 @@ Status build_map_content(TileStore& store, const LocalizerConfig& config, const 
         const uint64_t k = (uint64_t(uint32_t(fx)) << 32) | uint32_t(fy);
         auto it = owned.find(k);
         if (it != owned.end()) return it->second;
-        const int32_t ax = floor_div(int64_t(std::floor((fx * side - vs) / vs)), tile);
-        const int32_t bx = floor_div(int64_t(std::floor(((fx + 1) * side + vs) / vs)), tile);
-        const int32_t ay = floor_div(int64_t(std::floor((fy * side - vs) / vs)), tile);
-        const int32_t by = floor_div(int64_t(std::floor(((fy + 1) * side + vs) / vs)), tile);
+        const int32_t ax = static_cast<int32_t>(floor_div(int64_t(std::floor((fx * side - vs) / vs)), tile));
+        const int32_t bx = static_cast<int32_t>(floor_div(int64_t(std::floor(((fx + 1) * side + vs) / vs)), tile));
+        const int32_t ay = static_cast<int32_t>(floor_div(int64_t(std::floor((fy * side - vs) / vs)), tile));
+        const int32_t by = static_cast<int32_t>(floor_div(int64_t(std::floor(((fy + 1) * side + vs) / vs)), tile));
         uint64_t first = UINT64_MAX;
         for (int32_t x = ax; x <= bx && first == UINT64_MAX; ++x)
           for (int32_t y = ay; y <= by; ++y)
