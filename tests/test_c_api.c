@@ -290,7 +290,8 @@ static void test_localize_rejects(gsf_localizer* loc) {
   const uint32_t D = GSF_NUM_CLASSES;
   memset(&r, 0xAB, sizeof(r));
   CHECK_STATUS(gsf_localize(NULL, q.xyzi, 4, q.count, q.labels, q.logits, D, &r), GSF_STATUS_INVALID_ARGUMENT);
-  CHECK(r.status == GSF_STATUS_INVALID_ARGUMENT && r.inliers == 0 && r.map_T_scan[0] == 1.0 && r.reserved == 0);
+  CHECK(r.status == GSF_STATUS_INVALID_ARGUMENT && r.inliers == 0 && r.map_T_scan[0] == 1.0 && r.confident == 0 &&
+        r.confidence == 0.0);
   CHECK_STATUS(gsf_localize(loc, NULL, 4, q.count, q.labels, q.logits, D, &r), GSF_STATUS_INVALID_ARGUMENT);
   CHECK_STATUS(gsf_localize(loc, q.xyzi, 4, q.count, NULL, q.logits, D, &r), GSF_STATUS_INVALID_ARGUMENT);
   CHECK_STATUS(gsf_localize(loc, q.xyzi, 2, q.count, q.labels, q.logits, D, &r), GSF_STATUS_INVALID_ARGUMENT);

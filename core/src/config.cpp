@@ -35,6 +35,7 @@ Status validate(const LocalizerConfig& c) {
       !(c.verify.refine_step_deg >= 0) || c.verify.refine_rounds > 16 ||
       !(c.verify.rarity_exponent >= 0 && c.verify.rarity_exponent <= 2))
     return Status::InvalidArgument;
+  if (!(c.confidence.min_probability >= 0.0f && c.confidence.min_probability <= 1.0f)) return Status::InvalidArgument;
   if (c.cluster.max_instances == 0 || c.cluster.max_instances >= (1u << 16)) return Status::InvalidArgument;
   return Status::Ok;
 }

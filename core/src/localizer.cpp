@@ -497,6 +497,8 @@ Status Localizer::localize(const ScanView& scan, LocalizeResult* out_ptr) {
   if (s != Status::Ok) return finish(Status::NoSolution);
   im.choose_answer(cfg, out);
   im.settle_height(cfg, C, out);
+  out.confidence = 1.0 - out.ambiguity;
+  out.confident = out.confidence >= cfg.confidence.min_probability;
   lap(&out.times.pose);
   if (cfg.refine.enabled && map_.counts.refine_points > 0) {
     im.refine_answer(out);

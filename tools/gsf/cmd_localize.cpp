@@ -91,6 +91,8 @@ int cmd_localize(int argc, char** argv) {
     j.field("inliers", r.inliers);
     j.field("score", r.score);
     j.field("ambiguity", r.ambiguity);
+    j.field("confidence", r.confidence);
+    j.field("answered", r.status == Status::Ok && r.confident);  // the default decision rule
     j.field("time_ms", double(r.times.total) / 1e6);
     write_result_diagnostics(j, r, nullptr);
     j.end_object();

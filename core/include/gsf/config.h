@@ -5,6 +5,7 @@
 #include <cstdint>
 
 #include "gsf/class_table.h"
+#include "gsf/detail/confidence.h"
 #include "gsf/detail/gaussian_field.h"
 #include "gsf/detail/gsf_filter.h"
 #include "gsf/detail/instance_clustering.h"
@@ -106,6 +107,7 @@ struct LocalizerConfig {
   HypothesisConfig hypotheses;
   VerifyConfig verify;
   RefineConfig refine;  // off by default (the "gsf+refine" evaluation row turns it on)
+  ConfidenceConfig confidence;
 };
 
 Status validate(const LocalizerConfig& config);

@@ -141,12 +141,13 @@ typedef struct gsf_result {
   double map_T_scan[12];        // map-local frame: t relative to the map origin (gsf_map_info.origin)
   double map_frame_T_scan[12];  // the map's frame (gsf_map_info.frame): t = map-local t + origin, in double
   double ambiguity;             // 0 = unambiguous ... 1 = decline (see gsf::LocalizeResult)
+  double confidence;            // calibrated probability that the pose is right (t < 5 m, r < 10 deg)
   double score;                 // sum of inlier weights
   uint64_t clique_nodes;
   uint32_t clique_size, query_instances, query_triangles, triangle_matches, gsf_survivors, correspondences;
   uint32_t field_probes, field_comparisons;
   uint32_t refined, budget_exhausted, capacity_truncated;  // 0 or 1
-  uint32_t reserved;                                       // 0 (no padding anywhere in the struct)
+  uint32_t confident;  // 0 or 1: confidence >= the config's min probability; act on the pose only when 1
 } gsf_result;
 
 // One-shot global localization of one scan in the sensor frame. Point i is xyz_stride[i * stride + 0..2]

@@ -55,6 +55,11 @@ struct LocalizeResult {
   // the answer's score, and at least min_inliers / inliers (weak support). 0 = unambiguous, 1 = a
   // different pose is as well supported, or the answer rests on the bare minimum (decline to answer).
   double ambiguity = 1.0;
+  // Calibrated probability that map_T_scan is right (translation < 5 m and rotation < 10 deg from the
+  // truth); 0 without an answer. `confident` is the default decision rule, confidence >=
+  // config.confidence.min_probability: act on the pose only when it is true.
+  double confidence = 0.0;
+  bool confident = false;
   uint32_t scan_voxels = 0;             // voxels of the query's layer (at most voxel.max_voxels)
   uint32_t pole_instances = 0;          // geometric pole / trunk instances among query_instances
   uint32_t pole_instances_dropped = 0;  // ... not kept because cluster.max_instances was full
