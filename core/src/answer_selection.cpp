@@ -73,6 +73,12 @@ Status AnswerSelector::bind(Arena& arena, uint32_t refine_top, uint32_t max_voxe
   return arena.overflowed() ? Status::BufferTooSmall : Status::Ok;
 }
 
+Eigen::Isometry3d AnswerSelector::scoring_pose_of(uint32_t h, uint32_t refined_count) const {
+  for (uint32_t k = 0; k < refined_count; ++k)
+    if (refined_id_[k] == h) return refined_pose_[k];
+  return (*hyps_)[h].map_T_scan;
+}
+
 void AnswerSelector::set_verify_weights(const float* weights) {
   for (int c = 0; c < kNumClasses; ++c) verify_weights_[c] = weights[c];
 }
@@ -81,27 +87,34 @@ void AnswerSelector::choose(PoseHypotheses& hyps, const VoxelLayer& voxels, cons
                             const float* weights, const HypothesisConfig& hc, const VerifyConfig& vc,
                             LocalizeResult& out) {
   const uint32_t H = hyps.size();
+  hyps_ = &hyps;
   const bool verify = vc.enabled && !semantic.empty();
   uint32_t best = 0, second = UINT32_MAX;
   uint8_t full_scored[PoseHypotheses::kMaxHypotheses] = {};
   uint32_t refined_count = 0;
+  rival_count_ = 0;
+  compact_points_ = 0;
   rarity_weights(voxels, weights, vc.rarity_exponent, vc.max_points, verify_weights_);
   // Every score below reads the voxels through their compact copy (the same results, bit for bit);
   // a layer larger than the copy (never: the copy has the layer's capacity) would read the voxels.
   const bool compact = verify && voxels.size() <= point_capacity_ && points_ != nullptr;
-  if (compact) fill_verify_points(voxels, points_);
+  if (compact) {
+    fill_verify_points(voxels, points_);
+    compact_points_ = voxels.size();
+  }
   const uint32_t nv = voxels.size();
+  const float lambda = vc.disagree_weight;
   auto score = [&](const Eigen::Isometry3d& T, uint32_t max_points, const float* w) {
-    return compact ? verify_pose(points_, nv, semantic, T, max_points, w)
-                   : verify_pose(voxels, semantic, T, max_points, w);
+    return compact ? verify_pose(points_, nv, semantic, T, max_points, w, lambda)
+                   : verify_pose(voxels, semantic, T, max_points, w, lambda);
   };
   auto search = [&](const Eigen::Isometry3d& T, Eigen::Isometry3d* refined, const PoseVerification* at_start) {
     return compact ? verify_pose_refined(points_, nv, semantic, T, vc.max_points, verify_weights_, vc.refine_rounds,
                                          vc.refine_step_m, vc.refine_step_deg, refined, vc.search_divisor,
-                                         vc.polish_divisor, at_start)
+                                         vc.polish_divisor, at_start, lambda)
                    : verify_pose_refined(voxels, semantic, T, vc.max_points, verify_weights_, vc.refine_rounds,
                                          vc.refine_step_m, vc.refine_step_deg, refined, vc.search_divisor,
-                                         vc.polish_divisor, at_start);
+                                         vc.polish_divisor, at_start, lambda);
   };
   if (verify) {
     // Coarse score for every hypothesis, the full score for the best `full_top`, then the best
@@ -128,12 +141,14 @@ void AnswerSelector::choose(PoseHypotheses& hyps, const VoxelLayer& voxels, cons
     best = nt > 0 ? top[0] : 0;
     const Eigen::Isometry3d& a = hyps[best].map_T_scan;
     const double yaw_a = yaw_of(a), same_rad = double(hc.same_pose_deg) / kRadToDeg;
-    for (uint32_t k = 1; k < nt && second == UINT32_MAX; ++k) {
+    for (uint32_t k = 1; k < nt && rival_count_ < kMaxRivals; ++k) {
       const Eigen::Isometry3d& b = hyps[top[k]].map_T_scan;
       const double dx = b.translation().x() - a.translation().x(), dy = b.translation().y() - a.translation().y();
       double dyaw = std::fabs(yaw_of(b) - yaw_a);
       if (dyaw > kPi) dyaw = 2.0 * kPi - dyaw;
-      if (std::sqrt(dx * dx + dy * dy) > hc.same_pose_m || dyaw > same_rad) second = top[k];
+      if (std::sqrt(dx * dx + dy * dy) <= hc.same_pose_m && dyaw <= same_rad) continue;
+      if (second == UINT32_MAX) second = top[k];
+      rival_pose_[rival_count_++] = scoring_pose_of(top[k], refined_count);
     }
   } else {
     second = H > 1 ? 1 : UINT32_MAX;
@@ -184,14 +199,11 @@ void AnswerSelector::choose(PoseHypotheses& hyps, const VoxelLayer& voxels, cons
   // half-weight classes (vegetation, cars, terrain) is not judged worse than one of buildings and road,
   // and it is taken with the plain stability weights (at the pose the verification chose), so rare
   // classes' label noise does not read as disagreement.
+  answer_pose_ = hyps[best].map_T_scan;
   if (verify) {
     PoseVerification plain = answer.verification;
-    if (vc.rarity_exponent > 0.0f) {
-      const Eigen::Isometry3d* at = &answer.map_T_scan;
-      for (uint32_t k = 0; k < refined_count; ++k)
-        if (refined_id_[k] == best) at = &refined_pose_[k];
-      plain = score(*at, vc.max_points, weights);
-    }
+    answer_pose_ = scoring_pose_of(best, refined_count);
+    if (vc.rarity_exponent > 0.0f) plain = score(answer_pose_, vc.max_points, weights);
     terms.quality = agreement_ambiguity(plain, vc.quality_low, vc.quality_high);
   }
   out.ambiguity = terms.value();

@@ -33,7 +33,8 @@ Status validate(const LocalizerConfig& c) {
       c.verify.refine_top > 64 || c.verify.coarse_divisor == 0 || c.verify.search_divisor == 0 ||
       c.verify.polish_divisor == 0 || c.verify.full_top == 0 || !(c.verify.refine_step_m >= 0) ||
       !(c.verify.refine_step_deg >= 0) || c.verify.refine_rounds > 16 ||
-      !(c.verify.rarity_exponent >= 0 && c.verify.rarity_exponent <= 2))
+      !(c.verify.rarity_exponent >= 0 && c.verify.rarity_exponent <= 2) ||
+      !(c.verify.disagree_weight >= 0 && c.verify.disagree_weight <= 100))
     return Status::InvalidArgument;
   if (!(c.confidence.min_probability >= 0.0f && c.confidence.min_probability <= 1.0f)) return Status::InvalidArgument;
   if (c.cluster.max_instances == 0 || c.cluster.max_instances >= (1u << 16)) return Status::InvalidArgument;

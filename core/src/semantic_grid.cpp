@@ -205,7 +205,8 @@ struct PointSource {
 // The scoring loop, with the grid's reciprocal test hoisted out of it (kExactInverse: k.exact_inverse).
 template <bool kExactInverse, class Source>
 PoseVerification score_samples(const Source& src, const SemanticGridView& grid, const GridConstants& k,
-                               const Eigen::Isometry3d& T, uint32_t stride, const float* weights) {
+                               const Eigen::Isometry3d& T, uint32_t stride, const float* weights, float disagree_weight,
+                               float* evidence = nullptr) {
   PoseVerification v;
   const uint32_t n = src.size();
   // Bird's-eye comparison under the upright prior: only the hypothesis' heading and position matter. A
@@ -233,6 +234,7 @@ PoseVerification score_samples(const Source& src, const SemanticGridView& grid, 
     // lattice shift moves cues by metres, far beyond this tolerance). A disagreeing voxel's cell is in
     // a stored tile, so its palette entry's neighbour mask is there.
     if (verdict < 0 && (grid.neighbours[at] & bit)) verdict = 1;
+    if (evidence) *evidence++ = verdict == 0 ? 0.0f : (verdict > 0 ? w : -disagree_weight * w);
     if (verdict == 0) {
       ++v.unknown;
       continue;
@@ -241,26 +243,39 @@ PoseVerification score_samples(const Source& src, const SemanticGridView& grid, 
     if (verdict > 0) v.agree += w;
     else v.disagree += w;
   }
-  v.score = v.agree - v.disagree;
+  v.score = v.agree - disagree_weight * v.disagree;
   return v;
 }
 
 template <class Source>
 PoseVerification score_pose(const Source& src, const SemanticGridView& grid, const Eigen::Isometry3d& T,
-                            uint32_t max_points, const float* weights) {
+                            uint32_t max_points, const float* weights, float disagree_weight) {
   const uint32_t n = src.size();
   if (n == 0 || max_points == 0 || grid.empty() || grid.neighbours == nullptr) return PoseVerification();
   const uint32_t stride = (n + max_points - 1) / max_points;
   const GridConstants k = grid_constants(grid);
-  return k.exact_inverse ? score_samples<true>(src, grid, k, T, stride, weights)
-                         : score_samples<false>(src, grid, k, T, stride, weights);
+  return k.exact_inverse ? score_samples<true>(src, grid, k, T, stride, weights, disagree_weight)
+                         : score_samples<false>(src, grid, k, T, stride, weights, disagree_weight);
+}
+
+// The evidence variant: score_samples with each sample's signed weight written out (k = i / stride).
+template <class Source>
+PoseVerification score_pose_evidence(const Source& src, const SemanticGridView& grid, const Eigen::Isometry3d& T,
+                                     uint32_t max_points, const float* weights, float disagree_weight,
+                                     float* evidence) {
+  const uint32_t n = src.size();
+  if (n == 0 || max_points == 0 || grid.empty() || grid.neighbours == nullptr) return PoseVerification();
+  const uint32_t stride = (n + max_points - 1) / max_points;
+  const GridConstants k = grid_constants(grid);
+  return k.exact_inverse ? score_samples<true>(src, grid, k, T, stride, weights, disagree_weight, evidence)
+                         : score_samples<false>(src, grid, k, T, stride, weights, disagree_weight, evidence);
 }
 
 template <class Source>
 PoseVerification search_pose(const Source& src, const SemanticGridView& grid, const Eigen::Isometry3d& T,
                              uint32_t max_points, const float* weights, uint32_t rounds, float step_m, float step_deg,
                              Eigen::Isometry3d* refined, uint32_t search_divisor, uint32_t polish_divisor,
-                             const PoseVerification* at_start) {
+                             const PoseVerification* at_start, float disagree_weight) {
   Eigen::Isometry3d best = T;
   auto sample = [max_points](uint32_t divisor) {
     const uint32_t d = divisor > 0 ? divisor : 1;
@@ -269,12 +284,12 @@ PoseVerification search_pose(const Source& src, const SemanticGridView& grid, co
   const uint32_t coarse = sample(search_divisor), polish = sample(polish_divisor);
   bool any_move = false;
   uint32_t points = rounds > 1 ? coarse : polish;
-  float best_score = score_pose(src, grid, best, points, weights).score;
+  float best_score = score_pose(src, grid, best, points, weights, disagree_weight).score;
   double step = step_m, turn = double(step_deg) * 3.14159265358979323846 / 180.0;
   for (uint32_t r = 0; r < rounds; ++r, step *= 0.5, turn *= 0.5) {
     if (r + 1 == rounds && points != polish) {  // the last, finest round on its own sample
       points = polish;
-      best_score = score_pose(src, grid, best, points, weights).score;
+      best_score = score_pose(src, grid, best, points, weights, disagree_weight).score;
     }
     bool moved = true;
     for (int pass = 0; pass < 2 && moved; ++pass) {
@@ -289,7 +304,7 @@ PoseVerification search_pose(const Source& src, const SemanticGridView& grid, co
           c.linear() =
               c.linear() * Eigen::AngleAxisd(k == 4 ? turn : -turn, Eigen::Vector3d::UnitZ()).toRotationMatrix();
         }
-        const float sc = score_pose(src, grid, c, points, weights).score;
+        const float sc = score_pose(src, grid, c, points, weights, disagree_weight).score;
         if (sc > best_score) {
           best_score = sc;
           best = c;
@@ -301,7 +316,7 @@ PoseVerification search_pose(const Source& src, const SemanticGridView& grid, co
   if (refined) *refined = best;
   // Not moved: the full score at the start pose is the caller's, when it has it (the same call).
   if (!any_move && at_start) return *at_start;
-  return score_pose(src, grid, best, max_points, weights);
+  return score_pose(src, grid, best, max_points, weights, disagree_weight);
 }
 
 }  // namespace
@@ -314,30 +329,37 @@ void fill_verify_points(const VoxelLayer& voxels, VerifyPoint* out) {
 }
 
 PoseVerification verify_pose(const VoxelLayer& voxels, const SemanticGridView& grid, const Eigen::Isometry3d& T,
-                             uint32_t max_points, const float* weights) {
-  return score_pose(VoxelSource{voxels}, grid, T, max_points, weights);
+                             uint32_t max_points, const float* weights, float disagree_weight) {
+  return score_pose(VoxelSource{voxels}, grid, T, max_points, weights, disagree_weight);
 }
 
 PoseVerification verify_pose(const VerifyPoint* points, uint32_t n, const SemanticGridView& grid,
-                             const Eigen::Isometry3d& T, uint32_t max_points, const float* weights) {
-  return score_pose(PointSource{points, n}, grid, T, max_points, weights);
+                             const Eigen::Isometry3d& T, uint32_t max_points, const float* weights,
+                             float disagree_weight) {
+  return score_pose(PointSource{points, n}, grid, T, max_points, weights, disagree_weight);
+}
+
+PoseVerification verify_pose_evidence(const VerifyPoint* points, uint32_t n, const SemanticGridView& grid,
+                                      const Eigen::Isometry3d& T, uint32_t max_points, const float* weights,
+                                      float disagree_weight, float* evidence) {
+  return score_pose_evidence(PointSource{points, n}, grid, T, max_points, weights, disagree_weight, evidence);
 }
 
 PoseVerification verify_pose_refined(const VoxelLayer& voxels, const SemanticGridView& grid, const Eigen::Isometry3d& T,
                                      uint32_t max_points, const float* weights, uint32_t rounds, float step_m,
                                      float step_deg, Eigen::Isometry3d* refined, uint32_t search_divisor,
-                                     uint32_t polish_divisor, const PoseVerification* at_start) {
+                                     uint32_t polish_divisor, const PoseVerification* at_start, float disagree_weight) {
   return search_pose(VoxelSource{voxels}, grid, T, max_points, weights, rounds, step_m, step_deg, refined,
-                     search_divisor, polish_divisor, at_start);
+                     search_divisor, polish_divisor, at_start, disagree_weight);
 }
 
 PoseVerification verify_pose_refined(const VerifyPoint* points, uint32_t n, const SemanticGridView& grid,
                                      const Eigen::Isometry3d& T, uint32_t max_points, const float* weights,
                                      uint32_t rounds, float step_m, float step_deg, Eigen::Isometry3d* refined,
-                                     uint32_t search_divisor, uint32_t polish_divisor,
-                                     const PoseVerification* at_start) {
+                                     uint32_t search_divisor, uint32_t polish_divisor, const PoseVerification* at_start,
+                                     float disagree_weight) {
   return search_pose(PointSource{points, n}, grid, T, max_points, weights, rounds, step_m, step_deg, refined,
-                     search_divisor, polish_divisor, at_start);
+                     search_divisor, polish_divisor, at_start, disagree_weight);
 }
 
 }  // namespace gsf

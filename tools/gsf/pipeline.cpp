@@ -83,6 +83,7 @@ bool apply_override(LocalizerConfig* c, const std::string& a, std::string* error
       {"verify.polish_divisor", nullptr, &c->verify.polish_divisor},
       {"verify.refine_step_m", &c->verify.refine_step_m, nullptr},
       {"verify.refine_step_deg", &c->verify.refine_step_deg, nullptr},
+      {"verify.disagree_weight", &c->verify.disagree_weight, nullptr},
       {"field.length_scale", &c->field.length_scale, nullptr},
       {"field.radius", &c->field.radius, nullptr},
       {"field.grid_spacing", &c->field.grid_spacing, nullptr},

@@ -84,6 +84,11 @@ struct VerifyConfig {
   float rarity_exponent = 0.5f;
   float refine_step_m = 0.4f;
   float refine_step_deg = 0.8f;
+  // score = agree - disagree_weight x disagree. Near-symmetric poses (a flipped avenue, a lattice shift)
+  // agree alike on the repeated structure; what separates them is that the true pose contradicts the map
+  // rarely, so a disagreement is stronger evidence than an agreement (per voxel, log((1-q)/(1-p)) against
+  // log(p/q) for agreement rates p at the truth and q at a wrong pose: 3-7 at p = 0.85-0.95).
+  float disagree_weight = 3.0f;
 };
 
 struct LocalizerConfig {

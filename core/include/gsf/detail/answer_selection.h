@@ -55,6 +55,15 @@ class AnswerSelector {
   // The verification weights of the last choose() (the stability weights given here before any).
   const float* verify_weights() const { return verify_weights_; }
   void set_verify_weights(const float* weights);
+  // After choose() with verification: the answer at the pose verification scored it (its pattern-refined
+  // pose when it was refined), its rivals (best first, fully scored, at another place or heading) at
+  // theirs, and the compact points verification read (0 when it read the voxels).
+  static constexpr uint32_t kMaxRivals = 4;
+  const Eigen::Isometry3d& answer_pose() const { return answer_pose_; }
+  const Eigen::Isometry3d* rival_poses() const { return rival_pose_; }
+  uint32_t rival_count() const { return rival_count_; }
+  const VerifyPoint* compact_points() const { return points_; }
+  uint32_t compact_point_count() const { return compact_points_; }
 
  private:
   Eigen::Isometry3d* refined_pose_ = nullptr;  // refine_top: poses the pattern search chose
@@ -64,6 +73,12 @@ class AnswerSelector {
   uint32_t refine_top_ = 0;
   uint32_t chosen_ = UINT32_MAX;
   float verify_weights_[kNumClasses] = {};
+  Eigen::Isometry3d scoring_pose_of(uint32_t h, uint32_t refined_count) const;
+  const PoseHypotheses* hyps_ = nullptr;
+  Eigen::Isometry3d answer_pose_ = Eigen::Isometry3d::Identity();
+  Eigen::Isometry3d rival_pose_[kMaxRivals];
+  uint32_t rival_count_ = 0;
+  uint32_t compact_points_ = 0;
 };
 
 }  // namespace gsf

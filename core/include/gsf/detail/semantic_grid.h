@@ -89,7 +89,8 @@ void fill_verify_points(const VoxelLayer& voxels, VerifyPoint* out);
 // Scores map_T_scan over at most max_points voxels of the query's voxel layer, sampled with a uniform
 // stride over the layer (never "the first N"). weights: stability weight per dense class.
 PoseVerification verify_pose(const VoxelLayer& voxels, const SemanticGridView& grid,
-                             const Eigen::Isometry3d& map_T_scan, uint32_t max_points, const float* weights);
+                             const Eigen::Isometry3d& map_T_scan, uint32_t max_points, const float* weights,
+                             float disagree_weight = 1.0f);
 
 // verify_pose after a small bird's-eye pattern search around map_T_scan (moves of step_m along x and y
 // and step_deg of heading, halved each round, 6 probes a pass, a second pass when the first moved), so
@@ -104,15 +105,23 @@ PoseVerification verify_pose_refined(const VoxelLayer& voxels, const SemanticGri
                                      const Eigen::Isometry3d& map_T_scan, uint32_t max_points, const float* weights,
                                      uint32_t rounds, float step_m, float step_deg, Eigen::Isometry3d* refined,
                                      uint32_t search_divisor = 4, uint32_t polish_divisor = 4,
-                                     const PoseVerification* at_start = nullptr);
+                                     const PoseVerification* at_start = nullptr, float disagree_weight = 1.0f);
+
+// verify_pose over compact points that also writes each sampled voxel's evidence: evidence[k] = +w when
+// the k-th sample (voxel k x stride) agrees, -w when it disagrees, 0 when unknown (w its class weight).
+// evidence holds at least min(n, max_points) floats. Same score as verify_pose, bit for bit.
+PoseVerification verify_pose_evidence(const VerifyPoint* points, uint32_t n, const SemanticGridView& grid,
+                                      const Eigen::Isometry3d& map_T_scan, uint32_t max_points, const float* weights,
+                                      float disagree_weight, float* evidence);
 
 // The same two, over n compact points (fill_verify_points of the layer: the same results, bit for bit).
 PoseVerification verify_pose(const VerifyPoint* points, uint32_t n, const SemanticGridView& grid,
-                             const Eigen::Isometry3d& map_T_scan, uint32_t max_points, const float* weights);
+                             const Eigen::Isometry3d& map_T_scan, uint32_t max_points, const float* weights,
+                             float disagree_weight = 1.0f);
 PoseVerification verify_pose_refined(const VerifyPoint* points, uint32_t n, const SemanticGridView& grid,
                                      const Eigen::Isometry3d& map_T_scan, uint32_t max_points, const float* weights,
                                      uint32_t rounds, float step_m, float step_deg, Eigen::Isometry3d* refined,
                                      uint32_t search_divisor = 4, uint32_t polish_divisor = 4,
-                                     const PoseVerification* at_start = nullptr);
+                                     const PoseVerification* at_start = nullptr, float disagree_weight = 1.0f);
 
 }  // namespace gsf
