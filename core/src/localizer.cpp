@@ -6,6 +6,7 @@
 
 #include "gsf/detail/answer_height.h"
 #include "gsf/detail/answer_selection.h"
+#include "gsf/detail/confidence.h"
 #include "gsf/detail/correspondence_set.h"
 #include "gsf/detail/fixed_vector.h"
 #include "gsf/detail/gaussian_field.h"
@@ -40,6 +41,7 @@ struct Localizer::Impl {
   CorrespondenceSet correspondences;
   PoseHypotheses hypotheses;
   AnswerSelector answer;
+  AnswerConfidence confidence;
   Refiner refiner;
   TriangleIndexView index;
   SemanticGridView semantic;
@@ -73,6 +75,7 @@ struct Localizer::Impl {
   Status generate_hypotheses(const LocalizerConfig& cfg, uint32_t C, LocalizeResult& out);
   void choose_answer(const LocalizerConfig& cfg, LocalizeResult& out);
   void settle_height(const LocalizerConfig& cfg, uint32_t C, LocalizeResult& out);
+  void measure_confidence(const LocalizerConfig& cfg, LocalizeResult& out);
   void refine_answer(LocalizeResult& out);
 };
 
@@ -128,6 +131,7 @@ Status Localizer::bind_workspace(Arena& ar, const LocalizerConfig& config, Impl&
   if (im.hypotheses.bind(ar, C, config.hypotheses.max_hypotheses, V) != Status::Ok) return Status::InvalidArgument;
   if (im.answer.bind(ar, config.verify.refine_top, config.voxel.max_voxels) != Status::Ok && !ar.counting())
     return Status::InvalidArgument;
+  if (im.confidence.bind(ar, config.verify.max_points) != Status::Ok && !ar.counting()) return Status::InvalidArgument;
   im.height_samples = ar.allocate<HeightSample>(C);
   record(&b.clique);
   if (config.refine.enabled && im.refiner.bind(ar, config.refine) != Status::Ok) return Status::InvalidArgument;
@@ -437,6 +441,19 @@ void Localizer::Impl::settle_height(const LocalizerConfig& cfg, uint32_t C, Loca
                        cfg.hypotheses.tls_threshold, cfg.hypotheses.min_inliers, height_samples, &out.map_T_scan);
 }
 
+// 9c. The answer's confidence (confidence.h): how it stands out against wrong poses of the same scan.
+void Localizer::Impl::measure_confidence(const LocalizerConfig& cfg, LocalizeResult& out) {
+  out.confidence = 0.0;  // without verification nothing vouches for the answer
+  if (out.verified && answer.compact_points() != nullptr && answer.compact_point_count() > 0) {
+    out.confidence_evidence =
+        confidence.measure(answer.compact_points(), answer.compact_point_count(), semantic, answer.verify_weights(),
+                           cfg.verify.disagree_weight, answer.answer_pose(), answer.rival_poses(), answer.rival_count(),
+                           cfg.verify.max_points);
+    out.confidence = confidence_probability(out.confidence_evidence);
+  }
+  out.confident = out.confidence >= cfg.confidence.min_probability;
+}
+
 // 10. Refinement against the map's point layer (accepted only within its correction limit).
 void Localizer::Impl::refine_answer(LocalizeResult& out) {
   Eigen::Isometry3d refined;
@@ -497,8 +514,7 @@ Status Localizer::localize(const ScanView& scan, LocalizeResult* out_ptr) {
   if (s != Status::Ok) return finish(Status::NoSolution);
   im.choose_answer(cfg, out);
   im.settle_height(cfg, C, out);
-  out.confidence = 1.0 - out.ambiguity;
-  out.confident = out.confidence >= cfg.confidence.min_probability;
+  im.measure_confidence(cfg, out);
   lap(&out.times.pose);
   if (cfg.refine.enabled && map_.counts.refine_points > 0) {
     im.refine_answer(out);

@@ -70,6 +70,19 @@ void write_result_diagnostics(JsonWriter& j, const LocalizeResult& x, const Quer
   j.field("verified", x.verified);
   j.field("chosen_hypothesis", x.chosen_hypothesis);
   j.field("height_votes", x.height_votes);
+  {
+    const ConfidenceEvidence& e = x.confidence_evidence;  // confidence.h
+    j.key("confidence_evidence");
+    j.begin_object();
+    j.field("z_rival", e.z_rival);
+    j.field("z_shift", e.z_shift);
+    j.field("z_turn", e.z_turn);
+    j.field("rivals", e.rivals);
+    j.field("samples", e.samples);
+    j.field("blocks", e.blocks);
+    j.field("known_share", e.known_share);
+    j.end_object();
+  }
   if (truth) {
     j.field("true_correspondences", truth->true_correspondences);
     j.field("repeatable_instances", truth->repeatable_instances);

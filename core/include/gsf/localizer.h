@@ -60,9 +60,10 @@ struct LocalizeResult {
   // config.confidence.min_probability: act on the pose only when it is true.
   double confidence = 0.0;
   bool confident = false;
-  uint32_t scan_voxels = 0;             // voxels of the query's layer (at most voxel.max_voxels)
-  uint32_t pole_instances = 0;          // geometric pole / trunk instances among query_instances
-  uint32_t pole_instances_dropped = 0;  // ... not kept because cluster.max_instances was full
+  ConfidenceEvidence confidence_evidence;  // what the confidence was computed from (diagnostics)
+  uint32_t scan_voxels = 0;                // voxels of the query's layer (at most voxel.max_voxels)
+  uint32_t pole_instances = 0;             // geometric pole / trunk instances among query_instances
+  uint32_t pole_instances_dropped = 0;     // ... not kept because cluster.max_instances was full
   uint32_t query_instances = 0, query_triangles = 0, triangle_matches = 0, gsf_survivors = 0, correspondences = 0;
   // What each cap dropped (all ranked before cutting), so a failure can be traced to a cap.
   uint32_t match_candidates = 0;         // map triangles accepted by labels and sides, before the per-triangle cap

@@ -2,15 +2,91 @@
 // change between versions. The stable interface is localizer.h, config.h, map_format.h, scan.h, status.h,
 // platform.h, class_table.h, georeference.h and the C API gsf.h.
 // The answer's confidence: a calibrated probability that the chosen pose is right (translation < 5 m and
-// rotation < 10 deg from the truth), and the default decision rule built on it.
+// rotation < 10 deg from the truth), and the default decision rule built on it (docs/confidence.md).
+//
+// Why not an absolute agreement threshold: a scan whose labels are 15% wrong agrees less with the map at
+// its TRUE pose too, so a threshold fitted at one noise level declines right answers at another. Instead
+// the answer is compared with wrong poses of the same scan, on the same sampled voxels:
+//   - its rivals: the best other hypotheses at another place or heading (a lattice shift, a flip);
+//   - shifted probes: the answer moved 2 and 8 m forward, back, left and right (is it a peak at all?);
+//   - turned probes: the answer turned by +-10 and 180 deg about the sensor.
+// Each comparison is a paired statistic whose noise term comes from the scan itself. The sampled voxels
+// are grouped in 4 m blocks of the scan (the voxels of one object or patch move together and are often
+// mislabelled together, so a block is one piece of evidence), and with D_B the sum over block B of
+// (evidence at the answer - evidence at the other pose), evidence being verification's +w / -lambda w / 0
+// per voxel (semantic_grid.h),
+//   z = sum_B D_B / sqrt(sum_B D_B^2),
+// a self-normalised (t-like) statistic: label noise that lowers both poses' agreement alike cancels in
+// D_B, and the spread of D_B over the blocks is the scan's own noise level. The probability is a product
+// of one logistic factor per kind of comparison, the answer must beat each kind of wrong pose:
+//   P = s(a_r + b_r z_rival) s(a_s + b_s z_shift) s(a_t + b_t z_turn),  s(x) = 1 / (1 + e^-x),
+// z of a kind being its closest comparison (the smallest z). The six numbers are fitted on simulated
+// suites of several segmentation-error families (bench/fit_confidence.py; docs/confidence.md has the
+// command and the data) and checked on other seeds and on real data.
 #pragma once
 #include <cstdint>
+
+#include <Eigen/Geometry>
+
+#include "gsf/detail/arena.h"
+#include "gsf/detail/semantic_grid.h"
+#include "gsf/status.h"
 
 namespace gsf {
 
 struct ConfidenceConfig {
   // The default decision rule: LocalizeResult::confident = confidence >= min_probability.
-  float min_probability = 0.5f;
+  float min_probability = 0.9f;
+};
+
+// The logistic factors of the probability (see above).
+struct ConfidenceModel {
+  float rival_offset, rival_slope;
+  float shift_offset, shift_slope;
+  float turn_offset, turn_slope;
+};
+// Fitted by bench/fit_confidence.py (docs/confidence.md).
+extern const ConfidenceModel kConfidenceModel;
+
+// What the confidence was computed from (LocalizeResult diagnostics).
+struct ConfidenceEvidence {
+  float z_rival = 0.0f;      // against the closest rival; without one, the closest probe of either kind
+  float z_shift = 0.0f;      // against the closest shifted probe
+  float z_turn = 0.0f;       // against the closest turned probe
+  uint32_t rivals = 0;       // rivals compared (at most AnswerConfidence::kMaxRivals)
+  uint32_t samples = 0;      // sampled voxels compared
+  uint32_t blocks = 0;       // scan blocks holding them
+  float known_share = 0.0f;  // share of the samples that landed on the map's semantic layer at the answer
+};
+
+// P from the evidence (the model above).
+double confidence_probability(const ConfidenceEvidence& e, const ConfidenceModel& model = kConfidenceModel);
+
+class AnswerConfidence {
+ public:
+  static constexpr uint32_t kMaxRivals = 4;
+  // max_points: verification's sample size (VerifyConfig::max_points).
+  static size_t required_bytes(uint32_t max_points);
+  Status bind(Arena& arena, uint32_t max_points);
+
+  // The evidence for `answer` (map-local, the pose verification scored) against `rivals`, over the
+  // same strided sample of the n compact points verification used (weights and disagree_weight too).
+  ConfidenceEvidence measure(const VerifyPoint* points, uint32_t n, const SemanticGridView& grid, const float* weights,
+                             float disagree_weight, const Eigen::Isometry3d& answer, const Eigen::Isometry3d* rivals,
+                             uint32_t rival_count, uint32_t max_points);
+
+ private:
+  struct Sample;
+  // z of the answer against `other` (the answer's evidence must be in answer_evidence_).
+  float paired_z(const Sample& s, const Eigen::Isometry3d& other);
+
+  float* answer_evidence_ = nullptr;  // max_points: per sample, at the answer
+  float* other_evidence_ = nullptr;   // max_points: per sample, at the pose compared
+  uint16_t* block_of_ = nullptr;      // max_points: each sample's block
+  uint16_t* blocks_ = nullptr;        // max_points: the distinct blocks holding samples
+  float* block_sum_ = nullptr;        // kBlocks: D_B
+  uint32_t capacity_ = 0;
+  uint32_t samples_ = 0, block_count_ = 0;
 };
 
 }  // namespace gsf

@@ -1,0 +1,132 @@
+#include "gsf/detail/confidence.h"
+
+#include <algorithm>
+#include <cmath>
+
+namespace gsf {
+
+// bench/fit_confidence.py on the training suites (docs/confidence.md).
+const ConfidenceModel kConfidenceModel = {-0.51f, 2.91f, 3.09f, 1.64f, -4.51f, 2.45f};
+
+namespace {
+
+// Scan blocks: 4 m squares over +-96 m around the sensor; samples beyond go to the edge blocks.
+constexpr float kBlockM = 4.0f;
+constexpr int kBlockSide = 48;
+constexpr uint32_t kBlocks = kBlockSide * kBlockSide;
+static_assert(kBlocks <= 65536, "block indices are uint16");
+
+// z is clipped to this range before the logistic factors: beyond it the factors are flat, and a
+// comparison that moved no sample (z = 0 / 0) reads as no evidence either way.
+constexpr float kZMin = -3.0f, kZMax = 10.0f;
+
+uint16_t block_index(float x, float y) {
+  auto axis = [](float v) {
+    const float b = std::floor(v / kBlockM) + kBlockSide / 2;
+    return b >= 0.0f && b < kBlockSide ? static_cast<int>(b) : (b < 0.0f ? 0 : kBlockSide - 1);  // NaN: 0
+  };
+  return static_cast<uint16_t>(axis(y) * kBlockSide + axis(x));
+}
+
+// The answer moved `forward` and `left` metres in its own (scan) frame.
+Eigen::Isometry3d shifted(const Eigen::Isometry3d& T, double forward, double left) {
+  Eigen::Isometry3d c = T;
+  c.translation() += T.linear() * Eigen::Vector3d(forward, left, 0.0);
+  return c;
+}
+
+// The answer turned about the sensor (map_T_scan * Rz keeps the scan origin where it is).
+Eigen::Isometry3d turned(const Eigen::Isometry3d& T, double deg) {
+  Eigen::Isometry3d c = T;
+  c.linear() = T.linear() * Eigen::AngleAxisd(deg * 3.14159265358979323846 / 180.0, Eigen::Vector3d::UnitZ())
+                                .toRotationMatrix();
+  return c;
+}
+
+double logistic(double x) { return 1.0 / (1.0 + std::exp(-x)); }
+
+double factor(float offset, float slope, float z) {
+  return logistic(double(offset) + double(slope) * std::min(kZMax, std::max(kZMin, z)));
+}
+
+}  // namespace
+
+struct AnswerConfidence::Sample {
+  const VerifyPoint* points;
+  uint32_t n;
+  const SemanticGridView& grid;
+  const float* weights;
+  float disagree_weight;
+  uint32_t max_points;
+};
+
+double confidence_probability(const ConfidenceEvidence& e, const ConfidenceModel& m) {
+  if (e.samples == 0) return 0.0;
+  return factor(m.rival_offset, m.rival_slope, e.z_rival) * factor(m.shift_offset, m.shift_slope, e.z_shift) *
+         factor(m.turn_offset, m.turn_slope, e.z_turn);
+}
+
+size_t AnswerConfidence::required_bytes(uint32_t max_points) { return counted_bytes<AnswerConfidence>(max_points); }
+
+Status AnswerConfidence::bind(Arena& arena, uint32_t max_points) {
+  capacity_ = max_points;
+  answer_evidence_ = arena.allocate<float>(max_points);
+  other_evidence_ = arena.allocate<float>(max_points);
+  block_of_ = arena.allocate<uint16_t>(max_points);
+  blocks_ = arena.allocate<uint16_t>(max_points);
+  block_sum_ = arena.allocate<float>(kBlocks, true);
+  samples_ = block_count_ = 0;
+  return arena.overflowed() ? Status::BufferTooSmall : Status::Ok;
+}
+
+float AnswerConfidence::paired_z(const Sample& s, const Eigen::Isometry3d& other) {
+  verify_pose_evidence(s.points, s.n, s.grid, other, s.max_points, s.weights, s.disagree_weight, other_evidence_);
+  for (uint32_t k = 0; k < samples_; ++k) block_sum_[block_of_[k]] += answer_evidence_[k] - other_evidence_[k];
+  double sum = 0.0, sq = 0.0;
+  for (uint32_t b = 0; b < block_count_; ++b) {
+    const double d = block_sum_[blocks_[b]];
+    sum += d;
+    sq += d * d;
+    block_sum_[blocks_[b]] = 0.0f;  // every block sum is zero between calls
+  }
+  return sq > 0.0 ? static_cast<float>(sum / std::sqrt(sq)) : 0.0f;
+}
+
+ConfidenceEvidence AnswerConfidence::measure(const VerifyPoint* points, uint32_t n, const SemanticGridView& grid,
+                                             const float* weights, float disagree_weight,
+                                             const Eigen::Isometry3d& answer, const Eigen::Isometry3d* rivals,
+                                             uint32_t rival_count, uint32_t max_points) {
+  ConfidenceEvidence e;
+  max_points = std::min(max_points, capacity_);
+  if (n == 0 || max_points == 0 || grid.empty() || points == nullptr || block_sum_ == nullptr) return e;
+  const Sample s{points, n, grid, weights, disagree_weight, max_points};
+  // The strided sample verify_pose reads: sample k is point k x stride.
+  const uint32_t stride = (n + max_points - 1) / max_points;
+  samples_ = (n + stride - 1) / stride;
+  block_count_ = 0;
+  for (uint32_t k = 0; k < samples_; ++k) {
+    const uint16_t b = block_of_[k] = block_index(points[k * stride].x, points[k * stride].y);
+    if (block_sum_[b] == 0.0f) {  // first sample in the block: mark it (reset by paired_z's first pass)
+      block_sum_[b] = 1.0f;
+      blocks_[block_count_++] = b;
+    }
+  }
+  for (uint32_t b = 0; b < block_count_; ++b) block_sum_[blocks_[b]] = 0.0f;
+  const PoseVerification at = verify_pose_evidence(points, n, grid, answer, max_points, weights, disagree_weight,
+                                                   answer_evidence_);
+  e.samples = samples_;
+  e.blocks = block_count_;
+  e.known_share = float(at.scored) / float(samples_);
+  e.z_shift = e.z_turn = kZMax;
+  for (double d : {2.0, 8.0}) {
+    const double moves[4][2] = {{d, 0.0}, {-d, 0.0}, {0.0, d}, {0.0, -d}};
+    for (const auto& m : moves) e.z_shift = std::min(e.z_shift, paired_z(s, shifted(answer, m[0], m[1])));
+  }
+  for (double deg : {10.0, -10.0, 180.0}) e.z_turn = std::min(e.z_turn, paired_z(s, turned(answer, deg)));
+  e.rivals = std::min(rival_count, kMaxRivals);
+  e.z_rival = e.rivals > 0 ? kZMax : std::min(e.z_shift, e.z_turn);
+  for (uint32_t r = 0; r < e.rivals; ++r) e.z_rival = std::min(e.z_rival, paired_z(s, rivals[r]));
+  return e;
+}
+
+}  // namespace gsf
