@@ -170,6 +170,15 @@ uint16_t label_partner(uint16_t semantic, int k) {
   return p && k >= 0 && k < p->count ? p->partner[k] : semantic;
 }
 
+namespace {
+// The partner class chosen by `pick` (uniform in 0..3): the first, likelier one 3 times in 4 when there
+// are two; the class itself when it has none.
+uint16_t drawn_partner(uint16_t semantic, uint32_t pick) {
+  const int n = label_partner_count(semantic);
+  return label_partner(semantic, (n > 1 && pick == 3) ? 1 : 0);
+}
+}  // namespace
+
 void apply_label_noise(uint32_t* labels, uint32_t count, float p, uint64_t seed) {
   gsf::Rng rng(seed);
   for (uint32_t i = 0; i < count; ++i) {
@@ -177,9 +186,24 @@ void apply_label_noise(uint32_t* labels, uint32_t count, float p, uint64_t seed)
     const uint32_t pick = rng.uniform(4);  // drawn for every point: the stream does not depend on labels
     if (u >= p) continue;
     const uint16_t sem = static_cast<uint16_t>(labels[i] & 0xFFFFu);
-    const int n = label_partner_count(sem);
-    if (n == 0) continue;
-    labels[i] = (labels[i] & 0xFFFF0000u) | label_partner(sem, (n > 1 && pick == 3) ? 1 : 0);
+    labels[i] = (labels[i] & 0xFFFF0000u) | drawn_partner(sem, pick);
+  }
+}
+
+void apply_object_confusion(uint32_t* labels, uint32_t count, float p, uint64_t seed) {
+  uint32_t drawn_for = 0;  // the instance whose draw `confused` / `pick` hold (points come in runs)
+  bool confused = false;
+  uint32_t pick = 0;
+  for (uint32_t i = 0; i < count; ++i) {
+    const uint32_t instance = labels[i] >> 16;
+    if (instance == 0) continue;  // stuff: no object to confuse
+    if (instance != drawn_for) {
+      gsf::Rng rng(gsf::mix64(seed ^ gsf::mix64(instance)));
+      confused = rng.uniform01() < p;
+      pick = rng.uniform(4);
+      drawn_for = instance;
+    }
+    if (confused) labels[i] = (labels[i] & 0xFFFF0000u) | drawn_partner(static_cast<uint16_t>(labels[i]), pick);
   }
 }
 
@@ -252,6 +276,9 @@ namespace {
 // from the scan's seed (independent per scan and between the drives), then instance ids are stripped.
 void apply_sensing(const SimConfig& c, int sequence, uint32_t frame, SimScan* scan) {
   const uint64_t seed = scan_seed(c.world.seed, sequence, frame);
+  if (c.object_confusion > 0)
+    apply_object_confusion(scan->labels.data(), scan->size(), c.object_confusion,
+                           gsf::mix64(seed ^ 0x4F424A434F4E4655ULL));
   if (c.label_noise > 0)
     apply_label_noise(scan->labels.data(), scan->size(), c.label_noise, gsf::mix64(seed ^ 0x4C4142454C4E4F49ULL));
   if (!c.instance_ids) strip_instance_ids(scan->labels.data(), scan->size());
@@ -315,7 +342,7 @@ void write_zone_meta(std::ostream& meta, const SimConfig& c, const World& world,
 
 // meta.json's "sensing" object: the label errors and label format of the written scans.
 void write_sensing_meta(std::ostream& meta, const SimConfig& c) {
-  meta << "  \"sensing\": {\"label_noise\": " << c.label_noise
+  meta << "  \"sensing\": {\"label_noise\": " << c.label_noise << ", \"object_confusion\": " << c.object_confusion
        << ", \"instance_ids\": " << (c.instance_ids ? "true" : "false") << ", \"label_set\": \""
        << (c.nuscenes_labels ? "nuscenes" : "semantic-kitti") << "\""
        << "},\n";

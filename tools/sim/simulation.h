@@ -37,6 +37,9 @@ struct SimConfig {
   // mistakes), and whether labels keep the instance id in their high 16 bits.
   float label_noise = 0.0f;
   bool instance_ids = true;
+  // Correlated segmentation errors (issue 24), drawn per scan for both drives, before label_noise:
+  // share of instances relabelled whole, per scan, to one partner class (a pole called a trunk).
+  float object_confusion = 0.0f;
   // Label set of the written scans: false = SemanticKITTI (labels/, uint32); true = nuScenes-lidarseg
   // (lidarseg/, uint8, kitti_to_nuscenes): poles, signs, fences and trunks lose their classes inside
   // static.manmade / static.vegetation, as in real nuScenes data.
@@ -73,6 +76,10 @@ int label_partner_count(uint16_t semantic);
 uint16_t label_partner(uint16_t semantic, int k);
 // Replaces the semantic part of a share `p` of labels by a partner (instance bits kept); seeded.
 void apply_label_noise(uint32_t* labels, uint32_t count, float p, uint64_t seed);
+// Whole-object confusion: each instance (instance id != 0) with partner classes is, with probability p,
+// relabelled whole to one partner (the first 3 times in 4 when it has two); instance bits kept. The draw
+// is a function of (seed, instance id) alone: every point of the instance agrees, whatever their order.
+void apply_object_confusion(uint32_t* labels, uint32_t count, float p, uint64_t seed);
 void strip_instance_ids(uint32_t* labels, uint32_t count);
 
 using SimProgress = std::function<void(const char* stage, uint32_t done, uint32_t total)>;
