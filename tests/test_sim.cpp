@@ -560,3 +560,51 @@ TEST_CASE("Object confusion relabels whole instances to one partner class, at it
   REQUIRE(instances > 1000);
   CHECK(std::fabs(rate - 0.2) < 0.03);
 }
+
+TEST_CASE("Thin misses grow with range, touch only poles, signs and trunks, and write their background class") {
+  // Points of every class at horizontal ranges 0.5..80 m around the sensor, each tagged with an instance.
+  const uint16_t classes[] = {80, 81, 71, 50, 51, 40, 48, 70, 72, 10};
+  std::vector<float> xyzi;
+  std::vector<uint32_t> clean;
+  for (uint16_t cls : classes)
+    for (int k = 0; k < 1600; ++k) {
+      const float r = 0.5f + 0.05f * k, az = 0.37f * k;
+      xyzi.insert(xyzi.end(), {r * std::cos(az), r * std::sin(az), 1.5f - 0.001f * k, 0.5f});
+      clean.push_back(cls | (7u << 16));
+    }
+  const uint32_t n = static_cast<uint32_t>(clean.size());
+  auto range = [&](size_t i) { return std::hypot(xyzi[4 * i], xyzi[4 * i + 1]); };
+  auto thin = [](uint32_t l) { return (l & 0xFFFF) == 80 || (l & 0xFFFF) == 81 || (l & 0xFFFF) == 71; };
+  std::vector<uint32_t> none = clean, all = clean, half = clean;
+  apply_thin_miss(xyzi.data(), none.data(), n, 0.0f, 5);
+  CHECK(none == clean);
+  apply_thin_miss(xyzi.data(), all.data(), n, 1.0f, 5);
+  apply_thin_miss(xyzi.data(), half.data(), n, 0.5f, 6);
+  std::map<int, std::pair<int, int>> band;  // 10 m band -> (thin points, missed) at P = 1
+  int far = 0, far_half_missed = 0;
+  for (size_t i = 0; i < n; ++i) {
+    const float r = range(i);
+    if (!thin(clean[i])) {
+      CHECK(all[i] == clean[i]);  // other classes untouched
+      CHECK(half[i] == clean[i]);
+      continue;
+    }
+    const bool missed = all[i] != clean[i];
+    if (missed) CHECK(all[i] == ((clean[i] & 0xFFFF) == 71 ? 70u : 50u));  // background class, no instance
+    if (r < kThinMissNear) CHECK_FALSE(missed);                            // near points never missed
+    if (r > kThinMissFar) CHECK(missed);                                   // at P = 1 far points always
+    band[static_cast<int>(r / 10)].first++;
+    band[static_cast<int>(r / 10)].second += missed;
+    if (r > kThinMissFar) {
+      ++far;
+      far_half_missed += half[i] != clean[i];
+    }
+  }
+  // Between 10 and 60 m the share missed rises linearly: about 0.3 in 20..30 m, 0.7 in 40..50 m.
+  const double r2 = double(band[2].second) / band[2].first, r4 = double(band[4].second) / band[4].first;
+  INFO("missed at P = 1: " << r2 << " in 20..30 m, " << r4 << " in 40..50 m");
+  CHECK(std::fabs(r2 - 0.3) < 0.08);
+  CHECK(std::fabs(r4 - 0.7) < 0.08);
+  CHECK(std::fabs(double(far_half_missed) / far - 0.5) < 0.08);  // P = 0.5 beyond 60 m
+  CHECK(thin_miss_probability(0.6f, 35.0f) == Approx(0.3f));
+}

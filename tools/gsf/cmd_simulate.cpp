@@ -1,6 +1,6 @@
 // gsf simulate --out DIR [--preset demo|tiny|suite|tiny-lattice] [--zone row|lattice|hall|avenue|auto]
 //              [--cue-density X] [--seed N] [--beams N] [--label-noise P] [--object-confusion P]
-//              [--no-instance-ids] [--label-set semantic-kitti|nuscenes] [--offset X,Y[,Z]]
+//              [--thin-miss P] [--no-instance-ids] [--label-set semantic-kitti|nuscenes] [--offset X,Y[,Z]]
 #include <cstdio>
 
 #include "args.h"
@@ -25,6 +25,7 @@ bool get_share(const Args& args, const std::string& name, float* out, std::strin
 bool parse_sensing(const Args& args, sim::SimConfig* cfg, std::string* err) {
   if (!get_share(args, "label-noise", &cfg->label_noise, err)) return false;
   if (!get_share(args, "object-confusion", &cfg->object_confusion, err)) return false;
+  if (!get_share(args, "thin-miss", &cfg->thin_miss, err)) return false;
   cfg->instance_ids = !args.flag("no-instance-ids");
   if (args.get("label-set") != "semantic-kitti" && args.get("label-set") != "nuscenes") {
     *err = "--label-set must be semantic-kitti or nuscenes";
@@ -65,6 +66,10 @@ int cmd_simulate(int argc, char** argv) {
       {"object-confusion",
        "share 0..1 of instances relabelled whole, per scan, to one partner class (a pole read as a trunk, a "
        "car as a truck)",
+       "0"},
+      {"thin-miss",
+       "P 0..1: pole, sign and trunk points missed (written as building / vegetation) with probability P x "
+       "clamp((range - 10 m) / 50 m, 0, 1)",
        "0"},
       {"no-instance-ids", "write labels with the instance id bits zeroed", "", true},
       {"label-set",

@@ -207,6 +207,21 @@ void apply_object_confusion(uint32_t* labels, uint32_t count, float p, uint64_t 
   }
 }
 
+float thin_miss_probability(float p, float range) {
+  return p * std::clamp((range - kThinMissNear) / (kThinMissFar - kThinMissNear), 0.0f, 1.0f);
+}
+
+void apply_thin_miss(const float* xyzi, uint32_t* labels, uint32_t count, float p, uint64_t seed) {
+  gsf::Rng rng(seed);
+  for (uint32_t i = 0; i < count; ++i) {
+    const float u = rng.uniform01();  // drawn for every point: the stream does not depend on labels
+    const uint16_t sem = static_cast<uint16_t>(labels[i] & 0xFFFFu);
+    if (sem != 80 && sem != 81 && sem != 71) continue;
+    if (u >= thin_miss_probability(p, std::hypot(xyzi[4 * i], xyzi[4 * i + 1]))) continue;
+    labels[i] = sem == 71 ? 70u : 50u;  // trunk -> vegetation; pole, sign -> building
+  }
+}
+
 void strip_instance_ids(uint32_t* labels, uint32_t count) {
   for (uint32_t i = 0; i < count; ++i) labels[i] &= 0xFFFFu;
 }
@@ -279,6 +294,9 @@ void apply_sensing(const SimConfig& c, int sequence, uint32_t frame, SimScan* sc
   if (c.object_confusion > 0)
     apply_object_confusion(scan->labels.data(), scan->size(), c.object_confusion,
                            gsf::mix64(seed ^ 0x4F424A434F4E4655ULL));
+  if (c.thin_miss > 0)
+    apply_thin_miss(scan->xyzi.data(), scan->labels.data(), scan->size(), c.thin_miss,
+                    gsf::mix64(seed ^ 0x5448494E4D495353ULL));
   if (c.label_noise > 0)
     apply_label_noise(scan->labels.data(), scan->size(), c.label_noise, gsf::mix64(seed ^ 0x4C4142454C4E4F49ULL));
   if (!c.instance_ids) strip_instance_ids(scan->labels.data(), scan->size());
@@ -343,8 +361,8 @@ void write_zone_meta(std::ostream& meta, const SimConfig& c, const World& world,
 // meta.json's "sensing" object: the label errors and label format of the written scans.
 void write_sensing_meta(std::ostream& meta, const SimConfig& c) {
   meta << "  \"sensing\": {\"label_noise\": " << c.label_noise << ", \"object_confusion\": " << c.object_confusion
-       << ", \"instance_ids\": " << (c.instance_ids ? "true" : "false") << ", \"label_set\": \""
-       << (c.nuscenes_labels ? "nuscenes" : "semantic-kitti") << "\""
+       << ", \"thin_miss\": " << c.thin_miss << ", \"instance_ids\": " << (c.instance_ids ? "true" : "false")
+       << ", \"label_set\": \"" << (c.nuscenes_labels ? "nuscenes" : "semantic-kitti") << "\""
        << "},\n";
 }
 

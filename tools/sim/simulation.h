@@ -40,6 +40,9 @@ struct SimConfig {
   // Correlated segmentation errors (issue 24), drawn per scan for both drives, before label_noise:
   // share of instances relabelled whole, per scan, to one partner class (a pole called a trunk).
   float object_confusion = 0.0f;
+  // Thin things missed with range: P of the points of poles, signs and trunks beyond kThinMissFar
+  // (linearly from kThinMissNear) take the class behind them (apply_thin_miss).
+  float thin_miss = 0.0f;
   // Label set of the written scans: false = SemanticKITTI (labels/, uint32); true = nuScenes-lidarseg
   // (lidarseg/, uint8, kitti_to_nuscenes): poles, signs, fences and trunks lose their classes inside
   // static.manmade / static.vegetation, as in real nuScenes data.
@@ -80,6 +83,14 @@ void apply_label_noise(uint32_t* labels, uint32_t count, float p, uint64_t seed)
 // relabelled whole to one partner (the first 3 times in 4 when it has two); instance bits kept. The draw
 // is a function of (seed, instance id) alone: every point of the instance agrees, whatever their order.
 void apply_object_confusion(uint32_t* labels, uint32_t count, float p, uint64_t seed);
+// Range-dependent misses of thin classes: a pole (80), traffic-sign (81) or trunk (71) point at
+// horizontal range r from the sensor (its x, y in the sensor frame) loses its class with probability
+// thin_miss_probability(p, r): a pole or sign point becomes building (50), a trunk point vegetation (70),
+// what a network says of a thin thing against its background; its instance bits are cleared (it is no
+// longer part of the thing). One draw per point, whatever its class.
+constexpr float kThinMissNear = 10.0f, kThinMissFar = 60.0f;  // m: never missed below, at rate p beyond
+float thin_miss_probability(float p, float range);            // p * clamp((r - near) / (far - near), 0, 1)
+void apply_thin_miss(const float* xyzi, uint32_t* labels, uint32_t count, float p, uint64_t seed);
 void strip_instance_ids(uint32_t* labels, uint32_t count);
 
 using SimProgress = std::function<void(const char* stage, uint32_t done, uint32_t total)>;
