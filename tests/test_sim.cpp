@@ -608,3 +608,75 @@ TEST_CASE("Thin misses grow with range, touch only poles, signs and trunks, and 
   CHECK(std::fabs(double(far_half_missed) / far - 0.5) < 0.08);  // P = 0.5 beyond 60 m
   CHECK(thin_miss_probability(0.6f, 35.0f) == Approx(0.3f));
 }
+
+TEST_CASE("Error families through run_simulation: both drives, before ids are stripped; map beams; same bytes twice") {
+  namespace fs = std::filesystem;
+  const std::string tmp = std::string(GSF_TEST_TMP_DIR) + "/test_sim_families";
+  fs::remove_all(tmp);
+  const SimConfig clean = fast_tiny_lattice();  // instance ids kept, no errors
+  SimConfig confused = clean, thin = clean, cross = clean;
+  confused.object_confusion = 1.0f;
+  confused.instance_ids = false;
+  thin.thin_miss = 1.0f;
+  REQUIRE(run_simulation(clean, tmp + "/clean", nullptr) == gsf::Status::Ok);
+  REQUIRE(run_simulation(confused, tmp + "/confused", nullptr) == gsf::Status::Ok);
+  REQUIRE(run_simulation(thin, tmp + "/thin", nullptr) == gsf::Status::Ok);
+  const auto a = tree(tmp + "/clean"), o = tree(tmp + "/confused"), t = tree(tmp + "/thin");
+  int changed_scans[2] = {0, 0}, thin_missed = 0;
+  for (const auto& kv : a) {
+    if (kv.first.find("/labels/") == std::string::npos) continue;
+    const int seq = kv.first.find("/00/") != std::string::npos ? 0 : 1;
+    const auto la = as_labels(kv.second), lo = as_labels(o.at(kv.first)), lt = as_labels(t.at(kv.first));
+    const auto xyz =
+        t.at("sequences/0" + std::to_string(seq) + "/velodyne/" + fs::path(kv.first).stem().string() + ".bin");
+    REQUIRE(lo.size() == la.size());
+    std::map<uint32_t, uint32_t> class_of;  // instance -> its one written label in this scan
+    for (size_t i = 0; i < la.size(); ++i) {
+      if (la[i] >> 16) {  // an instance: a partner class of its own, the same for all its points, no id
+        CHECK(is_partner(la[i] & 0xFFFF, lo[i]));
+        CHECK(class_of.emplace(la[i] >> 16, lo[i]).first->second == lo[i]);
+      } else {
+        CHECK(lo[i] == la[i]);
+      }
+      if (lt[i] == la[i]) continue;
+      ++thin_missed;  // only thin classes, to their background, never within 10 m
+      float p[4];
+      std::memcpy(p, xyz.data() + 16 * i, sizeof(p));
+      CHECK(std::hypot(p[0], p[1]) >= kThinMissNear);
+      CHECK(lt[i] == ((la[i] & 0xFFFF) == 71 ? 70u : 50u));
+      CHECK(((la[i] & 0xFFFF) == 80 || (la[i] & 0xFFFF) == 81 || (la[i] & 0xFFFF) == 71));
+    }
+    changed_scans[seq] += !class_of.empty();
+  }
+  CHECK(changed_scans[0] > 10);  // the mapping drive's labels carry errors too
+  CHECK(changed_scans[1] > 5);
+  CHECK(thin_missed > 20);
+
+  // A dense mapping LiDAR and a sparse query one, every error at once: the same bytes twice.
+  cross.map_beams = 64;
+  cross.lidar.beams = 16;
+  cross.label_noise = 0.03f;
+  cross.object_confusion = 0.2f;
+  cross.thin_miss = 0.6f;
+  cross.instance_ids = false;
+  REQUIRE(run_simulation(cross, tmp + "/x1", nullptr) == gsf::Status::Ok);
+  REQUIRE(run_simulation(cross, tmp + "/x2", nullptr) == gsf::Status::Ok);
+  const auto x1 = tree(tmp + "/x1");
+  CHECK(x1 == tree(tmp + "/x2"));
+  uint64_t points[2] = {0, 0}, scans[2] = {0, 0};
+  for (const auto& kv : x1)
+    if (kv.first.find("/labels/") != std::string::npos) {
+      const int seq = kv.first.find("/00/") != std::string::npos ? 0 : 1;
+      points[seq] += kv.second.size() / 4;
+      scans[seq]++;
+    }
+  REQUIRE(scans[0] > 0);
+  REQUIRE(scans[1] > 0);
+  INFO("points per scan: mapping " << points[0] / scans[0] << ", queries " << points[1] / scans[1]);
+  CHECK(points[0] / scans[0] > 3 * (points[1] / scans[1]));  // 64 beams over the same elevations as 16
+  const std::string meta(x1.at("meta.json").begin(), x1.at("meta.json").end());
+  for (const char* key : {"\"object_confusion\": 0.2", "\"thin_miss\": 0.6", "\"map_beams\": 64", "\"beams\": 16",
+                          "\"label_noise\": 0.03"})
+    CHECK(meta.find(key) != std::string::npos);
+  fs::remove_all(tmp);
+}

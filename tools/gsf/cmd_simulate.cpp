@@ -1,5 +1,5 @@
 // gsf simulate --out DIR [--preset demo|tiny|suite|tiny-lattice] [--zone row|lattice|hall|avenue|auto]
-//              [--cue-density X] [--seed N] [--beams N] [--label-noise P] [--object-confusion P]
+//              [--cue-density X] [--seed N] [--beams N] [--map-beams N] [--label-noise P] [--object-confusion P]
 //              [--thin-miss P] [--no-instance-ids] [--label-set semantic-kitti|nuscenes] [--offset X,Y[,Z]]
 #include <cstdio>
 
@@ -40,6 +40,13 @@ bool parse_sensing(const Args& args, sim::SimConfig* cfg, std::string* err) {
     }
     cfg->lidar.beams = static_cast<int>(v);
   }
+  if (args.has("map-beams")) {
+    if (!args.get_int("map-beams", &v, err) || v < 2 || v > 256) {
+      *err = "--map-beams must be 2..256";
+      return false;
+    }
+    cfg->map_beams = static_cast<int>(v);
+  }
   return true;
 }
 
@@ -76,7 +83,11 @@ int cmd_simulate(int argc, char** argv) {
        "labels written: semantic-kitti (labels/, uint32) or nuscenes (lidarseg/, uint8: poles, signs and trunks only "
        "as static.manmade / static.vegetation)",
        "semantic-kitti"},
-      {"beams", "LiDAR beams (e.g. 32 or 64)", ""},
+      {"beams", "LiDAR beams (e.g. 16, 32, 64 or 128; the query drive's when --map-beams is given)", ""},
+      {"map-beams",
+       "LiDAR beams of the mapping drive (sequence 00), e.g. 64 with --beams 16: a map from a dense sensor, "
+       "queries from a sparse one (default: --beams)",
+       ""},
       {"blocks-x", "city blocks along x (overrides the preset)", ""},
       {"blocks-y", "city blocks along y (overrides the preset)", ""},
       {"offset",

@@ -132,6 +132,12 @@ float zone_query_spacing(const World& w, const SimConfig& c) {
   return c.query_spacing / 2;
 }
 
+LidarParams drive_lidar(const SimConfig& c, int sequence) {
+  LidarParams l = c.lidar;
+  if (sequence == 0 && c.map_beams > 0) l.beams = c.map_beams;
+  return l;
+}
+
 namespace {
 struct LabelPartners {
   uint16_t semantic;
@@ -309,11 +315,12 @@ Status write_drive(const SimConfig& c, const std::string& root, int sequence, co
   gsf::port::NuScenesLidarsegWriter nus_writer;
   std::vector<uint8_t> lidarseg;
   SimScan scan;
+  const LidarParams lidar = drive_lidar(c, sequence);
   const char* name = sequence == 0 ? "00" : "01";
   Status s = c.nuscenes_labels ? nus_writer.open(root, name) : writer.open(root, name);
   if (s != Status::Ok) return s;
   for (uint32_t f = 0; f < d.poses.size(); ++f) {
-    caster.scan(d.poses[f], c.lidar, scan_seed(c.world.seed, sequence, f), &scan);
+    caster.scan(d.poses[f], lidar, scan_seed(c.world.seed, sequence, f), &scan);
     apply_sensing(c, sequence, f, &scan);
     if (c.nuscenes_labels) {
       lidarseg.resize(scan.size());
@@ -361,7 +368,8 @@ void write_zone_meta(std::ostream& meta, const SimConfig& c, const World& world,
 // meta.json's "sensing" object: the label errors and label format of the written scans.
 void write_sensing_meta(std::ostream& meta, const SimConfig& c) {
   meta << "  \"sensing\": {\"label_noise\": " << c.label_noise << ", \"object_confusion\": " << c.object_confusion
-       << ", \"thin_miss\": " << c.thin_miss << ", \"instance_ids\": " << (c.instance_ids ? "true" : "false")
+       << ", \"thin_miss\": " << c.thin_miss << ", \"map_beams\": " << drive_lidar(c, 0).beams
+       << ", \"beams\": " << drive_lidar(c, 1).beams << ", \"instance_ids\": " << (c.instance_ids ? "true" : "false")
        << ", \"label_set\": \"" << (c.nuscenes_labels ? "nuscenes" : "semantic-kitti") << "\""
        << "},\n";
 }

@@ -33,6 +33,10 @@ struct SimConfig {
   // avenue 6 m). The approach road of a lattice / hall gets near_query_spacing (0 = query_spacing).
   float zone_query_spacing = 0.0f;
   float near_query_spacing = 0.0f;
+  // Beams of the mapping drive's LiDAR (sequence 00); 0 = lidar.beams, which is always the query drive's.
+  // Cross-sensor: a map from a dense 64/128-beam car queried by a 16/32-beam one. Only the beam count
+  // differs: the same elevation range, azimuth step, range and noise (drive_lidar).
+  int map_beams = 0;
   // Sensing: share of points whose written label is confused with a plausible other class (a network's
   // mistakes), and whether labels keep the instance id in their high 16 bits.
   float label_noise = 0.0f;
@@ -62,6 +66,8 @@ struct SimConfig {
 };
 
 float zone_query_spacing(const World& world, const SimConfig& config);
+// The LiDAR of drive `sequence` (0 mapping, 1 queries): config.lidar with map_beams for the mapping drive.
+LidarParams drive_lidar(const SimConfig& config, int sequence);
 
 struct Drive {
   std::vector<Eigen::Isometry3d> poses;  // world_T_lidar
