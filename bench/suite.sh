@@ -14,6 +14,9 @@
 #   --jobs N                  worlds in parallel (env SUITE_JOBS; default 2)
 #   --preset NAME             simulate preset (default suite; tiny-lattice for a smoke run)
 #   --label-noise P           (default 0.03)    --instance-ids   keep instance ids (default: zeroed)
+#   --object-confusion P      --thin-miss P     segmentation-error families (gsf simulate; default: not
+#   --beams N                 --map-beams N     passed, so an older --sim-gsf works): whole objects
+#                             relabelled, thin things missed with range, query / mapping LiDAR beams
 #   --label-set NAME          labels the worlds are written with: semantic-kitti (default) or nuscenes
 #                             (no pole, trunk, sign or fence class; build-map/evaluate pick the table)
 #   --modes LIST              evaluate modes (default instance,gsf)
@@ -33,6 +36,7 @@ jobs=${SUITE_JOBS:-2}
 preset=suite
 label_noise=0.03
 label_set=semantic-kitti
+sim_extra=""  # the error-family options given, passed to simulate as they are
 ids_flag=--no-instance-ids
 modes=instance,gsf
 gsf=""
@@ -49,6 +53,7 @@ while [ $# -gt 0 ]; do
     --preset) preset=$2; shift 2 ;;
     --label-noise) label_noise=$2; shift 2 ;;
     --label-set) label_set=$2; shift 2 ;;
+    --object-confusion|--thin-miss|--beams|--map-beams) sim_extra="$sim_extra $1 $2"; shift 2 ;;
     --instance-ids) ids_flag=""; shift ;;
     --modes) modes=$2; shift 2 ;;
     --gsf) gsf=$2; shift 2 ;;
@@ -80,7 +85,7 @@ run_world() {
   local t0=$SECONDS
   {
     "$sim_gsf" simulate --preset "$preset" --zone "$zone" --seed "$seed" --label-noise "$label_noise" $ids_flag $label_set_flag \
-      --out "$d/dataset" --quiet &&
+      $sim_extra --out "$d/dataset" --quiet &&
     "$gsf" build-map --dataset "$d/dataset" --out "$d/map.gsfmap" "${set_args[@]}" $build_args --quiet &&
     "$gsf" evaluate --map "$d/map.gsfmap" --dataset "$d/dataset" --mode "$modes" --json "$d/results.json" \
       "${set_args[@]}" --quiet
@@ -93,12 +98,12 @@ run_world() {
 export -f run_world
 label_set_flag=""
 [ "$label_set" != semantic-kitti ] && label_set_flag="--label-set $label_set"
-export out gsf sim_gsf preset label_noise label_set_flag ids_flag modes set_overrides build_args keep
+export out gsf sim_gsf preset label_noise label_set_flag sim_extra ids_flag modes set_overrides build_args keep
 
 start=$SECONDS
 n=0
 for z in $zones; do for s in $seeds; do n=$((n + 1)); done; done
-echo "suite: $n worlds ($zones) x seeds ($seeds), preset $preset, label noise $label_noise, $label_set labels${ids_flag:+, no instance ids}${set_overrides:+, --set $set_overrides}${build_args:+, build-map $build_args}, $jobs in parallel -> $out" >&2
+echo "suite: $n worlds ($zones) x seeds ($seeds), preset $preset, label noise $label_noise${sim_extra:+,$sim_extra}, $label_set labels${ids_flag:+, no instance ids}${set_overrides:+, --set $set_overrides}${build_args:+, build-map $build_args}, $jobs in parallel -> $out" >&2
 status=0
 for z in $zones; do for s in $seeds; do printf '%s %s\n' "$z" "$s"; done; done |
   xargs -P "$jobs" -n 2 bash -c 'run_world "$0" "$1"' || status=1

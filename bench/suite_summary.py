@@ -40,7 +40,8 @@ def load_worlds(out):
         w = {"world": os.path.basename(d), "zone": zone, "seed": meta.get("seed"), "seconds": secs,
              "queries": None, "zone_queries": None, "near_zone_queries": None, "elsewhere_queries": None,
              "repeated_instances": meta.get("zone", {}).get("repeated_instances"),
-             "cued_instances": meta.get("zone", {}).get("cued_instances"), "modes": {}}
+             "cued_instances": meta.get("zone", {}).get("cued_instances"),
+             "sensing": meta.get("sensing"), "modes": {}}
         for mode, v in r["modes"].items():
             s = v["summary"]
             m = {}

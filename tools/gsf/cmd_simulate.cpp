@@ -1,6 +1,6 @@
 // gsf simulate --out DIR [--preset demo|tiny|suite|tiny-lattice] [--zone row|lattice|hall|avenue|auto]
-//              [--cue-density X] [--seed N] [--beams N] [--label-noise P] [--no-instance-ids] [--label-set
-//              semantic-kitti|nuscenes] [--offset X,Y[,Z]]
+//              [--cue-density X] [--seed N] [--beams N] [--map-beams N] [--label-noise P] [--object-confusion P]
+//              [--thin-miss P] [--no-instance-ids] [--label-set semantic-kitti|nuscenes] [--offset X,Y[,Z]]
 #include <cstdio>
 
 #include "args.h"
@@ -8,6 +8,49 @@
 #include "sim/simulation.h"
 
 namespace gsf::cli {
+namespace {
+
+// A share 0..1 from option `name` (given or its default) into *out.
+bool get_share(const Args& args, const std::string& name, float* out, std::string* err) {
+  double d;
+  if (!args.get_double(name, &d, err) || !(d >= 0.0 && d <= 1.0)) {
+    *err = "--" + name + " must be a number in 0..1";
+    return false;
+  }
+  *out = static_cast<float>(d);
+  return true;
+}
+
+// The sensing options: what the LiDAR sees and which label errors the written scans carry.
+bool parse_sensing(const Args& args, sim::SimConfig* cfg, std::string* err) {
+  if (!get_share(args, "label-noise", &cfg->label_noise, err)) return false;
+  if (!get_share(args, "object-confusion", &cfg->object_confusion, err)) return false;
+  if (!get_share(args, "thin-miss", &cfg->thin_miss, err)) return false;
+  cfg->instance_ids = !args.flag("no-instance-ids");
+  if (args.get("label-set") != "semantic-kitti" && args.get("label-set") != "nuscenes") {
+    *err = "--label-set must be semantic-kitti or nuscenes";
+    return false;
+  }
+  cfg->nuscenes_labels = args.get("label-set") == "nuscenes";
+  long long v;
+  if (args.has("beams")) {
+    if (!args.get_int("beams", &v, err) || v < 2 || v > 256) {
+      *err = "--beams must be 2..256";
+      return false;
+    }
+    cfg->lidar.beams = static_cast<int>(v);
+  }
+  if (args.has("map-beams")) {
+    if (!args.get_int("map-beams", &v, err) || v < 2 || v > 256) {
+      *err = "--map-beams must be 2..256";
+      return false;
+    }
+    cfg->map_beams = static_cast<int>(v);
+  }
+  return true;
+}
+
+}  // namespace
 
 int cmd_simulate(int argc, char** argv) {
   const std::vector<OptionSpec> specs = {
@@ -27,12 +70,24 @@ int cmd_simulate(int argc, char** argv) {
       {"seed", "world seed (overrides the preset's)", ""},
       {"label-noise", "share 0..1 of points written with a confused label (pole<->trunk, terrain<->vegetation, ...)",
        "0"},
+      {"object-confusion",
+       "share 0..1 of instances relabelled whole, per scan, to one partner class (a pole read as a trunk, a "
+       "car as a truck)",
+       "0"},
+      {"thin-miss",
+       "P 0..1: pole, sign and trunk points missed (written as building / vegetation) with probability P x "
+       "clamp((range - 10 m) / 50 m, 0, 1)",
+       "0"},
       {"no-instance-ids", "write labels with the instance id bits zeroed", "", true},
       {"label-set",
        "labels written: semantic-kitti (labels/, uint32) or nuscenes (lidarseg/, uint8: poles, signs and trunks only "
        "as static.manmade / static.vegetation)",
        "semantic-kitti"},
-      {"beams", "LiDAR beams (e.g. 32 or 64)", ""},
+      {"beams", "LiDAR beams (e.g. 16, 32, 64 or 128; the query drive's when --map-beams is given)", ""},
+      {"map-beams",
+       "LiDAR beams of the mapping drive (sequence 00), e.g. 64 with --beams 16: a map from a dense sensor, "
+       "queries from a sparse one (default: --beams)",
+       ""},
       {"blocks-x", "city blocks along x (overrides the preset)", ""},
       {"blocks-y", "city blocks along y (overrides the preset)", ""},
       {"offset",
@@ -83,17 +138,7 @@ int cmd_simulate(int argc, char** argv) {
       return usage_error("simulate", "--cue-density must be a number in 0..1");
     cfg.world.cue_density = static_cast<float>(d);
   }
-  if (!args.get_double("label-noise", &d, &err) || !(d >= 0.0 && d <= 1.0))
-    return usage_error("simulate", "--label-noise must be a number in 0..1");
-  cfg.label_noise = static_cast<float>(d);
-  cfg.instance_ids = !args.flag("no-instance-ids");
-  if (args.get("label-set") != "semantic-kitti" && args.get("label-set") != "nuscenes")
-    return usage_error("simulate", "--label-set must be semantic-kitti or nuscenes");
-  cfg.nuscenes_labels = args.get("label-set") == "nuscenes";
-  if (args.has("beams")) {
-    if (!args.get_int("beams", &v, &err) || v < 2 || v > 256) return usage_error("simulate", "--beams must be 2..256");
-    cfg.lidar.beams = static_cast<int>(v);
-  }
+  if (!parse_sensing(args, &cfg, &err)) return usage_error("simulate", err);
   if (args.has("blocks-x")) {
     if (!args.get_int("blocks-x", &v, &err) || v < 1 || v > 64)
       return usage_error("simulate", "--blocks-x must be 1..64");

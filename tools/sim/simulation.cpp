@@ -132,6 +132,12 @@ float zone_query_spacing(const World& w, const SimConfig& c) {
   return c.query_spacing / 2;
 }
 
+LidarParams drive_lidar(const SimConfig& c, int sequence) {
+  LidarParams l = c.lidar;
+  if (sequence == 0 && c.map_beams > 0) l.beams = c.map_beams;
+  return l;
+}
+
 namespace {
 struct LabelPartners {
   uint16_t semantic;
@@ -170,6 +176,15 @@ uint16_t label_partner(uint16_t semantic, int k) {
   return p && k >= 0 && k < p->count ? p->partner[k] : semantic;
 }
 
+namespace {
+// The partner class chosen by `pick` (uniform in 0..3): the first, likelier one 3 times in 4 when there
+// are two; the class itself when it has none.
+uint16_t drawn_partner(uint16_t semantic, uint32_t pick) {
+  const int n = label_partner_count(semantic);
+  return label_partner(semantic, (n > 1 && pick == 3) ? 1 : 0);
+}
+}  // namespace
+
 void apply_label_noise(uint32_t* labels, uint32_t count, float p, uint64_t seed) {
   gsf::Rng rng(seed);
   for (uint32_t i = 0; i < count; ++i) {
@@ -177,9 +192,39 @@ void apply_label_noise(uint32_t* labels, uint32_t count, float p, uint64_t seed)
     const uint32_t pick = rng.uniform(4);  // drawn for every point: the stream does not depend on labels
     if (u >= p) continue;
     const uint16_t sem = static_cast<uint16_t>(labels[i] & 0xFFFFu);
-    const int n = label_partner_count(sem);
-    if (n == 0) continue;
-    labels[i] = (labels[i] & 0xFFFF0000u) | label_partner(sem, (n > 1 && pick == 3) ? 1 : 0);
+    labels[i] = (labels[i] & 0xFFFF0000u) | drawn_partner(sem, pick);
+  }
+}
+
+void apply_object_confusion(uint32_t* labels, uint32_t count, float p, uint64_t seed) {
+  uint32_t drawn_for = 0;  // the instance whose draw `confused` / `pick` hold (points come in runs)
+  bool confused = false;
+  uint32_t pick = 0;
+  for (uint32_t i = 0; i < count; ++i) {
+    const uint32_t instance = labels[i] >> 16;
+    if (instance == 0) continue;  // stuff: no object to confuse
+    if (instance != drawn_for) {
+      gsf::Rng rng(gsf::mix64(seed ^ gsf::mix64(instance)));
+      confused = rng.uniform01() < p;
+      pick = rng.uniform(4);
+      drawn_for = instance;
+    }
+    if (confused) labels[i] = (labels[i] & 0xFFFF0000u) | drawn_partner(static_cast<uint16_t>(labels[i]), pick);
+  }
+}
+
+float thin_miss_probability(float p, float range) {
+  return p * std::clamp((range - kThinMissNear) / (kThinMissFar - kThinMissNear), 0.0f, 1.0f);
+}
+
+void apply_thin_miss(const float* xyzi, uint32_t* labels, uint32_t count, float p, uint64_t seed) {
+  gsf::Rng rng(seed);
+  for (uint32_t i = 0; i < count; ++i) {
+    const float u = rng.uniform01();  // drawn for every point: the stream does not depend on labels
+    const uint16_t sem = static_cast<uint16_t>(labels[i] & 0xFFFFu);
+    if (sem != 80 && sem != 81 && sem != 71) continue;
+    if (u >= thin_miss_probability(p, std::hypot(xyzi[4 * i], xyzi[4 * i + 1]))) continue;
+    labels[i] = sem == 71 ? 70u : 50u;  // trunk -> vegetation; pole, sign -> building
   }
 }
 
@@ -246,55 +291,96 @@ Drive query_drive(const World& w, const SimConfig& c) {
   return d;
 }
 
-Status run_simulation(const SimConfig& c, const std::string& root, SimSummary* summary, const SimProgress& progress) {
-  SimSummary sum;
-  const World world = generate_world(c.world);
-  const World later = apply_time_gap(world, c.time_gap);
-  const Drive map = mapping_drive(world, c);
-  const Drive queries = query_drive(world, c);
-  sum.road_length_m = world.road_length();
-  const Raycaster cast_map(world), cast_query(later);
+namespace {
+
+// The labels a segmentation network would write for one scan of drive `sequence`: its errors are drawn
+// from the scan's seed (independent per scan and between the drives), then instance ids are stripped.
+void apply_sensing(const SimConfig& c, int sequence, uint32_t frame, SimScan* scan) {
+  const uint64_t seed = scan_seed(c.world.seed, sequence, frame);
+  if (c.object_confusion > 0)
+    apply_object_confusion(scan->labels.data(), scan->size(), c.object_confusion,
+                           gsf::mix64(seed ^ 0x4F424A434F4E4655ULL));
+  if (c.thin_miss > 0)
+    apply_thin_miss(scan->xyzi.data(), scan->labels.data(), scan->size(), c.thin_miss,
+                    gsf::mix64(seed ^ 0x5448494E4D495353ULL));
+  if (c.label_noise > 0)
+    apply_label_noise(scan->labels.data(), scan->size(), c.label_noise, gsf::mix64(seed ^ 0x4C4142454C4E4F49ULL));
+  if (!c.instance_ids) strip_instance_ids(scan->labels.data(), scan->size());
+}
+
+// Scans one drive and writes it as sequence "00" (sequence 0) or "01" (1) with its poses.
+Status write_drive(const SimConfig& c, const std::string& root, int sequence, const Drive& d, const Raycaster& caster,
+                   SimSummary* sum, const SimProgress& progress) {
+  gsf::port::SemanticKittiWriter writer;
+  gsf::port::NuScenesLidarsegWriter nus_writer;
+  std::vector<uint8_t> lidarseg;
   SimScan scan;
-  const Drive* drives[2] = {&map, &queries};
-  const Raycaster* casters[2] = {&cast_map, &cast_query};
-  for (int seq = 0; seq < 2; ++seq) {
-    gsf::port::SemanticKittiWriter writer;
-    gsf::port::NuScenesLidarsegWriter nus_writer;
-    std::vector<uint8_t> lidarseg;
-    Status s =
-        c.nuscenes_labels ? nus_writer.open(root, seq == 0 ? "00" : "01") : writer.open(root, seq == 0 ? "00" : "01");
-    if (s != Status::Ok) return s;
-    const Drive& d = *drives[seq];
-    for (uint32_t f = 0; f < d.poses.size(); ++f) {
-      casters[seq]->scan(d.poses[f], c.lidar, scan_seed(c.world.seed, seq, f), &scan);
-      if (c.label_noise > 0)
-        apply_label_noise(scan.labels.data(), scan.size(), c.label_noise,
-                          gsf::mix64(scan_seed(c.world.seed, seq, f) ^ 0x4C4142454C4E4F49ULL));
-      if (!c.instance_ids) strip_instance_ids(scan.labels.data(), scan.size());
-      if (c.nuscenes_labels) {
-        lidarseg.resize(scan.size());
-        for (uint32_t i = 0; i < scan.size(); ++i) lidarseg[i] = gsf::port::kitti_to_nuscenes(scan.labels[i]);
-        s = nus_writer.write_scan(f, scan.xyzi.data(), lidarseg.data(), scan.size());
-      } else {
-        s = writer.write_scan(f, scan.xyzi.data(), scan.labels.data(), nullptr, scan.size());
-      }
-      if (s != Status::Ok) return s;
-      sum.points += scan.size();
-      if (progress) progress(seq == 0 ? "mapping drive" : "query drive", f + 1, static_cast<uint32_t>(d.poses.size()));
+  const LidarParams lidar = drive_lidar(c, sequence);
+  const char* name = sequence == 0 ? "00" : "01";
+  Status s = c.nuscenes_labels ? nus_writer.open(root, name) : writer.open(root, name);
+  if (s != Status::Ok) return s;
+  for (uint32_t f = 0; f < d.poses.size(); ++f) {
+    caster.scan(d.poses[f], lidar, scan_seed(c.world.seed, sequence, f), &scan);
+    apply_sensing(c, sequence, f, &scan);
+    if (c.nuscenes_labels) {
+      lidarseg.resize(scan.size());
+      for (uint32_t i = 0; i < scan.size(); ++i) lidarseg[i] = gsf::port::kitti_to_nuscenes(scan.labels[i]);
+      s = nus_writer.write_scan(f, scan.xyzi.data(), lidarseg.data(), scan.size());
+    } else {
+      s = writer.write_scan(f, scan.xyzi.data(), scan.labels.data(), nullptr, scan.size());
     }
-    std::vector<Eigen::Isometry3d> posed = d.poses;  // the scans stay in the sensor frame; only poses move
-    for (Eigen::Isometry3d& p : posed)
-      p.translation() += Eigen::Vector3d(c.pose_offset[0], c.pose_offset[1], c.pose_offset[2]);
-    s = c.nuscenes_labels ? nus_writer.write_poses(posed) : writer.write_poses(posed);
     if (s != Status::Ok) return s;
+    sum->points += scan.size();
+    if (progress)
+      progress(sequence == 0 ? "mapping drive" : "query drive", f + 1, static_cast<uint32_t>(d.poses.size()));
   }
-  sum.map_scans = static_cast<uint32_t>(map.poses.size());
-  sum.queries = static_cast<uint32_t>(queries.poses.size());
-  for (bool z : queries.in_zone) sum.zone_queries += z ? 1u : 0u;
-  for (bool z : queries.near_zone) sum.near_zone_queries += z ? 1u : 0u;
-  sum.zone_instances = static_cast<uint32_t>(world.zone_instances.size());
-  for (const ZoneInstance& zi : world.zone_instances) sum.cued_instances += zi.cued ? 1u : 0u;
-  // meta.json
+  std::vector<Eigen::Isometry3d> posed = d.poses;  // the scans stay in the sensor frame; only poses move
+  for (Eigen::Isometry3d& p : posed)
+    p.translation() += Eigen::Vector3d(c.pose_offset[0], c.pose_offset[1], c.pose_offset[2]);
+  return c.nuscenes_labels ? nus_writer.write_poses(posed) : writer.write_poses(posed);
+}
+
+// meta.json's "zone" object: type, cue mode and density, rectangle, the type's sizes and counts.
+void write_zone_meta(std::ostream& meta, const SimConfig& c, const World& world, const SimSummary& sum) {
+  const WorldParams& wp = c.world;
+  meta << "  \"zone\": {\"type\": \"" << zone_name(wp.zone) << "\", \"cues\": \""
+       << (wp.legacy_row_cues() ? "legacy" : "density")
+       << "\", \"cue_density\": " << (wp.legacy_row_cues() ? -1.0f : wp.effective_cue_density()) << ", \"rect\": ["
+       << world.zone_rect[0] << ", " << world.zone_rect[1] << ", " << world.zone_rect[2] << ", " << world.zone_rect[3]
+       << "]";
+  if (wp.zone == ZoneType::Lattice)
+    meta << ", \"nx\": " << wp.lattice_nx << ", \"ny\": " << wp.lattice_ny << ", \"dx\": " << wp.lattice_spacing
+         << ", \"dy\": " << wp.lattice_spacing;
+  else if (wp.zone == ZoneType::Hall)
+    meta << ", \"nx\": " << wp.hall_nx << ", \"ny\": " << wp.hall_ny << ", \"dx\": " << wp.hall_dx
+         << ", \"dy\": " << wp.hall_dy;
+  else if (wp.zone == ZoneType::Avenue)
+    meta << ", \"length\": " << wp.avenue_length << ", \"period\": " << wp.avenue_period << ", \"kind\": \""
+         << (!world.zone_repeated_prims.empty() && world.prims[world.zone_repeated_prims[0]].semantic == 71 ? "trees"
+                                                                                                            : "lamps")
+         << "\"";
+  else meta << ", \"length\": " << wp.zone_length << ", \"period\": " << wp.zone_period;
+  meta << ", \"margin\": " << wp.zone_margin << ", \"repeated_instances\": " << sum.zone_instances
+       << ", \"cued_instances\": " << sum.cued_instances << ", \"zone_queries\": " << sum.zone_queries
+       << ", \"near_zone_queries\": " << sum.near_zone_queries << ", \"near_zone_m\": " << kNearZone << "},\n";
+}
+
+// meta.json's "sensing" object: the label errors and label format of the written scans.
+void write_sensing_meta(std::ostream& meta, const SimConfig& c) {
+  meta << "  \"sensing\": {\"label_noise\": " << c.label_noise << ", \"object_confusion\": " << c.object_confusion
+       << ", \"thin_miss\": " << c.thin_miss << ", \"map_beams\": " << drive_lidar(c, 0).beams
+       << ", \"beams\": " << drive_lidar(c, 1).beams << ", \"instance_ids\": " << (c.instance_ids ? "true" : "false")
+       << ", \"label_set\": \"" << (c.nuscenes_labels ? "nuscenes" : "semantic-kitti") << "\""
+       << "},\n";
+}
+
+void write_flags(std::ostream& meta, const std::vector<bool>& flags) {
+  for (size_t i = 0; i < flags.size(); ++i) meta << (i ? "," : "") << (flags[i] ? 1 : 0);
+}
+
+// meta.json: the original keys first, then the zone, sensing and per-query near-zone keys added later.
+Status write_meta(const SimConfig& c, const World& world, const Drive& queries, const SimSummary& sum,
+                  const std::string& root) {
   std::ofstream meta(std::filesystem::path(root) / "meta.json", std::ios::trunc);
   meta << "{\n  \"generator\": \"gsf simulate\",\n  \"seed\": " << c.world.seed << ",\n";
   meta << "  \"world\": {\"blocks_x\": " << c.world.blocks_x << ", \"blocks_y\": " << c.world.blocks_y
@@ -315,39 +401,37 @@ Status run_simulation(const SimConfig& c, const std::string& root, SimSummary* s
        << ",\n  \"map_sequence\": \"00\",\n  \"query_sequence\": \"01\",\n";
   meta << "  \"map_scans\": " << sum.map_scans << ",\n  \"queries\": " << sum.queries << ",\n";
   meta << "  \"query_in_repetitive_zone\": [";
-  for (size_t i = 0; i < queries.in_zone.size(); ++i) meta << (i ? "," : "") << (queries.in_zone[i] ? 1 : 0);
-  // Zone description and sensing options (keys added after the original ones).
-  const WorldParams& wp = c.world;
-  meta << "],\n  \"zone\": {\"type\": \"" << zone_name(wp.zone) << "\", \"cues\": \""
-       << (wp.legacy_row_cues() ? "legacy" : "density")
-       << "\", \"cue_density\": " << (wp.legacy_row_cues() ? -1.0f : wp.effective_cue_density()) << ", \"rect\": ["
-       << world.zone_rect[0] << ", " << world.zone_rect[1] << ", " << world.zone_rect[2] << ", " << world.zone_rect[3]
-       << "]";
-  if (wp.zone == ZoneType::Lattice)
-    meta << ", \"nx\": " << wp.lattice_nx << ", \"ny\": " << wp.lattice_ny << ", \"dx\": " << wp.lattice_spacing
-         << ", \"dy\": " << wp.lattice_spacing;
-  else if (wp.zone == ZoneType::Hall)
-    meta << ", \"nx\": " << wp.hall_nx << ", \"ny\": " << wp.hall_ny << ", \"dx\": " << wp.hall_dx
-         << ", \"dy\": " << wp.hall_dy;
-  else if (wp.zone == ZoneType::Avenue)
-    meta << ", \"length\": " << wp.avenue_length << ", \"period\": " << wp.avenue_period << ", \"kind\": \""
-         << (!world.zone_repeated_prims.empty() && world.prims[world.zone_repeated_prims[0]].semantic == 71 ? "trees"
-                                                                                                            : "lamps")
-         << "\"";
-  else meta << ", \"length\": " << wp.zone_length << ", \"period\": " << wp.zone_period;
-  meta << ", \"margin\": " << wp.zone_margin << ", \"repeated_instances\": " << sum.zone_instances
-       << ", \"cued_instances\": " << sum.cued_instances << ", \"zone_queries\": " << sum.zone_queries
-       << ", \"near_zone_queries\": " << sum.near_zone_queries << ", \"near_zone_m\": " << kNearZone << "},\n";
-  meta << "  \"sensing\": {\"label_noise\": " << c.label_noise
-       << ", \"instance_ids\": " << (c.instance_ids ? "true" : "false") << ", \"label_set\": \""
-       << (c.nuscenes_labels ? "nuscenes" : "semantic-kitti") << "\""
-       << "},\n";
+  write_flags(meta, queries.in_zone);
+  meta << "],\n";
+  write_zone_meta(meta, c, world, sum);
+  write_sensing_meta(meta, c);
   meta << "  \"query_near_zone\": [";
-  for (size_t i = 0; i < queries.near_zone.size(); ++i) meta << (i ? "," : "") << (queries.near_zone[i] ? 1 : 0);
+  write_flags(meta, queries.near_zone);
   meta << "]\n}\n";
-  if (!meta) return Status::IoError;
-  if (summary) *summary = sum;
-  return Status::Ok;
+  return meta ? Status::Ok : Status::IoError;
+}
+
+}  // namespace
+
+Status run_simulation(const SimConfig& c, const std::string& root, SimSummary* summary, const SimProgress& progress) {
+  SimSummary sum;
+  const World world = generate_world(c.world);
+  const World later = apply_time_gap(world, c.time_gap);
+  const Drive map = mapping_drive(world, c);
+  const Drive queries = query_drive(world, c);
+  sum.road_length_m = world.road_length();
+  Status s = write_drive(c, root, 0, map, Raycaster(world), &sum, progress);
+  if (s == Status::Ok) s = write_drive(c, root, 1, queries, Raycaster(later), &sum, progress);
+  if (s != Status::Ok) return s;
+  sum.map_scans = static_cast<uint32_t>(map.poses.size());
+  sum.queries = static_cast<uint32_t>(queries.poses.size());
+  for (bool z : queries.in_zone) sum.zone_queries += z ? 1u : 0u;
+  for (bool z : queries.near_zone) sum.near_zone_queries += z ? 1u : 0u;
+  sum.zone_instances = static_cast<uint32_t>(world.zone_instances.size());
+  for (const ZoneInstance& zi : world.zone_instances) sum.cued_instances += zi.cued ? 1u : 0u;
+  s = write_meta(c, world, queries, sum, root);
+  if (s == Status::Ok && summary) *summary = sum;
+  return s;
 }
 
 }  // namespace gsf::sim

@@ -33,10 +33,20 @@ struct SimConfig {
   // avenue 6 m). The approach road of a lattice / hall gets near_query_spacing (0 = query_spacing).
   float zone_query_spacing = 0.0f;
   float near_query_spacing = 0.0f;
+  // Beams of the mapping drive's LiDAR (sequence 00); 0 = lidar.beams, which is always the query drive's.
+  // Cross-sensor: a map from a dense 64/128-beam car queried by a 16/32-beam one. Only the beam count
+  // differs: the same elevation range, azimuth step, range and noise (drive_lidar).
+  int map_beams = 0;
   // Sensing: share of points whose written label is confused with a plausible other class (a network's
   // mistakes), and whether labels keep the instance id in their high 16 bits.
   float label_noise = 0.0f;
   bool instance_ids = true;
+  // Correlated segmentation errors (issue 24), drawn per scan for both drives, before label_noise:
+  // share of instances relabelled whole, per scan, to one partner class (a pole called a trunk).
+  float object_confusion = 0.0f;
+  // Thin things missed with range: P of the points of poles, signs and trunks beyond kThinMissFar
+  // (linearly from kThinMissNear) take the class behind them (apply_thin_miss).
+  float thin_miss = 0.0f;
   // Label set of the written scans: false = SemanticKITTI (labels/, uint32); true = nuScenes-lidarseg
   // (lidarseg/, uint8, kitti_to_nuscenes): poles, signs, fences and trunks lose their classes inside
   // static.manmade / static.vegetation, as in real nuScenes data.
@@ -56,6 +66,8 @@ struct SimConfig {
 };
 
 float zone_query_spacing(const World& world, const SimConfig& config);
+// The LiDAR of drive `sequence` (0 mapping, 1 queries): config.lidar with map_beams for the mapping drive.
+LidarParams drive_lidar(const SimConfig& config, int sequence);
 
 struct Drive {
   std::vector<Eigen::Isometry3d> poses;  // world_T_lidar
@@ -73,6 +85,18 @@ int label_partner_count(uint16_t semantic);
 uint16_t label_partner(uint16_t semantic, int k);
 // Replaces the semantic part of a share `p` of labels by a partner (instance bits kept); seeded.
 void apply_label_noise(uint32_t* labels, uint32_t count, float p, uint64_t seed);
+// Whole-object confusion: each instance (instance id != 0) with partner classes is, with probability p,
+// relabelled whole to one partner (the first 3 times in 4 when it has two); instance bits kept. The draw
+// is a function of (seed, instance id) alone: every point of the instance agrees, whatever their order.
+void apply_object_confusion(uint32_t* labels, uint32_t count, float p, uint64_t seed);
+// Range-dependent misses of thin classes: a pole (80), traffic-sign (81) or trunk (71) point at
+// horizontal range r from the sensor (its x, y in the sensor frame) loses its class with probability
+// thin_miss_probability(p, r): a pole or sign point becomes building (50), a trunk point vegetation (70),
+// what a network says of a thin thing against its background; its instance bits are cleared (it is no
+// longer part of the thing). One draw per point, whatever its class.
+constexpr float kThinMissNear = 10.0f, kThinMissFar = 60.0f;  // m: never missed below, at rate p beyond
+float thin_miss_probability(float p, float range);            // p * clamp((r - near) / (far - near), 0, 1)
+void apply_thin_miss(const float* xyzi, uint32_t* labels, uint32_t count, float p, uint64_t seed);
 void strip_instance_ids(uint32_t* labels, uint32_t count);
 
 using SimProgress = std::function<void(const char* stage, uint32_t done, uint32_t total)>;
