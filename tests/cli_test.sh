@@ -103,8 +103,9 @@ for row in range(3):
 answered = [q for q in modes["gsf"]["queries"] if q["status"] == "Ok"]
 assert answered and all(len(q["pose"]) == 12 for q in answered)
 assert "match_dropped" in one["diagnostics"] and "hypotheses" in one["diagnostics"], one.keys()
-for f in ["map_trajectory.svg", "correspondences_instance.svg", "correspondences_gsf.svg"]:
+for f in ["map_trajectory.svg", "correspondences_instance.svg", "correspondences_gsf.svg", "reliability.svg"]:
     assert open(f"{t}/svg/{f}").read().startswith("<svg"), f
+assert "ECE" in open(f"{t}/svg/reliability.svg").read()
 print("cli ok:", g["successes"], "GSF successes,", i["successes"], "instance-only")
 PY
 echo "1 passed, 0 failed"

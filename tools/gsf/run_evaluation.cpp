@@ -15,6 +15,7 @@
 #include "gsf/map_format.h"
 #include "gsf/port/clock.h"
 #include "json_writer.h"
+#include "reliability_svg.h"
 #include "result_json.h"
 #include "svg.h"
 
@@ -160,6 +161,14 @@ void write_json(const std::string& path, const EvalOptions& o, const MapView& ma
   f << j.str() << "\n";
 }
 
+// The reliability diagram of the localizer modes (Scan Context's confidence is only a stand-in).
+void write_reliability_svg(const EvalOptions& o, const std::vector<ModeSummary>& sums) {
+  std::vector<ModeSummary> shown;
+  for (const ModeSummary& s : sums)
+    if (s.mode != "scan-context") shown.push_back(s);
+  if (!shown.empty()) save_reliability_svg(o.svg_dir + "/reliability.svg", shown, shown[0].min_confidence);
+}
+
 // Map instances by class + the shown mode's query trajectory coloured by success.
 void write_map_trajectory_svg(const EvalOptions& o, const MapView& map, const ModeRun& shown) {
   const float* lo = map.counts.bounds_min;
@@ -218,8 +227,10 @@ void write_correspondence_svgs(const EvalOptions& o, const MapView& map, const M
   }
 }
 
-void write_svgs(const EvalOptions& o, const MapView& map, const std::vector<ModeRun>& runs) {
+void write_svgs(const EvalOptions& o, const MapView& map, const std::vector<ModeRun>& runs,
+                const std::vector<ModeSummary>& sums) {
   std::filesystem::create_directories(o.svg_dir);
+  write_reliability_svg(o, sums);
   const ModeRun* gsf = nullptr;
   const ModeRun* inst = nullptr;
   for (const auto& r : runs) {
@@ -553,7 +564,7 @@ int run_evaluation(const EvalOptions& o) {
     print_reliability(sums);
   }
   if (!o.json_out.empty()) write_json(o.json_out, o, map, runs, sums, meta);
-  if (!o.svg_dir.empty()) write_svgs(o, map, runs);
+  if (!o.svg_dir.empty()) write_svgs(o, map, runs, sums);
   return 0;
 }
 
