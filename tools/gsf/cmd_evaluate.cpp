@@ -36,7 +36,7 @@ int cmd_evaluate(int argc, char** argv) {
       {"svg", "directory for the pictures (map + trajectory, correspondences, reliability diagram)", ""},
       {"logits", "synthetic or none (see build-map)", "synthetic"},
       {"min-confidence",
-       "decision rule: answer when status Ok and confidence >= P (0..1; sets confidence.min_probability; default: "
+       "decision rule: answer when status Ok and confidence >= VALUE (0..1; sets confidence.min_probability; default: "
        "the config's)",
        ""},
       {"limit", "evaluate only the first N queries", "0"},
