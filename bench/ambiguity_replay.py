@@ -2,6 +2,10 @@
 """Replays the localizer's ambiguity on recorded per-query diagnostics (gsf evaluate --json), so an
 ambiguity definition can be compared on every world of a suite without re-running the localizer.
 
+Historical tool: it replays the OLD decision rule, "answer when ambiguity <= threshold", from before
+the library decided on its calibrated confidence (LocalizeResult::confident, issue 24). The evaluation
+now answers by that rule; bench/calibration.py measures it. Ambiguity remains a per-query diagnostic.
+
 Usage: bench/ambiguity_replay.py [--mode gsf] [--threshold 0.5] NAME=DIR [NAME=DIR ...]
   DIR holds results.json files (bench/suite.sh --out DIR: DIR/<world>/results.json) or evaluate JSON
   files directly (bench/real_data.sh: DIR/*.json). Prints, per candidate definition and per DIR, the

@@ -44,7 +44,8 @@ r = json.load(open(sys.argv[1]))
 for mode, v in r["modes"].items():
     q = v["queries"][0]
     print(f"SemanticKITTI seq {sys.argv[2]} [{mode}]: {q['status']}, {q['translation_error_m']:.2f} m, "
-          f"{q['rotation_error_deg']:.2f} deg, {q['inliers']} inliers, ambiguity {q['ambiguity']:.2f}")
+          f"{q['rotation_error_deg']:.2f} deg, {q['inliers']} inliers, confidence {q['confidence']:.2f}"
+          f"{' (answered)' if q['answered'] else ' (declined)'}, ambiguity {q['ambiguity']:.2f}")
 PY
 done
 # nuScenes-lidarseg with its own label set (--classes auto -> nuscenes: raw lidarseg ids, geometric
@@ -70,8 +71,8 @@ def positions(seq):
         v = [float(x) for x in line.split()]
         ps.append((v[3], v[7]))
     return ps
-thr = 0.5
-print(f"nuScenes-lidarseg (answered = ambiguity <= {thr}; overlap = within 10 m of the mapping drive)")
+print("nuScenes-lidarseg (answered = the library's decision rule, status Ok and confident; overlap = within 10 m "
+      "of the mapping drive)")
 print(f"{'map -> queries':16} {'mode':11} {'overlap':>7} {'correct pose':>12} {'answered right':>14} "
       f"{'answered wrong':>14} {'elsewhere':>9} {'right there':>11} {'wrong there':>11} {'median ms':>9}")
 for m, q in (("0004", "0002"), ("0002", "0004"), ("0001", "0002")):
@@ -85,7 +86,7 @@ for m, q in (("0004", "0002"), ("0002", "0004"), ("0001", "0002")):
         for x in v["queries"]:
             f = x["frame"]
             near = min(math.dist(qp[f], p) for p in mp) < 10.0
-            answered = x["status"] == "Ok" and x["ambiguity"] <= thr
+            answered = bool(x["answered"])
             times.append(x["time_ms"])
             if near:
                 ov += 1

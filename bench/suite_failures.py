@@ -9,8 +9,9 @@ evaluation records (the best 16) and the truth's own verified score:
   absent, higher    no hypothesis near the truth, whose own score beats the answer's (hypothesis recall)
   absent, lower     no hypothesis near the truth, and the truth scores lower (verification's limit)
 It also counts answers 100 m or more away turned 180 deg (+-10), and how many of those were declined
-(ambiguity > the threshold): a zone's two approach roads look alike.
-Python standard library only.  Usage: bench/suite_failures.py OUT_DIR [--mode gsf] [--threshold 0.5]"""
+(not "answered" under the library's decision rule, status Ok and confident; with --min-confidence P:
+confidence < P): a zone's two approach roads look alike.
+Python standard library only.  Usage: bench/suite_failures.py OUT_DIR [--mode gsf] [--min-confidence P]"""
 import argparse
 import collections
 import glob
@@ -20,7 +21,8 @@ import os
 ap = argparse.ArgumentParser()
 ap.add_argument("suite_dir")
 ap.add_argument("--mode", default="gsf")
-ap.add_argument("--threshold", type=float, default=0.5)
+ap.add_argument("--min-confidence", type=float, default=None,
+                help="decline when confidence < P (default: the recorded decision rule, \"answered\")")
 args = ap.parse_args()
 
 causes = collections.Counter()
@@ -51,7 +53,10 @@ for path in sorted(glob.glob(os.path.join(args.suite_dir, "*", "results.json")))
         causes[(region, cause)] += 1
         if hs and hs[0]["distance_to_truth_m"] >= 100 and abs(abs(hs[0]["yaw_error_deg"]) - 180) <= 10:
             far_turned[region] += 1
-            declined[region] += q["ambiguity"] > args.threshold
+            if args.min_confidence is None:
+                declined[region] += not q["answered"]
+            else:
+                declined[region] += q["status"] != "Ok" or q["confidence"] < args.min_confidence
 failures = sum(causes.values())
 print(f"{args.mode}: {failures} failures of {total} queries")
 print("| region | cause | queries |\n| --- | --- | --- |")
@@ -59,4 +64,5 @@ for (region, cause), n in sorted(causes.items()):
     print(f"| {region} | {cause} | {n} |")
 for region in sorted(far_turned):
     print(f"{region}: {far_turned[region]} failures answered >= 100 m away turned 180 deg, "
-          f"{declined[region]} of them declined (ambiguity > {args.threshold})")
+          f"{declined[region]} of them declined ("
+          + ("the decision rule" if args.min_confidence is None else f"confidence < {args.min_confidence}") + ")")

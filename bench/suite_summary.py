@@ -1,8 +1,11 @@
 #!/usr/bin/env python3
 """Aggregates bench/suite.sh: per mode, per zone type and overall, the MEAN and WORST over the worlds
-(seeds) of success over all queries / in the zone / near it / elsewhere, precision and share answered at
-the default ambiguity threshold, median and p95 ms per query. Worst = lowest for rates, highest for times.
-Prints Markdown tables and writes OUT/summary.json (per-world numbers and the aggregates).
+(seeds) of success over all queries / in the zone / near it / elsewhere, precision and share answered
+under the library's decision rule (status Ok and confident), median and p95 ms per query. Worst = lowest
+for rates, highest for times. Then per mode, pooled over all worlds' queries (bench/calibration.py): the
+confidence's reliability table, ECE, Brier, precision and share answered at the rule, wrong answers and
+declined right ones, overall and per zone type. Prints Markdown tables and writes OUT/summary.json
+(per-world numbers, the aggregates, and "calibration": {mode: {"overall"|zone: {...}}}).
 Python standard library only.  Usage: bench/suite_summary.py OUT_DIR [--seconds S] [--set OVERRIDES]"""
 import argparse
 import glob
@@ -11,14 +14,17 @@ import os
 import statistics
 import sys
 
-# (key in summary.json, results.json summary key, column header, higher is better, scale, format)
+import calibration
+
+# (key in summary.json, results.json summary key(s): the first present counts (older results.json named
+# the rule's numbers *_at_threshold, for ambiguity <= 0.5), column header, higher is better, scale, format)
 METRICS = [
     ("success", "success_rate", "success", True, 100, "{:.1f}%"),
     ("zone", "zone_success_rate", "zone", True, 100, "{:.1f}%"),
     ("near_zone", "near_zone_success_rate", "near zone", True, 100, "{:.1f}%"),
     ("elsewhere", "elsewhere_success_rate", "elsewhere", True, 100, "{:.1f}%"),
-    ("precision", "precision_at_threshold", "prec@thr", True, 100, "{:.1f}%"),
-    ("answered", "answered_at_threshold", "answered", True, 100, "{:.1f}%"),
+    ("precision", ("precision_at_rule", "precision_at_threshold"), "prec@rule", True, 100, "{:.1f}%"),
+    ("answered", ("answered_at_rule", "answered_at_threshold"), "answered", True, 100, "{:.1f}%"),
     ("median_ms", "median_ms", "median ms", False, 1, "{:.1f}"),
     ("p95_ms", "p95_ms", "p95 ms", False, 1, "{:.1f}"),
 ]
@@ -27,8 +33,16 @@ COUNT_OF = {"zone": "zone_queries", "near_zone": "near_zone_queries", "elsewhere
 ZONE_ORDER = ["row", "lattice", "hall", "avenue"]
 
 
+def summary_value(s, src):
+    for key in (src,) if isinstance(src, str) else src:
+        if key in s:
+            return s[key]
+    return None
+
+
 def load_worlds(out):
-    worlds = []
+    """Per world its numbers (summary.json's "worlds") and {mode: queries} (for the pooled calibration)."""
+    worlds, queries = [], []
     for path in sorted(glob.glob(os.path.join(out, "*", "results.json"))):
         d = os.path.dirname(path)
         r = json.load(open(path))
@@ -42,19 +56,21 @@ def load_worlds(out):
              "repeated_instances": meta.get("zone", {}).get("repeated_instances"),
              "cued_instances": meta.get("zone", {}).get("cued_instances"),
              "sensing": meta.get("sensing"), "modes": {}}
+        queries.append({mode: v.get("queries", []) for mode, v in r["modes"].items()})
         for mode, v in r["modes"].items():
             s = v["summary"]
             m = {}
             for key, src, _, _, _, _ in METRICS:
-                val = s.get(src)
+                val = summary_value(s, src)
                 if key in COUNT_OF and not s.get(COUNT_OF[key]):
                     val = None
                 m[key] = val
+            m["min_confidence"] = s.get("min_confidence")  # the decision rule's threshold
             w["modes"][mode] = m
             for c in ("queries", "zone_queries", "near_zone_queries", "elsewhere_queries"):
                 w[c] = s.get(c)
         worlds.append(w)
-    return worlds
+    return worlds, queries
 
 
 def aggregate(worlds, mode):
@@ -70,6 +86,30 @@ def aggregate(worlds, mode):
     return agg
 
 
+def print_calibration(worlds, queries, modes, zones):
+    """Per mode, the pooled calibration over all worlds (table) and per zone type (one line each)."""
+    out = {}
+    for mode in modes:
+        with_conf = [(w, q[mode]) for w, q in zip(worlds, queries)
+                     if mode in q and all("confidence" in x and "answered" in x for x in q[mode])]
+        if not with_conf:
+            print(f"\ncalibration {mode}: no per-query confidence (results.json older than the decision rule)")
+            continue
+        out[mode] = {}
+        recorded = {w["modes"][mode]["min_confidence"] for w, _ in with_conf} - {None}
+        threshold = calibration.threshold_text(None, recorded)
+        print(f"\ncalibration {mode}, pooled over {len(with_conf)} worlds (no pose = confidence 0, a failure):")
+        for label in zones + ["overall"]:
+            qs = [x for w, q in with_conf if label == "overall" or w["zone"] == label for x in q]
+            if not qs:
+                continue
+            c = calibration.calibration(qs)
+            out[mode][label] = c
+            print(calibration.summary_line(label, mode, c, threshold))
+        print("\n".join(calibration.table_lines(out[mode]["overall"])))
+    return out
+
+
 def fmt(v, scale, f):
     return "-" if v is None else f.format(v * scale)
 
@@ -80,7 +120,7 @@ def main():
     ap.add_argument("--seconds", type=float, default=None, help="wall time of the whole suite")
     ap.add_argument("--set", default="", help="config overrides the suite ran with (recorded)")
     a = ap.parse_args()
-    worlds = load_worlds(a.out)
+    worlds, queries = load_worlds(a.out)
     if not worlds:
         print(f"suite_summary: no */results.json under {a.out}", file=sys.stderr)
         return 1
@@ -111,6 +151,7 @@ def main():
             for key, _, _, _, scale, f in METRICS:
                 cells.append(f"{fmt(agg[key]['mean'], scale, f)} / {fmt(agg[key]['worst'], scale, f)}")
             print("| " + " | ".join(cells) + " |")
+    summary["calibration"] = print_calibration(worlds, queries, modes, zones)
     secs = [w["seconds"] for w in worlds if w["seconds"] is not None]
     if secs:
         print(f"\nper world: {statistics.fmean(secs):.0f} s mean, {max(secs):.0f} s max (simulate + build-map + evaluate)")

@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # CLI contract test (host builds): usage errors exit 2 with a message, runtime errors exit 1, and the
 # documented pipeline simulate -> build-map -> evaluate --json works on the tiny world with the
-# expected success counts (ground truth known) and a JSON file holding the documented fields; poses
+# expected success counts (ground truth known) and a JSON file holding the documented fields (per query
+# confidence and the decision rule's "answered"; per mode reliability bins, ECE, the rule's counts); poses
 # come in the map's frame and the map-local one, apart by the map origin.
 set -u
 gsf=$1
@@ -22,6 +23,8 @@ expect 2 "unknown option '--bogus'" -- "$gsf" evaluate --bogus 1
 expect 2 "missing required option '--map'" -- "$gsf" evaluate --dataset x
 expect 2 "bad --mode" -- "$gsf" evaluate --map m --dataset d --mode teleport
 expect 2 "expects an integer" -- "$gsf" evaluate --map m --dataset d --limit ten
+expect 2 "min-confidence must be in" -- "$gsf" evaluate --map m --dataset d --min-confidence 1.01
+expect 2 "min-confidence must be in" -- "$gsf" evaluate --map m --dataset d --min-confidence -0.1
 expect 2 "unknown config name" -- "$gsf" build-map --dataset d --out m --set match.nonsense=1
 expect 1 "cannot open map file" -- "$gsf" evaluate --map "$tmp/none.gsfmap" --dataset "$tmp"
 expect 1 "cannot open sequence" -- "$gsf" build-map --dataset "$tmp/nothing" --out "$tmp/m.gsfmap"
@@ -38,6 +41,8 @@ echo "$built" | grep -q "origin 0.000, -2.000, 2.000 m in frame 'local'" || fail
 "$gsf" inspect --map <(cat "$tmp/map.gsfmap") | grep -q "read into memory" || fail "map through a pipe"
 "$gsf" evaluate --map "$tmp/map.gsfmap" --dataset "$tmp/ds" --sequence 01 --json "$tmp/out.json" --mode all \
   --svg "$tmp/svg" --quiet >/dev/null || fail "evaluate"
+"$gsf" evaluate --map "$tmp/map.gsfmap" --dataset "$tmp/ds" --sequence 01 --json "$tmp/all.json" --mode gsf,scan-context \
+  --min-confidence 0 --limit 12 --quiet >/dev/null || fail "evaluate --min-confidence 0"
 "$gsf" localize --map "$tmp/map.gsfmap" --dataset "$tmp/ds" --sequence 01 --frame 3 > "$tmp/one.json" || fail "localize"
 python3 - "$tmp" <<'PY' || exit 1
 import json, sys, os
@@ -57,6 +62,27 @@ for name, m in modes.items():
         for k in ["index", "frame", "success", "translation_error_m", "rotation_error_deg", "time_ms", "status"]:
             assert k in q, (name, k)
 g, i = modes["gsf"]["summary"], modes["instance"]["summary"]
+# The decision rule (answered = status Ok and confident) and the confidence's calibration.
+for name, m in modes.items():
+    s, qs = m["summary"], m["queries"]
+    for q in qs:
+        assert 0 <= q["confidence"] <= 1 and isinstance(q["answered"], bool), (name, q["confidence"])
+        assert not q["answered"] or q["status"] == "Ok", (name, q["index"])
+        assert "ambiguity" in q and "success" in q
+    rel = s["reliability"]
+    assert len(rel) == 10 and rel[0]["lo"] == 0 and rel[-1]["hi"] == 1, rel
+    assert sum(b["count"] for b in rel) == s["queries"], (name, rel)
+    assert 0 <= s["ece"] <= 1 and 0 <= s["brier"] <= 1, (name, s["ece"], s["brier"])
+    answered = [q for q in qs if q["answered"]]
+    assert s["answered"] == len(answered) and abs(s["answered_at_rule"] - len(answered) / len(qs)) < 1e-6, name
+    assert s["wrong_at_rule"] == sum(not q["success"] for q in answered), name
+    assert s["declined_right"] == sum(q["success"] and not q["answered"] for q in qs), name
+    assert s["min_confidence"] == 0.5, s["min_confidence"]  # the library's default
+every = json.load(open(f"{t}/all.json"))["modes"]
+for name, m in every.items():  # --min-confidence 0: every query with a pose is answered
+    assert m["summary"]["min_confidence"] == 0, m["summary"]["min_confidence"]
+    assert all(q["answered"] == (q["status"] == "Ok") for q in m["queries"]), name
+    assert m["summary"]["answered"] == m["summary"]["with_pose"] > 0, m["summary"]
 # Known answers from the simulator's ground truth (tiny world, 31 queries, 6 in the zone).
 assert g["zone_queries"] == 6, g["zone_queries"]
 assert g["successes"] >= 20, g["successes"]
@@ -77,8 +103,9 @@ for row in range(3):
 answered = [q for q in modes["gsf"]["queries"] if q["status"] == "Ok"]
 assert answered and all(len(q["pose"]) == 12 for q in answered)
 assert "match_dropped" in one["diagnostics"] and "hypotheses" in one["diagnostics"], one.keys()
-for f in ["map_trajectory.svg", "correspondences_instance.svg", "correspondences_gsf.svg"]:
+for f in ["map_trajectory.svg", "correspondences_instance.svg", "correspondences_gsf.svg", "reliability.svg"]:
     assert open(f"{t}/svg/{f}").read().startswith("<svg"), f
+assert "ECE" in open(f"{t}/svg/reliability.svg").read()
 print("cli ok:", g["successes"], "GSF successes,", i["successes"], "instance-only")
 PY
 echo "1 passed, 0 failed"

@@ -86,8 +86,9 @@ int cmd_demo(int argc, char** argv) {
   o.svg_dir = out;
   o.progress = !quiet;
   const int rc = run_evaluation(o);
-  std::printf("\nwrote %s/results.json, %s/map_trajectory.svg, %s/correspondences_*.svg  [total %.0f s]\n", out.c_str(),
-              out.c_str(), out.c_str(), elapsed());
+  std::printf(
+      "\nwrote %s/results.json, %s/map_trajectory.svg, %s/correspondences_*.svg, %s/reliability.svg  [total %.0f s]\n",
+      out.c_str(), out.c_str(), out.c_str(), out.c_str(), elapsed());
   return rc;
 }
 

@@ -1,4 +1,5 @@
 // gsf evaluate --map MAP --dataset DIR --sequence 01 --json OUT.json [--mode gsf|instance|scan-context|all]
+// [--min-confidence P] [--svg DIR]
 #include <cstdio>
 #include <sstream>
 
@@ -32,9 +33,12 @@ int cmd_evaluate(int argc, char** argv) {
       {"map-sequence", "mapping sequence (Scan Context peer database)", "00"},
       {"mode", "comma list of instance (GSF off, Outram), gsf, gsf+refine, scan-context, or all", "all"},
       {"json", "write per-mode summaries and per-query results here", ""},
-      {"svg", "directory for the pictures (map + trajectory, correspondences)", ""},
+      {"svg", "directory for the pictures (map + trajectory, correspondences, reliability diagram)", ""},
       {"logits", "synthetic or none (see build-map)", "synthetic"},
-      {"threshold", "ambiguity threshold for answering (precision vs answered)", "0.5"},
+      {"min-confidence",
+       "decision rule: answer when status Ok and confidence >= VALUE (0..1; sets confidence.min_probability; default: "
+       "the config's)",
+       ""},
       {"limit", "evaluate only the first N queries", "0"},
       {"classes",
        "label set of the dataset's labels: auto, semantic-kitti, nuscenes or a class-table file (docs/data-formats.md)",
@@ -67,8 +71,13 @@ int cmd_evaluate(int argc, char** argv) {
   if (!parse_logit_mode(args.get("logits"), &o.logits))
     return usage_error("evaluate", "--logits must be synthetic or none");
   long long lim;
-  if (!args.get_double("threshold", &o.threshold, &err) || !args.get_int("limit", &lim, &err) || lim < 0)
+  if (!args.get_int("limit", &lim, &err) || lim < 0)
     return usage_error("evaluate", err.empty() ? "--limit must be >= 0" : err);
+  if (args.has("min-confidence")) {
+    if (!args.get_double("min-confidence", &o.min_confidence, &err)) return usage_error("evaluate", err);
+    if (!(o.min_confidence >= 0 && o.min_confidence <= 1))
+      return usage_error("evaluate", "--min-confidence must be in [0, 1]");
+  }
   o.limit = static_cast<uint32_t>(lim);
   return run_evaluation(o);
 }

@@ -15,6 +15,7 @@
 #include "gsf/map_format.h"
 #include "gsf/port/clock.h"
 #include "json_writer.h"
+#include "reliability_svg.h"
 #include "result_json.h"
 #include "svg.h"
 
@@ -39,6 +40,85 @@ void write_diagnostics(JsonWriter& j, const QueryRecord& r) {
   t.truth_verified_score = r.truth_verified_score;
   t.true_pairs = &r.true_pairs;
   write_result_diagnostics(j, r.result, &t);
+}
+
+// The decision rule's numbers and the confidence's reliability bins, into the mode's summary object.
+void write_rule_and_calibration(JsonWriter& j, const ModeSummary& s) {
+  j.field("min_confidence", s.min_confidence);
+  j.field("precision_at_rule", s.rule.precision);
+  j.field("answered_at_rule", s.rule.answered_share);
+  j.field("wrong_at_rule", s.rule.wrong);
+  j.field("declined_right", s.rule.declined_right);
+  j.field("ece", s.calibration.ece);
+  j.field("brier", s.calibration.brier);
+  j.key("reliability");
+  j.begin_array();
+  for (const ReliabilityBin& b : s.calibration.bins) {
+    j.begin_object();
+    j.field("lo", b.lo);
+    j.field("hi", b.hi);
+    j.field("count", b.count);
+    j.field("mean_confidence", b.mean_confidence);  // null when empty
+    j.field("success_rate", b.success_rate);
+    j.end_object();
+  }
+  j.end_array();
+  j.key("precision_curve");  // answer if the query has a pose and confidence >= threshold
+  j.begin_array();
+  for (const auto& p : s.curve) {
+    j.begin_object();
+    j.field("threshold", p.threshold);
+    j.field("answered", p.answered);
+    j.field("precision", p.precision);
+    j.end_object();
+  }
+  j.end_array();
+}
+
+void write_summary_json(JsonWriter& j, const ModeSummary& s, uint64_t workspace_bytes) {
+  j.key("summary");
+  j.begin_object();
+  j.field("queries", s.queries);
+  j.field("with_pose", s.with_pose);
+  j.field("answered", s.rule.answered);
+  j.field("successes", s.successes);
+  j.field("success_rate", s.success_rate);
+  j.field("zone_queries", s.zone_queries);
+  j.field("zone_success_rate", s.zone_success_rate);
+  j.field("near_zone_queries", s.near_zone_queries);
+  j.field("near_zone_success_rate", s.near_zone_success_rate);
+  j.field("elsewhere_queries", s.elsewhere_queries);
+  j.field("elsewhere_success_rate", s.elsewhere_success_rate);
+  j.field("ate_m", s.ate_m);
+  j.field("are_deg", s.are_deg);
+  j.field("median_ms", s.median_ms);
+  j.field("p95_ms", s.p95_ms);
+  j.field("mean_ms", s.mean_ms);
+  j.field("time_ratio_to_instance", s.time_ratio_to_gsf_off);
+  j.field("workspace_bytes", static_cast<unsigned long long>(workspace_bytes));
+  write_stage_ms(j, "median_stage_ms", s.median_stage);
+  write_rule_and_calibration(j, s);
+  j.end_object();
+}
+
+void write_query_json(JsonWriter& j, const QueryRecord& r, bool diagnostics) {
+  j.begin_object();
+  j.field("index", r.index);
+  j.field("frame", r.frame);
+  j.field("status", r.status);
+  j.field("confidence", r.confidence);
+  j.field("answered", r.answered);  // the decision rule: status Ok and confident
+  j.field("success", r.success);
+  j.field("in_zone", r.in_zone);
+  j.field("near_zone", r.near_zone);
+  j.field("translation_error_m", r.has_pose ? r.error.translation_m : -1.0);
+  j.field("rotation_error_deg", r.has_pose ? r.error.rotation_deg : -1.0);
+  j.field("time_ms", r.time_ms);
+  j.field("ambiguity", r.ambiguity);  // diagnostic; the rule is on confidence
+  j.field("inliers", r.inliers);
+  if (r.has_pose) write_pose(j, "pose", r.estimate);  // the map's frame (the dataset's)
+  if (diagnostics) write_diagnostics(j, r);
+  j.end_object();
 }
 
 void write_json(const std::string& path, const EvalOptions& o, const MapView& map, const std::vector<ModeRun>& runs,
@@ -66,64 +146,12 @@ void write_json(const std::string& path, const EvalOptions& o, const MapView& ma
   j.key("modes");
   j.begin_object();
   for (size_t m = 0; m < runs.size(); ++m) {
-    const ModeSummary& s = sums[m];
     j.key(runs[m].mode);
     j.begin_object();
-    j.key("summary");
-    j.begin_object();
-    j.field("queries", s.queries);
-    j.field("answered", s.answered);
-    j.field("successes", s.successes);
-    j.field("success_rate", s.success_rate);
-    j.field("zone_queries", s.zone_queries);
-    j.field("zone_success_rate", s.zone_success_rate);
-    j.field("near_zone_queries", s.near_zone_queries);
-    j.field("near_zone_success_rate", s.near_zone_success_rate);
-    j.field("elsewhere_queries", s.elsewhere_queries);
-    j.field("elsewhere_success_rate", s.elsewhere_success_rate);
-    j.field("ate_m", s.ate_m);
-    j.field("are_deg", s.are_deg);
-    j.field("median_ms", s.median_ms);
-    j.field("p95_ms", s.p95_ms);
-    j.field("mean_ms", s.mean_ms);
-    j.field("time_ratio_to_instance", s.time_ratio_to_gsf_off);
-    j.field("workspace_bytes", static_cast<unsigned long long>(runs[m].workspace_bytes));
-    write_stage_ms(j, "median_stage_ms", s.median_stage);
-    j.field("ambiguity_threshold", s.default_threshold);
-    j.field("precision_at_threshold", s.precision_at_default);
-    j.field("answered_at_threshold", s.answered_at_default);
-    j.field("wrong_answers_at_threshold", s.wrong_answers_at_default);
-    j.key("precision_curve");
-    j.begin_array();
-    for (const auto& p : s.curve) {
-      j.begin_object();
-      j.field("threshold", p.threshold);
-      j.field("answered", p.answered);
-      j.field("precision", p.precision);
-      j.end_object();
-    }
-    j.end_array();
-    j.end_object();
+    write_summary_json(j, sums[m], runs[m].workspace_bytes);
     j.key("queries");
     j.begin_array();
-    const ModeRun& run = runs[m];
-    for (const auto& r : run.records) {
-      j.begin_object();
-      j.field("index", r.index);
-      j.field("frame", r.frame);
-      j.field("status", r.status);
-      j.field("success", r.success);
-      j.field("in_zone", r.in_zone);
-      j.field("near_zone", r.near_zone);
-      j.field("translation_error_m", r.answered ? r.error.translation_m : -1.0);
-      j.field("rotation_error_deg", r.answered ? r.error.rotation_deg : -1.0);
-      j.field("time_ms", r.time_ms);
-      j.field("ambiguity", r.ambiguity);
-      j.field("inliers", r.inliers);
-      if (r.answered) write_pose(j, "pose", r.estimate);  // the map's frame (the dataset's)
-      if (run.mode != "scan-context") write_diagnostics(j, r);
-      j.end_object();
-    }
+    for (const auto& r : runs[m].records) write_query_json(j, r, runs[m].mode != "scan-context");
     j.end_array();
     j.end_object();
   }
@@ -133,43 +161,45 @@ void write_json(const std::string& path, const EvalOptions& o, const MapView& ma
   f << j.str() << "\n";
 }
 
-void write_svgs(const EvalOptions& o, const MapView& map, const std::vector<ModeRun>& runs) {
-  std::filesystem::create_directories(o.svg_dir);
-  const ModeRun* gsf = nullptr;
-  const ModeRun* inst = nullptr;
-  for (const auto& r : runs) {
-    if (r.mode == "gsf") gsf = &r;
-    if (r.mode == "instance") inst = &r;
-  }
-  const ModeRun* shown = gsf ? gsf : (runs.empty() ? nullptr : &runs[0]);
-  if (!shown) return;
-  // 1. Map instances by class + query trajectory coloured by success.
+// The reliability diagram of the localizer modes (Scan Context's confidence is only a stand-in).
+void write_reliability_svg(const EvalOptions& o, const std::vector<ModeSummary>& sums) {
+  std::vector<ModeSummary> shown;
+  for (const ModeSummary& s : sums)
+    if (s.mode != "scan-context") shown.push_back(s);
+  if (!shown.empty()) save_reliability_svg(o.svg_dir + "/reliability.svg", shown, shown[0].min_confidence);
+}
+
+// Map instances by class + the shown mode's query trajectory coloured by success.
+void write_map_trajectory_svg(const EvalOptions& o, const MapView& map, const ModeRun& shown) {
   const float* lo = map.counts.bounds_min;
   const float* hi = map.counts.bounds_max;
   SvgCanvas c(lo[0] - 20, lo[1] - 20, hi[0] + 20, hi[1] + 20, 1400);
   for (uint32_t i = 0; i < map.counts.instances; ++i)
     c.circle(map.instances[i].centroid[0], map.instances[i].centroid[1], 1.6, class_colour(map.instances[i].label),
              0.8);
-  for (const auto& r : shown->records) {
+  for (const auto& r : shown.records) {
     const auto t = r.truth_local.translation();  // map-local, like the map's instances
-    c.circle(t.x(), t.y(), 5, r.success ? "#1a9850" : (r.answered ? "#d73027" : "#999999"), 0.9);
+    c.circle(t.x(), t.y(), 5, r.success ? "#1a9850" : (r.has_pose ? "#d73027" : "#999999"), 0.9);
   }
-  c.text_px(
-      20, 16,
-      "map instances by class; queries (" + shown->mode + "): green = success, red = wrong pose, grey = no answer", 13);
+  c.text_px(20, 16,
+            "map instances by class; queries (" + shown.mode + "): green = success, red = wrong pose, grey = no pose",
+            13);
   c.save(o.svg_dir + "/map_trajectory.svg");
-  // 2. Correspondences before/after the GSF filter for one repetitive-zone query (paper Fig. 3).
-  if (!gsf || !inst) return;
+}
+
+// Correspondences before/after the GSF filter for one repetitive-zone query (paper Fig. 3): one where GSF
+// succeeds and instance-only fails if there is one.
+void write_correspondence_svgs(const EvalOptions& o, const MapView& map, const ModeRun& inst, const ModeRun& gsf) {
   int pick = -1;
-  for (size_t q = 0; q < gsf->records.size(); ++q)
-    if (gsf->records[q].in_zone && gsf->records[q].success && !inst->records[q].success) {
+  for (size_t q = 0; q < gsf.records.size(); ++q)
+    if (gsf.records[q].in_zone && gsf.records[q].success && !inst.records[q].success) {
       pick = int(q);
       break;
     }
-  for (size_t q = 0; q < gsf->records.size() && pick < 0; ++q)
-    if (gsf->records[q].in_zone) pick = int(q);
+  for (size_t q = 0; q < gsf.records.size() && pick < 0; ++q)
+    if (gsf.records[q].in_zone) pick = int(q);
   if (pick < 0) return;
-  for (const ModeRun* run : {inst, gsf}) {
+  for (const ModeRun* run : {&inst, &gsf}) {
     const QueryRecord& r = run->records[pick];
     const Eigen::Isometry3d& T = r.truth_local;
     const Eigen::Vector3d p = T.translation();
@@ -197,6 +227,286 @@ void write_svgs(const EvalOptions& o, const MapView& map, const std::vector<Mode
   }
 }
 
+void write_svgs(const EvalOptions& o, const MapView& map, const std::vector<ModeRun>& runs,
+                const std::vector<ModeSummary>& sums) {
+  std::filesystem::create_directories(o.svg_dir);
+  write_reliability_svg(o, sums);
+  const ModeRun* gsf = nullptr;
+  const ModeRun* inst = nullptr;
+  for (const auto& r : runs) {
+    if (r.mode == "gsf") gsf = &r;
+    if (r.mode == "instance") inst = &r;
+  }
+  const ModeRun* shown = gsf ? gsf : (runs.empty() ? nullptr : &runs[0]);
+  if (shown) write_map_trajectory_svg(o, map, *shown);
+  if (gsf && inst) write_correspondence_svgs(o, map, *inst, *gsf);
+}
+
+// One localizer mode: its config, workspace and localizer (the modes run interleaved, query by query).
+struct LocalizerMode {
+  size_t run;
+  LocalizerConfig cfg;
+  std::vector<uint64_t> workspace;
+  std::unique_ptr<Localizer> loc;
+};
+
+// The decision rule's threshold: --min-confidence when given, else the config's (defaults + --set), so
+// the library's `confident` and the evaluation agree.
+bool resolve_min_confidence(const EvalOptions& o, float* out, std::string* error) {
+  LocalizerConfig cfg = default_config();
+  if (!apply_overrides(&cfg, o.overrides, error)) return false;
+  *out = o.min_confidence >= 0 ? static_cast<float>(o.min_confidence) : cfg.confidence.min_probability;
+  return true;
+}
+
+// Sets up a localizer mode (instance, gsf, gsf+refine); returns 0 or the process exit code.
+int init_localizer_mode(const EvalOptions& o, const std::string& mode, float min_confidence, const LabelSet& labels,
+                        const MapView& map, Clock* clock, LocalizerMode* lm) {
+  lm->cfg = default_config();
+  std::string err;
+  if (!apply_overrides(&lm->cfg, o.overrides, &err)) {
+    std::fprintf(stderr, "gsf evaluate: %s\n", err.c_str());
+    return 2;
+  }
+  lm->cfg.confidence.min_probability = min_confidence;
+  lm->cfg.classes = labels.config_table();
+  lm->cfg.match.use_gsf = mode != "instance";
+  lm->cfg.refine.enabled = mode == "gsf+refine";
+  const size_t need = Localizer::required_bytes(lm->cfg);
+  lm->workspace.assign(need / 8 + 2, 0);
+  lm->loc = std::make_unique<Localizer>();
+  const Status s = lm->loc->init(lm->cfg, map, lm->workspace.data(), lm->workspace.size() * 8, clock);
+  if (s != Status::Ok) {
+    std::fprintf(stderr, "gsf evaluate: localizer init failed for mode %s: %s\n", mode.c_str(), to_string(s));
+    return 1;
+  }
+  return 0;
+}
+
+// A run per mode in o.modes, and a localizer for each localizer mode; returns 0 or the process exit code.
+int init_modes(const EvalOptions& o, float min_confidence, const LabelSet& labels, const MapView& map, Clock* clock,
+               std::vector<ModeRun>* runs, std::vector<LocalizerMode>* locs) {
+  for (const std::string& mode : o.modes) {
+    ModeRun run;
+    run.mode = mode;
+    if (mode == "instance" || mode == "gsf" || mode == "gsf+refine") {
+      LocalizerMode lm;
+      lm.run = runs->size();
+      if (const int rc = init_localizer_mode(o, mode, min_confidence, labels, map, clock, &lm)) return rc;
+      run.workspace_bytes = Localizer::required_bytes(lm.cfg);
+      locs->push_back(std::move(lm));
+    } else if (mode != "scan-context") {
+      std::fprintf(stderr, "gsf evaluate: unknown mode '%s'\n", mode.c_str());
+      return 2;
+    }
+    runs->push_back(std::move(run));
+  }
+  return 0;
+}
+
+// Summaries, with time ratios against the instance-only row of the same run.
+std::vector<ModeSummary> summarize_runs(const std::vector<ModeRun>& runs, double min_confidence) {
+  std::vector<ModeSummary> sums;
+  for (const auto& r : runs) sums.push_back(summarize(r.mode, r.records, min_confidence));
+  double base = 0;
+  for (const auto& s : sums)
+    if (s.mode == "instance") base = s.median_ms;
+  for (auto& s : sums) s.time_ratio_to_gsf_off = base > 0 ? s.median_ms / base : 0;
+  return sums;
+}
+
+// A record with the query's identity and ground truth filled in.
+QueryRecord new_record(port::ScanSource& src, uint32_t q, const Meta& meta, const MapView& map) {
+  QueryRecord r;
+  r.index = q;
+  r.frame = src.frame_id(q);
+  r.in_zone = q < meta.query_in_zone.size() && meta.query_in_zone[q];
+  r.near_zone = q < meta.query_near_zone.size() && meta.query_near_zone[q];
+  src.pose(q, &r.truth);
+  // The map's coordinates are relative to its origin; the dataset's poses are in the map's frame.
+  r.truth_local = to_map_local(map.georef, r.truth);
+  return r;
+}
+
+// Success is judged on every query with a pose, answered or not.
+void judge(QueryRecord* r) {
+  if (!r->has_pose) return;
+  r->error = pose_error(r->estimate, r->truth);
+  r->success = is_success(r->error);
+}
+
+// Counts the selected correspondences and query instances the ground truth agrees with (< 2 m).
+void add_truth_diagnostics(const Localizer& loc, const MapView& map, const std::vector<Localizer::Correspondence>& corr,
+                           QueryRecord* r) {
+  for (const auto& k : corr) {
+    const Eigen::Vector3d qw = r->truth_local * Eigen::Vector3d(k.query_xyz[0], k.query_xyz[1], k.query_xyz[2]);
+    const float* m = map.instances[k.map_instance].centroid;
+    if ((qw - Eigen::Vector3d(m[0], m[1], m[2])).norm() >= 2.0) continue;
+    ++r->true_correspondences;
+    r->true_pairs.push_back({k.weight, std::hypot(k.query_xyz[0], k.query_xyz[1])});
+  }
+  float qxyz[3 * 1024];
+  uint8_t qlab[1024];
+  const uint32_t ni = std::min<uint32_t>(loc.last_instances(qxyz, qlab, 1024), 1024);
+  for (uint32_t i = 0; i < ni; ++i) {
+    const Eigen::Vector3d qw = r->truth_local * Eigen::Vector3d(qxyz[3 * i], qxyz[3 * i + 1], qxyz[3 * i + 2]);
+    for (uint32_t m = 0; m < map.counts.instances; ++m) {  // host tool: a linear scan is fine
+      const float* c = map.instances[m].centroid;
+      if (map.instances[m].label == qlab[i] && (qw - Eigen::Vector3d(c[0], c[1], c[2])).norm() < 2.0) {
+        ++r->repeatable_instances;
+        break;
+      }
+    }
+  }
+}
+
+// Localizes one query (already read into `scan`, or failed with `read_status`) in one mode; corr_buf is
+// scratch for the correspondences.
+void localize_query(LocalizerMode& lm, const ScanView& scan, Status read_status, const MapView& map,
+                    std::vector<Localizer::Correspondence>& corr_buf, QueryRecord r, ModeRun* run) {
+  LocalizeResult res;
+  if (read_status == Status::Ok) lm.loc->localize(scan, &res);
+  else res.status = read_status;
+  r.status = to_string(res.status);
+  r.has_pose = res.status == Status::Ok;
+  r.answered = r.has_pose && res.confident;  // the library's decision rule
+  r.estimate = res.map_frame_T_scan;
+  r.ambiguity = res.ambiguity;
+  r.confidence = r.has_pose ? res.confidence : 0.0;
+  r.inliers = res.inliers;
+  r.result = res;
+  r.time_ms = ms(res.times.total);
+  r.stages = stage_ms(res.times);
+  judge(&r);
+  const uint32_t nc = lm.loc->last_correspondences(corr_buf.data(), static_cast<uint32_t>(corr_buf.size()));
+  std::vector<Localizer::Correspondence> corr(corr_buf.begin(),
+                                              corr_buf.begin() + std::min<size_t>(nc, corr_buf.size()));
+  add_truth_diagnostics(*lm.loc, map, corr, &r);
+  if (res.status == Status::Ok) r.truth_verified_score = lm.loc->score_pose(r.truth_local).score;
+  run->corr.push_back(std::move(corr));
+  run->records.push_back(std::move(r));
+}
+// The Scan Context peer: a database of the map drive's scans, one nearest-place query per scan. It has
+// no calibrated confidence; its stand-in is 1 - its distance ratio to the best place at least 10 m
+// away, under the same threshold. Returns 0 or the process exit code.
+int run_scan_context(const EvalOptions& o, const LabelSet& labels, port::ScanSource& src, const MapView& map,
+                     const Meta& meta, uint32_t nq, double min_confidence, port::ScanBuffer& buf, ModeRun* run) {
+  Status s;
+  auto map_src = open_source(o.dataset, o.map_sequence, &s, &labels);
+  if (s != Status::Ok) {
+    std::fprintf(stderr, "gsf evaluate: scan-context needs the map sequence '%s': %s\n", o.map_sequence.c_str(),
+                 to_string(s));
+    return 1;
+  }
+  bench::ScanContextConfig sc;
+  bench::ScanContextDatabase db(sc);
+  for (uint32_t i = 0; i < map_src->size(); ++i) {
+    Eigen::Isometry3d pose;
+    if (map_src->pose(i, &pose) != Status::Ok || map_src->read(i, buf) != Status::Ok) continue;
+    db.add(bench::make_scan_context(sc, buf.points, 4, buf.count), pose);
+  }
+  run->workspace_bytes = db.size() * (sizeof(float) * (sc.rings * sc.sectors + sc.rings) + sizeof(Eigen::Isometry3d));
+  for (uint32_t q = 0; q < nq; ++q) {
+    QueryRecord r = new_record(src, q, meta, map);
+    r.status = "IoError";
+    if (src.read(q, buf) == Status::Ok) {
+      const auto t0 = std::chrono::steady_clock::now();
+      const auto m = db.query(bench::make_scan_context(sc, buf.points, 4, buf.count));
+      r.time_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+      r.status = m.found ? "Ok" : "NoSolution";
+      r.has_pose = m.found;
+      r.estimate = m.pose;
+      r.ambiguity = m.second_distance > 0 ? std::min(1.0, double(m.distance) / m.second_distance) : 1.0;
+      r.confidence = r.has_pose ? 1.0 - r.ambiguity : 0.0;
+      r.answered = r.has_pose && r.confidence >= min_confidence;
+      judge(&r);
+    }
+    run->corr.emplace_back();
+    run->records.push_back(r);
+  }
+  return 0;
+}
+
+void print_header(const MapView& map, const Meta& meta, const std::vector<ModeSummary>& sums, uint32_t nq) {
+  const double km = map.counts.road_length_m / 1000.0;
+  std::printf(
+      "\nmap: %zu bytes, %u instances, %u triangles, %.0f m of road -> %.2f MB/km; origin %.3f, %.3f, %.3f in '%s'\n",
+      map.total_bytes, map.counts.instances, map.counts.triangles, map.counts.road_length_m,
+      km > 0 ? map.total_bytes / 1e6 / km : 0.0, map.georef.origin[0], map.georef.origin[1], map.georef.origin[2],
+      map.georef.frame);
+  std::printf(
+      "queries: %u (%u in the repetitive zone%s%s, %u near it, %u elsewhere); success = t < %.0f m and r < %.0f "
+      "deg\n\n",
+      nq, sums.empty() ? 0 : sums[0].zone_queries, meta.zone_type.empty() ? "" : ": ", meta.zone_type.c_str(),
+      sums.empty() ? 0 : sums[0].near_zone_queries, sums.empty() ? 0 : sums[0].elsewhere_queries, kSuccessTranslation,
+      kSuccessRotationDeg);
+}
+
+void print_table(const std::vector<ModeSummary>& sums, const std::vector<ModeRun>& runs) {
+  std::printf("%-13s %8s %8s %8s %8s %7s %7s %9s %9s %7s %10s %9s %9s\n", "mode", "success", "repet.", "near", "else",
+              "ATE m", "ARE deg", "median ms", "p95 ms", "x off", "workspace", "prec@rule", "answered");
+  for (size_t m = 0; m < sums.size(); ++m) {
+    const ModeSummary& x = sums[m];
+    std::printf("%-13s %7.1f%% %7.1f%% %7.1f%% %7.1f%% %7.2f %7.2f %9.1f %9.1f %7.2f %8.1fMB %8.1f%% %8.1f%%\n",
+                x.mode.c_str(), 100 * x.success_rate, 100 * x.zone_success_rate, 100 * x.near_zone_success_rate,
+                100 * x.elsewhere_success_rate, x.ate_m, x.are_deg, x.median_ms, x.p95_ms, x.time_ratio_to_gsf_off,
+                runs[m].workspace_bytes / 1e6, 100 * x.rule.precision, 100 * x.rule.answered_share);
+  }
+  for (const auto& x : sums)
+    if (x.mode != "scan-context")
+      std::printf(
+          "  %s median stage ms: voxel %.1f  cluster %.1f  field %.1f  triangle %.1f  match %.1f  gsf %.1f  "
+          "clique %.1f  pose %.1f  refine %.1f\n",
+          x.mode.c_str(), x.median_stage.voxel, x.median_stage.cluster, x.median_stage.field, x.median_stage.triangle,
+          x.median_stage.match, x.median_stage.gsf, x.median_stage.clique, x.median_stage.pose, x.median_stage.refine);
+  std::printf(
+      "  (prec@rule / answered: precision and share answered under the decision rule, status Ok and confidence "
+      ">= %.2f)\n",
+      sums.empty() ? 0.0 : sums[0].min_confidence);
+}
+
+// printf into a string (for table rows built cell by cell).
+template <typename... T>
+std::string cell(const char* format, T... values) {
+  char b[96];
+  std::snprintf(b, sizeof(b), format, values...);
+  return b;
+}
+
+void print_line(std::string line) {
+  while (!line.empty() && line.back() == ' ') line.pop_back();
+  std::printf("%s\n", line.c_str());
+}
+
+// Per mode: the decision rule's counts, the calibration error (ECE) and the Brier score.
+void print_calibration(const std::vector<ModeSummary>& sums) {
+  std::printf("\ncalibration (all queries; no pose = confidence 0 and a failure):\n");
+  std::printf("%-13s %6s %7s %6s %6s %9s %9s %6s %14s\n", "mode", "n", "success", "ECE", "Brier", "prec@rule",
+              "answered", "wrong", "declined-right");
+  for (const ModeSummary& x : sums)
+    std::printf("%-13s %6u %6.1f%% %5.1f%% %6.3f %8.1f%% %8.1f%% %6u %14u\n", x.mode.c_str(), x.queries,
+                100 * x.success_rate, 100 * x.calibration.ece, x.calibration.brier, 100 * x.rule.precision,
+                100 * x.rule.answered_share, x.rule.wrong, x.rule.declined_right);
+}
+
+// Per confidence bin (rows) and mode (columns): queries, mean confidence -> observed success.
+void print_reliability(const std::vector<ModeSummary>& sums) {
+  std::printf("reliability: per confidence bin, queries  mean confidence -> observed success\n");
+  std::string head = cell("%-9s", "bin");
+  for (const ModeSummary& x : sums) head += cell("  %-18s", x.mode.c_str());
+  print_line(head);
+  for (int b = 0; b < kReliabilityBins; ++b) {
+    const ReliabilityBin& first = sums.front().calibration.bins[b];
+    std::string line = cell("[%.1f,%.1f%c", first.lo, first.hi, b + 1 == kReliabilityBins ? ']' : ')');
+    for (const ModeSummary& x : sums) {
+      const ReliabilityBin& bin = x.calibration.bins[b];
+      line += bin.count == 0 ? cell("  %5s %12s", "-", "")
+                             : cell("  %5u %4.2f -> %4.2f", bin.count, bin.mean_confidence, bin.success_rate);
+    }
+    print_line(line);
+  }
+}
+
 }  // namespace
 
 int run_evaluation(const EvalOptions& o) {
@@ -213,9 +523,10 @@ int run_evaluation(const EvalOptions& o) {
     return 1;
   }
   LabelSet labels;
-  std::string lerr;
-  if (!resolve_label_set(o.classes, o.dataset, o.sequence, &labels, &lerr)) {
-    std::fprintf(stderr, "gsf evaluate: %s\n", lerr.c_str());
+  float min_confidence = 0;
+  if (!resolve_label_set(o.classes, o.dataset, o.sequence, &labels, &err) ||
+      !resolve_min_confidence(o, &min_confidence, &err)) {
+    std::fprintf(stderr, "gsf evaluate: %s\n", err.c_str());
     return 2;
   }
   auto src = open_source(o.dataset, o.sequence, &s, &labels);
@@ -230,196 +541,30 @@ int run_evaluation(const EvalOptions& o) {
   port::SteadyClock clock;
   // Localizer modes run interleaved, query by query, so every row sees the same machine conditions
   // (sequential runs showed the same voxel stage differing by 35% between rows).
-  struct LocalizerMode {
-    size_t run;
-    LocalizerConfig cfg;
-    std::vector<uint64_t> workspace;
-    std::unique_ptr<Localizer> loc;
-  };
   std::vector<ModeRun> runs;
   std::vector<LocalizerMode> locs;
-  for (const std::string& mode : o.modes) {
-    ModeRun run;
-    run.mode = mode;
-    if (mode == "instance" || mode == "gsf" || mode == "gsf+refine") {
-      LocalizerMode lm;
-      lm.run = runs.size();
-      lm.cfg = default_config();
-      std::string oerr;
-      if (!apply_overrides(&lm.cfg, o.overrides, &oerr)) {
-        std::fprintf(stderr, "gsf evaluate: %s\n", oerr.c_str());
-        return 2;
-      }
-      lm.cfg.classes = labels.config_table();
-      lm.cfg.match.use_gsf = mode != "instance";
-      lm.cfg.refine.enabled = mode == "gsf+refine";
-      const size_t need = Localizer::required_bytes(lm.cfg);
-      lm.workspace.assign(need / 8 + 2, 0);
-      lm.loc = std::make_unique<Localizer>();
-      s = lm.loc->init(lm.cfg, map, lm.workspace.data(), lm.workspace.size() * 8, &clock);
-      if (s != Status::Ok) {
-        std::fprintf(stderr, "gsf evaluate: localizer init failed for mode %s: %s\n", mode.c_str(), to_string(s));
-        return 1;
-      }
-      run.workspace_bytes = need;
-      locs.push_back(std::move(lm));
-    } else if (mode != "scan-context") {
-      std::fprintf(stderr, "gsf evaluate: unknown mode '%s'\n", mode.c_str());
-      return 2;
-    }
-    runs.push_back(std::move(run));
-  }
+  if (const int rc = init_modes(o, min_confidence, labels, map, &clock, &runs, &locs)) return rc;
   std::vector<Localizer::Correspondence> corr(4096);
   for (uint32_t q = 0; q < nq && !locs.empty(); ++q) {
-    Eigen::Isometry3d truth;
-    src->pose(q, &truth);
-    // The map's coordinates are relative to its origin; the dataset's poses are in the map's frame.
-    const Eigen::Isometry3d truth_local = to_map_local(map.georef, truth);
+    const QueryRecord blank = new_record(*src, q, meta, map);
     const Status rs = read_scan(*src, q, buf.buffer(), o.logits, 2000000u + src->frame_id(q), labels.config_table());
-    for (LocalizerMode& lm : locs) {
-      QueryRecord r;
-      r.index = q;
-      r.frame = src->frame_id(q);
-      r.in_zone = q < meta.query_in_zone.size() && meta.query_in_zone[q];
-      r.near_zone = q < meta.query_near_zone.size() && meta.query_near_zone[q];
-      r.truth = truth;
-      r.truth_local = truth_local;
-      LocalizeResult res;
-      if (rs == Status::Ok) {
-        lm.loc->localize(buf.buffer().view(), &res);
-      } else {
-        res.status = rs;
-      }
-      r.status = to_string(res.status);
-      r.answered = res.status == Status::Ok;
-      r.estimate = res.map_frame_T_scan;
-      r.ambiguity = res.ambiguity;
-      r.inliers = res.inliers;
-      r.result = res;
-      r.time_ms = ms(res.times.total);
-      r.stages = stage_ms(res.times);
-      if (r.answered) {
-        r.error = pose_error(r.estimate, r.truth);
-        r.success = is_success(r.error);
-      }
-      const uint32_t nc = lm.loc->last_correspondences(corr.data(), static_cast<uint32_t>(corr.size()));
-      for (uint32_t k = 0; k < nc && k < corr.size(); ++k) {
-        const Eigen::Vector3d qw =
-            truth_local * Eigen::Vector3d(corr[k].query_xyz[0], corr[k].query_xyz[1], corr[k].query_xyz[2]);
-        const float* m = map.instances[corr[k].map_instance].centroid;
-        if ((qw - Eigen::Vector3d(m[0], m[1], m[2])).norm() >= 2.0) continue;
-        ++r.true_correspondences;
-        r.true_pairs.push_back({corr[k].weight, std::hypot(corr[k].query_xyz[0], corr[k].query_xyz[1])});
-      }
-      {
-        float qxyz[3 * 1024];
-        uint8_t qlab[1024];
-        const uint32_t ni = std::min<uint32_t>(lm.loc->last_instances(qxyz, qlab, 1024), 1024);
-        for (uint32_t i = 0; i < ni; ++i) {
-          const Eigen::Vector3d qw = truth_local * Eigen::Vector3d(qxyz[3 * i], qxyz[3 * i + 1], qxyz[3 * i + 2]);
-          for (uint32_t m = 0; m < map.counts.instances; ++m) {  // host tool: a linear scan is fine
-            const float* c = map.instances[m].centroid;
-            if (map.instances[m].label == qlab[i] && (qw - Eigen::Vector3d(c[0], c[1], c[2])).norm() < 2.0) {
-              ++r.repeatable_instances;
-              break;
-            }
-          }
-        }
-      }
-      if (res.status == Status::Ok) r.truth_verified_score = lm.loc->score_pose(truth_local).score;
-      runs[lm.run].corr.emplace_back(corr.begin(), corr.begin() + std::min<size_t>(nc, corr.size()));
-      runs[lm.run].records.push_back(r);
-    }
+    for (LocalizerMode& lm : locs) localize_query(lm, buf.buffer().view(), rs, map, corr, blank, &runs[lm.run]);
     if (o.progress && (q % 10 == 0 || q + 1 == nq)) std::fprintf(stderr, "\r  evaluate: %u / %u queries", q + 1, nq);
   }
   if (o.progress && !locs.empty()) std::fprintf(stderr, "\n");
-  for (ModeRun& run : runs) {
-    if (run.mode != "scan-context") continue;
-    {
-      auto map_src = open_source(o.dataset, o.map_sequence, &s, &labels);
-      if (s != Status::Ok) {
-        std::fprintf(stderr, "gsf evaluate: scan-context needs the map sequence '%s': %s\n", o.map_sequence.c_str(),
-                     to_string(s));
-        return 1;
-      }
-      bench::ScanContextConfig sc;
-      bench::ScanContextDatabase db(sc);
-      for (uint32_t i = 0; i < map_src->size(); ++i) {
-        Eigen::Isometry3d pose;
-        if (map_src->pose(i, &pose) != Status::Ok || map_src->read(i, buf.buffer()) != Status::Ok) continue;
-        db.add(bench::make_scan_context(sc, buf.buffer().points, 4, buf.buffer().count), pose);
-      }
-      run.workspace_bytes =
-          db.size() * (sizeof(float) * (sc.rings * sc.sectors + sc.rings) + sizeof(Eigen::Isometry3d));
-      for (uint32_t q = 0; q < nq; ++q) {
-        QueryRecord r;
-        r.index = q;
-        r.frame = src->frame_id(q);
-        r.in_zone = q < meta.query_in_zone.size() && meta.query_in_zone[q];
-        r.near_zone = q < meta.query_near_zone.size() && meta.query_near_zone[q];
-        src->pose(q, &r.truth);
-        r.truth_local = to_map_local(map.georef, r.truth);
-        if (src->read(q, buf.buffer()) == Status::Ok) {
-          const auto t0 = std::chrono::steady_clock::now();
-          const auto desc = bench::make_scan_context(sc, buf.buffer().points, 4, buf.buffer().count);
-          const auto m = db.query(desc);
-          r.time_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
-          r.answered = m.found;
-          r.estimate = m.pose;
-          // Ambiguity: how close the best place at least 10 m away comes to the best match.
-          r.ambiguity = m.second_distance > 0 ? std::min(1.0, double(m.distance) / m.second_distance) : 1.0;
-          r.status = m.found ? "Ok" : "NoSolution";
-          if (r.answered) {
-            r.error = pose_error(r.estimate, r.truth);
-            r.success = is_success(r.error);
-          }
-        } else {
-          r.status = "IoError";
-        }
-        run.corr.emplace_back();
-        run.records.push_back(r);
-      }
-    }
+  for (ModeRun& run : runs)
+    if (run.mode == "scan-context")
+      if (const int rc = run_scan_context(o, labels, *src, map, meta, nq, min_confidence, buf.buffer(), &run))
+        return rc;
+  const std::vector<ModeSummary> sums = summarize_runs(runs, min_confidence);
+  print_header(map, meta, sums, nq);
+  print_table(sums, runs);
+  if (!sums.empty()) {
+    print_calibration(sums);
+    print_reliability(sums);
   }
-  // Summaries, with time ratios against the instance-only row of the same run.
-  std::vector<ModeSummary> sums;
-  for (const auto& r : runs) sums.push_back(summarize(r.mode, r.records, o.threshold));
-  double base = 0;
-  for (const auto& s2 : sums)
-    if (s2.mode == "instance") base = s2.median_ms;
-  for (auto& s2 : sums) s2.time_ratio_to_gsf_off = base > 0 ? s2.median_ms / base : 0;
-  const double km = map.counts.road_length_m / 1000.0;
-  std::printf(
-      "\nmap: %zu bytes, %u instances, %u triangles, %.0f m of road -> %.2f MB/km; origin %.3f, %.3f, %.3f in '%s'\n",
-      map.total_bytes, map.counts.instances, map.counts.triangles, map.counts.road_length_m,
-      km > 0 ? map.total_bytes / 1e6 / km : 0.0, map.georef.origin[0], map.georef.origin[1], map.georef.origin[2],
-      map.georef.frame);
-  std::printf(
-      "queries: %u (%u in the repetitive zone%s%s, %u near it, %u elsewhere); success = t < %.0f m and r < %.0f "
-      "deg\n\n",
-      nq, sums.empty() ? 0 : sums[0].zone_queries, meta.zone_type.empty() ? "" : ": ", meta.zone_type.c_str(),
-      sums.empty() ? 0 : sums[0].near_zone_queries, sums.empty() ? 0 : sums[0].elsewhere_queries, kSuccessTranslation,
-      kSuccessRotationDeg);
-  std::printf("%-13s %8s %8s %8s %8s %7s %7s %9s %9s %7s %10s %9s %9s\n", "mode", "success", "repet.", "near", "else",
-              "ATE m", "ARE deg", "median ms", "p95 ms", "x off", "workspace", "prec@thr", "answered");
-  for (size_t m = 0; m < sums.size(); ++m) {
-    const ModeSummary& x = sums[m];
-    std::printf("%-13s %7.1f%% %7.1f%% %7.1f%% %7.1f%% %7.2f %7.2f %9.1f %9.1f %7.2f %8.1fMB %8.1f%% %8.1f%%\n",
-                x.mode.c_str(), 100 * x.success_rate, 100 * x.zone_success_rate, 100 * x.near_zone_success_rate,
-                100 * x.elsewhere_success_rate, x.ate_m, x.are_deg, x.median_ms, x.p95_ms, x.time_ratio_to_gsf_off,
-                runs[m].workspace_bytes / 1e6, 100 * x.precision_at_default, 100 * x.answered_at_default);
-  }
-  for (const auto& x : sums)
-    if (x.mode != "scan-context")
-      std::printf(
-          "  %s median stage ms: voxel %.1f  cluster %.1f  field %.1f  triangle %.1f  match %.1f  gsf %.1f  "
-          "clique %.1f  pose %.1f  refine %.1f\n",
-          x.mode.c_str(), x.median_stage.voxel, x.median_stage.cluster, x.median_stage.field, x.median_stage.triangle,
-          x.median_stage.match, x.median_stage.gsf, x.median_stage.clique, x.median_stage.pose, x.median_stage.refine);
-  std::printf("  (prec@thr / answered: precision and share answered when declining queries with ambiguity > %.2f)\n",
-              o.threshold);
   if (!o.json_out.empty()) write_json(o.json_out, o, map, runs, sums, meta);
-  if (!o.svg_dir.empty()) write_svgs(o, map, runs);
+  if (!o.svg_dir.empty()) write_svgs(o, map, runs, sums);
   return 0;
 }
 

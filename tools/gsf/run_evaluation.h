@@ -15,10 +15,12 @@ struct EvalOptions {
   std::string map_sequence = "00";  // for the Scan Context peer (its database is the map drive's scans)
   std::vector<std::string> modes;   // instance, gsf, scan-context
   LogitMode logits = LogitMode::Synthetic;
-  double threshold = 0.5;  // default ambiguity threshold for "answered"
-  std::string json_out;    // empty: no JSON file
-  std::string svg_dir;     // empty: no pictures
-  uint32_t limit = 0;      // evaluate only the first N queries (0 = all)
+  // The decision rule's threshold, "answered" = status Ok and confidence >= it; it sets the localizer
+  // modes' config.confidence.min_probability. < 0: the config's own (defaults + overrides).
+  double min_confidence = -1;
+  std::string json_out;  // empty: no JSON file
+  std::string svg_dir;   // empty: no pictures (else map + trajectory, correspondences, reliability)
+  uint32_t limit = 0;    // evaluate only the first N queries (0 = all)
   bool progress = true;
   std::string classes = "auto";  // label set (pipeline.h resolve_label_set)
   std::string overrides;         // config overrides (name=value,...) applied to every localizer mode
