@@ -8,7 +8,7 @@
 # Usage: bench/families.sh [options]
 #   --families "p3 o10 ..."   families to run (space or comma separated; default all, in table order)
 #   --list                    print the family table and exit
-#   --seeds, --zones, --jobs, --set, --modes, --gsf, --sim-gsf, --preset   passed to bench/suite.sh
+#   --seeds, --zones, --jobs, --set, --modes, --gsf, --sim-gsf, --preset, --keep   passed to bench/suite.sh
 #   --out DIR                 output directory (default out/families)
 # Without --gsf the release preset's gsf is built once and used for every family.
 set -euo pipefail
@@ -29,6 +29,7 @@ b64    --beams 64 --label-noise 0.03
 b128   --beams 128 --label-noise 0.03
 cross  --map-beams 64 --beams 16 --label-noise 0.03
 cheap  --beams 16 --label-noise 0.10 --object-confusion 0.15 --thin-miss 0.6
+edge   --map-coverage 0.6 --label-noise 0.03
 "
 
 family_flags() {  # the suite.sh options of family $1, or a non-zero status for an unknown name
@@ -46,6 +47,7 @@ while [ $# -gt 0 ]; do
     --out) out=$2; shift 2 ;;
     --gsf) gsf=$2; shift 2 ;;
     --seeds|--zones|--jobs|--set|--modes|--sim-gsf|--preset) pass+=("$1" "$2"); shift 2 ;;
+    --keep) pass+=("$1"); shift ;;
     -h|--help) awk 'NR > 1 && /^#/ { sub(/^# ?/, ""); print; next } NR > 1 { exit }' "$0"; exit 0 ;;
     *) echo "families.sh: unknown option '$1' (see --help)" >&2; exit 2 ;;
   esac

@@ -40,6 +40,14 @@ bool parse_sensing(const Args& args, sim::SimConfig* cfg, std::string* err) {
     }
     cfg->lidar.beams = static_cast<int>(v);
   }
+  if (args.has("map-coverage")) {
+    double d;
+    if (!args.get_double("map-coverage", &d, err) || !(d > 0.0 && d <= 1.0)) {
+      *err = "--map-coverage must be a number in (0, 1]";
+      return false;
+    }
+    cfg->map_coverage = static_cast<float>(d);
+  }
   if (args.has("map-beams")) {
     if (!args.get_int("map-beams", &v, err) || v < 2 || v > 256) {
       *err = "--map-beams must be 2..256";
@@ -87,6 +95,10 @@ int cmd_simulate(int argc, char** argv) {
       {"map-beams",
        "LiDAR beams of the mapping drive (sequence 00), e.g. 64 with --beams 16: a map from a dense sensor, "
        "queries from a sparse one (default: --beams)",
+       ""},
+      {"map-coverage",
+       "share 0..1 of the world the map covers: the mapping drive keeps its poses in the western share of its x "
+       "extent, so queries beyond are off the map and those at its edge see it partly (default 1)",
        ""},
       {"blocks-x", "city blocks along x (overrides the preset)", ""},
       {"blocks-y", "city blocks along y (overrides the preset)", ""},

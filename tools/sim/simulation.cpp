@@ -236,6 +236,27 @@ uint64_t scan_seed(uint64_t seed, int sequence, uint32_t frame) {
   return gsf::mix64(seed * 1000003u + uint64_t(sequence) * 7919u + frame);
 }
 
+namespace {
+// Keeps the poses in the western `share` of the drive's x extent (SimConfig::map_coverage).
+void keep_western_share(Drive* d, float share) {
+  if (d->poses.empty()) return;
+  double lo = d->poses[0].translation().x(), hi = lo;
+  for (const auto& p : d->poses) {
+    lo = std::min(lo, p.translation().x());
+    hi = std::max(hi, p.translation().x());
+  }
+  const double cut = lo + double(share) * (hi - lo);
+  Drive kept;
+  for (size_t i = 0; i < d->poses.size(); ++i) {
+    if (d->poses[i].translation().x() > cut) continue;
+    kept.poses.push_back(d->poses[i]);
+    kept.in_zone.push_back(d->in_zone[i]);
+    kept.near_zone.push_back(d->near_zone[i]);
+  }
+  *d = kept;
+}
+}  // namespace
+
 Drive mapping_drive(const World& w, const SimConfig& c) {
   Drive d;
   const float lane = w.params.road_width / 4;
@@ -252,6 +273,7 @@ Drive mapping_drive(const World& w, const SimConfig& c) {
       d.near_zone.push_back(w.near_zone(x, y));
     }
   }
+  if (c.map_coverage < 1.0f) keep_western_share(&d, c.map_coverage);
   return d;
 }
 
@@ -368,9 +390,10 @@ void write_zone_meta(std::ostream& meta, const SimConfig& c, const World& world,
 // meta.json's "sensing" object: the label errors and label format of the written scans.
 void write_sensing_meta(std::ostream& meta, const SimConfig& c) {
   meta << "  \"sensing\": {\"label_noise\": " << c.label_noise << ", \"object_confusion\": " << c.object_confusion
-       << ", \"thin_miss\": " << c.thin_miss << ", \"map_beams\": " << drive_lidar(c, 0).beams
-       << ", \"beams\": " << drive_lidar(c, 1).beams << ", \"instance_ids\": " << (c.instance_ids ? "true" : "false")
-       << ", \"label_set\": \"" << (c.nuscenes_labels ? "nuscenes" : "semantic-kitti") << "\""
+       << ", \"thin_miss\": " << c.thin_miss << ", \"map_coverage\": " << c.map_coverage
+       << ", \"map_beams\": " << drive_lidar(c, 0).beams << ", \"beams\": " << drive_lidar(c, 1).beams
+       << ", \"instance_ids\": " << (c.instance_ids ? "true" : "false") << ", \"label_set\": \""
+       << (c.nuscenes_labels ? "nuscenes" : "semantic-kitti") << "\""
        << "},\n";
 }
 

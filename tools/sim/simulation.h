@@ -37,6 +37,10 @@ struct SimConfig {
   // Cross-sensor: a map from a dense 64/128-beam car queried by a 16/32-beam one. Only the beam count
   // differs: the same elevation range, azimuth step, range and noise (drive_lidar).
   int map_beams = 0;
+  // Share of the world the map covers: the mapping drive keeps only its poses in the western
+  // map_coverage of its x extent (the query drive is unchanged), so queries beyond are off the map and
+  // queries at its edge see it partly, as a vehicle does at the edge of its mapped area. 1 = all.
+  float map_coverage = 1.0f;
   // Sensing: share of points whose written label is confused with a plausible other class (a network's
   // mistakes), and whether labels keep the instance id in their high 16 bits.
   float label_noise = 0.0f;
