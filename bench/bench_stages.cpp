@@ -124,7 +124,7 @@ void digest(Fnv& f, const LocalizeResult& r) {
   f.add(r.inliers);
   f.add(r.clique_size);
   f.add(r.score);
-  f.add(r.ambiguity);
+  f.add(r.confidence);
   f.add(r.query_instances);
   f.add(r.query_triangles);
   f.add(r.triangle_matches);
@@ -164,20 +164,21 @@ void digest(Fnv& f, const LocalizeResult& r) {
 }
 
 // ---- stages ----------------------------------------------------------------------------------------
-constexpr int kStages = 12;  // floor, the nine stage times, unattributed, total
-const char* const kStageNames[kStages] = {"floor",        "voxel layer", "clustering",   "query fields",
-                                          "triangles",    "matching",    "GSF filter",   "hypotheses",
-                                          "verification", "refinement",  "unattributed", "total query"};
+constexpr int kStages = 13;  // floor, the ten stage times, unattributed, total
+const char* const kStageNames[kStages] = {"floor",      "voxel layer",  "clustering", "query fields", "triangles",
+                                          "matching",   "GSF filter",   "hypotheses", "verification", "confidence",
+                                          "refinement", "unattributed", "total query"};
 
 void stage_ns(const StageTimes& t, double out[kStages]) {
-  const uint64_t parts[9] = {t.voxel, t.cluster, t.field, t.triangle, t.match, t.gsf, t.clique, t.pose, t.refine};
+  const uint64_t parts[10] = {t.voxel, t.cluster, t.field, t.triangle,   t.match,
+                              t.gsf,   t.clique,  t.pose,  t.confidence, t.refine};
   uint64_t sum = 0;
-  for (int k = 0; k < 9; ++k) {
+  for (int k = 0; k < 10; ++k) {
     out[1 + k] = double(parts[k]);
     sum += parts[k];
   }
-  out[10] = double(t.total > sum ? t.total - sum : 0);
-  out[11] = double(t.total);
+  out[11] = double(t.total > sum ? t.total - sum : 0);
+  out[12] = double(t.total);
 }
 
 double median(std::vector<double> v) {
@@ -360,14 +361,14 @@ int main(int argc, char** argv) {
   }
   // Ratios of whole queries measured scan by scan (same scan, same repetition window).
   std::vector<double> on_off, rf_on;
-  for (size_t i = 0; i < modes[0].per_scan[11].size(); ++i) {
-    on_off.push_back(modes[1].per_scan[11][i] / modes[0].per_scan[11][i]);
-    rf_on.push_back(modes[2].per_scan[11][i] / modes[1].per_scan[11][i]);
+  for (size_t i = 0; i < modes[0].per_scan[kStages - 1].size(); ++i) {
+    on_off.push_back(modes[1].per_scan[kStages - 1][i] / modes[0].per_scan[kStages - 1][i]);
+    rf_on.push_back(modes[2].per_scan[kStages - 1][i] / modes[1].per_scan[kStages - 1][i]);
   }
   std::printf("\nGSF on / GSF off (total query): ratio of medians %.3f, median of per-scan ratios %.3f\n",
-              median(modes[1].per_scan[11]) / median(modes[0].per_scan[11]), median(on_off));
+              median(modes[1].per_scan[kStages - 1]) / median(modes[0].per_scan[kStages - 1]), median(on_off));
   std::printf("GSF + refine / GSF on (total query): ratio of medians %.3f, median of per-scan ratios %.3f\n",
-              median(modes[2].per_scan[11]) / median(modes[1].per_scan[11]), median(rf_on));
+              median(modes[2].per_scan[kStages - 1]) / median(modes[1].per_scan[kStages - 1]), median(rf_on));
   std::printf(
       "floor median %.1f us; 'unattributed' = total minus the nine stage times (result assembly, "
       "correspondence ranking)\n",

@@ -45,7 +45,7 @@ for mode, v in r["modes"].items():
     q = v["queries"][0]
     print(f"SemanticKITTI seq {sys.argv[2]} [{mode}]: {q['status']}, {q['translation_error_m']:.2f} m, "
           f"{q['rotation_error_deg']:.2f} deg, {q['inliers']} inliers, confidence {q['confidence']:.2f}"
-          f"{' (answered)' if q['answered'] else ' (declined)'}, ambiguity {q['ambiguity']:.2f}")
+          f"{' (answered)' if q['answered'] else ' (declined)'}")
 PY
 done
 # nuScenes-lidarseg with its own label set (--classes auto -> nuscenes: raw lidarseg ids, geometric

@@ -94,6 +94,7 @@ STAGES = [
     # weights and the ranking); until 2026-12-01 verify_pose inclusive + verify_pose_refined exclusive,
     # 0.05 M a scan less on the demo
     ("verification", ["gsf::AnswerSelector::choose("], []),
+    ("confidence", ["gsf::AnswerConfidence::measure("], []),
     ("refinement", ["gsf::Refiner::refine("], []),
     ("total query", ["gsf::Localizer::localize("], []),
 ]

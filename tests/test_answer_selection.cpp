@@ -1,6 +1,6 @@
 // The answer stage's closed-form parts: rarity weights (keep the total, scale by share^-e) and the
-// ambiguity terms, the answer's consensus height; the stage as a whole runs in test_localizer (golden, lattice
-// verification tests).
+// answer's consensus height; the stage as a whole runs in test_localizer (golden, lattice verification
+// tests).
 #include <catch2/catch.hpp>
 
 #include <cmath>
@@ -38,28 +38,6 @@ TEST_CASE("Rarity weights scale each class by its share^-e and keep the scan's t
   CHECK(double(out[kCar]) / base[kCar] == Approx(double(out[kRoad]) / base[kRoad] * std::sqrt(0.9)).epsilon(1e-5));
   rarity_weights(layer, base, 0.0f, 4096, out);  // exponent 0: the base weights
   for (int k = 0; k < kNumClasses; ++k) CHECK(out[k] == base[k]);
-}
-
-TEST_CASE("Ambiguity terms: agreement maps linearly between the thresholds; the largest term wins, capped at 1") {
-  PoseVerification v;
-  v.scored = 100;
-  v.agree = 95.0f;
-  v.disagree = 5.0f;  // q = 0.9
-  CHECK(agreement_ambiguity(v, 0.8f, 0.95f) == Approx((0.95 - 0.9) / 0.15).epsilon(1e-5));
-  v.agree = 100.0f;
-  v.disagree = 0.0f;  // q = 1: better than quality_high, no ambiguity from agreement
-  CHECK(agreement_ambiguity(v, 0.8f, 0.95f) < 0.0);
-  v.agree = v.disagree = 0.0f;  // nothing scored with weight: q = -1
-  CHECK(agreement_ambiguity(v, 0.8f, 0.95f) == Approx(1.95 / 0.15));
-  v.scored = 0;
-  CHECK(agreement_ambiguity(v, 0.8f, 0.95f) == 0.0);
-  AmbiguityTerms t;
-  t.rival = 0.2;
-  t.support = 3.0 / 12.0;
-  t.quality = -0.5;
-  CHECK(t.value() == 0.25);
-  t.quality = 4.0;
-  CHECK(t.value() == 1.0);
 }
 
 TEST_CASE("The answer's height is the weighted median vertical offset of the correspondences it explains") {

@@ -64,14 +64,14 @@ static void pose_error(const double* a, const double* b, double* metres, double*
 static int same_result(const gsf_result* a, const gsf_result* b) {
   return a->status == b->status && memcmp(a->map_T_scan, b->map_T_scan, sizeof(a->map_T_scan)) == 0 &&
          memcmp(a->map_frame_T_scan, b->map_frame_T_scan, sizeof(a->map_frame_T_scan)) == 0 &&
-         a->inliers == b->inliers && memcmp(&a->ambiguity, &b->ambiguity, sizeof(double)) == 0 &&
-         memcmp(&a->score, &b->score, sizeof(double)) == 0 && a->clique_size == b->clique_size &&
-         a->clique_nodes == b->clique_nodes && a->query_instances == b->query_instances &&
-         a->query_triangles == b->query_triangles && a->triangle_matches == b->triangle_matches &&
-         a->gsf_survivors == b->gsf_survivors && a->correspondences == b->correspondences &&
-         a->field_probes == b->field_probes && a->field_comparisons == b->field_comparisons &&
-         a->refined == b->refined && a->budget_exhausted == b->budget_exhausted &&
-         a->capacity_truncated == b->capacity_truncated;
+         a->inliers == b->inliers && memcmp(&a->confidence, &b->confidence, sizeof(double)) == 0 &&
+         a->confident == b->confident && memcmp(&a->score, &b->score, sizeof(double)) == 0 &&
+         a->clique_size == b->clique_size && a->clique_nodes == b->clique_nodes &&
+         a->query_instances == b->query_instances && a->query_triangles == b->query_triangles &&
+         a->triangle_matches == b->triangle_matches && a->gsf_survivors == b->gsf_survivors &&
+         a->correspondences == b->correspondences && a->field_probes == b->field_probes &&
+         a->field_comparisons == b->field_comparisons && a->refined == b->refined &&
+         a->budget_exhausted == b->budget_exhausted && a->capacity_truncated == b->capacity_truncated;
 }
 
 static void test_status_strings(void) {
@@ -356,8 +356,8 @@ static void test_end_to_end(const void* blob, size_t bytes) {
     same += (uint32_t)same_result(&mine[k], &cpp[k]);
     ok += (uint32_t)(mine[k].status == GSF_STATUS_OK && m < 5.0 && deg < 10.0);
     if (verbose)
-      printf("query %2u %-12s inliers %3u ambiguity %.3f error %8.3f m %7.3f deg%s\n", k,
-             gsf_status_string(mine[k].status), mine[k].inliers, mine[k].ambiguity, m, deg,
+      printf("query %2u %-12s inliers %3u confidence %.3f error %8.3f m %7.3f deg%s\n", k,
+             gsf_status_string(mine[k].status), mine[k].inliers, mine[k].confidence, m, deg,
              queries[k].in_zone ? " (zone)" : "");
   }
   CHECK(same == n);         // the C API is the C++ API, bit for bit

@@ -39,7 +39,7 @@ Count run(bool gsf_on, bool verify) {
       ++c.zone;
       c.zone_ok += ok;
     }
-    if (r.status == Status::Ok && r.ambiguity <= 0.5 && !ok) ++c.answered_wrong;
+    if (r.status == Status::Ok && r.confident && !ok) ++c.answered_wrong;
   }
   return c;
 }

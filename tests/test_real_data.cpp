@@ -169,7 +169,7 @@ NuScenesRun localize_nuscenes(const std::string& root, const char* map_seq, cons
     const Eigen::Isometry3d d = r.map_frame_T_scan.inverse() * truth;  // nuScenes poses are the map's frame
     const bool right =
         ok && d.translation().norm() < 5.0 && Eigen::AngleAxisd(d.rotation()).angle() < 10.0 * M_PI / 180.0;
-    const bool answered = ok && r.ambiguity <= 0.5;
+    const bool answered = ok && r.confident;  // the default decision rule
     double nearest = 1e9;
     for (const auto& p : drive) nearest = std::min(nearest, (p - truth.translation()).head<2>().norm());
     ++run.queries;

@@ -28,7 +28,7 @@ bool bits_equal(double a, double b) { return std::memcmp(&a, &b, sizeof(double))
 bool same(const LocalizeResult& a, const LocalizeResult& b) {
   return a.status == b.status && std::memcmp(a.map_T_scan.data(), b.map_T_scan.data(), sizeof(double) * 16) == 0 &&
          a.inliers == b.inliers && a.clique_size == b.clique_size && bits_equal(a.score, b.score) &&
-         bits_equal(a.ambiguity, b.ambiguity) && a.query_instances == b.query_instances &&
+         bits_equal(a.confidence, b.confidence) && a.query_instances == b.query_instances &&
          a.query_triangles == b.query_triangles && a.triangle_matches == b.triangle_matches &&
          a.gsf_survivors == b.gsf_survivors && a.correspondences == b.correspondences &&
          a.clique_nodes == b.clique_nodes && a.field_probes == b.field_probes &&

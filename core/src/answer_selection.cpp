@@ -50,15 +50,6 @@ void rarity_weights(const VoxelLayer& voxels, const float* base, float exponent,
     for (int c = 0; c < kNumClasses; ++c) out[c] = static_cast<float>(out[c] * (mass / scaled));
 }
 
-double AmbiguityTerms::value() const { return std::min(1.0, std::max({rival, support, quality})); }
-
-double agreement_ambiguity(const PoseVerification& plain, float quality_low, float quality_high) {
-  if (plain.scored == 0) return 0.0;
-  const double weight = double(plain.agree) + plain.disagree;
-  const double q = weight > 0 ? (double(plain.agree) - plain.disagree) / weight : -1.0;
-  return (double(quality_high) - q) / (double(quality_high) - quality_low);
-}
-
 size_t AnswerSelector::required_bytes(uint32_t refine_top, uint32_t max_voxels) {
   return counted_bytes<AnswerSelector>(refine_top, max_voxels);
 }
@@ -89,7 +80,7 @@ void AnswerSelector::choose(PoseHypotheses& hyps, const VoxelLayer& voxels, cons
   const uint32_t H = hyps.size();
   hyps_ = &hyps;
   const bool verify = vc.enabled && !semantic.empty();
-  uint32_t best = 0, second = UINT32_MAX;
+  uint32_t best = 0;
   uint8_t full_scored[PoseHypotheses::kMaxHypotheses] = {};
   uint32_t refined_count = 0;
   rival_count_ = 0;
@@ -147,11 +138,8 @@ void AnswerSelector::choose(PoseHypotheses& hyps, const VoxelLayer& voxels, cons
       double dyaw = std::fabs(yaw_of(b) - yaw_a);
       if (dyaw > kPi) dyaw = 2.0 * kPi - dyaw;
       if (std::sqrt(dx * dx + dy * dy) <= hc.same_pose_m && dyaw <= same_rad) continue;
-      if (second == UINT32_MAX) second = top[k];
       rival_pose_[rival_count_++] = scoring_pose_of(top[k], refined_count);
     }
-  } else {
-    second = H > 1 ? 1 : UINT32_MAX;
   }
   const PoseHypothesis& answer = hyps[best];
   out.map_T_scan = answer.map_T_scan;
@@ -183,30 +171,7 @@ void AnswerSelector::choose(PoseHypotheses& hyps, const VoxelLayer& voxels, cons
     r.verified_unknown = p.verification.unknown;
     r.fully_verified = verify && full_scored[shown[k]];
   }
-  AmbiguityTerms terms;
-  terms.support = double(hc.min_inliers) / double(answer.inliers);
-  if (second != UINT32_MAX) {
-    if (verify) {
-      const double margin = double(answer.verification.score) - hyps[second].verification.score;
-      const double scale = double(vc.margin_scale) * std::max<uint32_t>(answer.verification.scored, 1);
-      terms.rival = std::exp(-std::max(0.0, margin) / scale);
-    } else {
-      terms.rival = answer.support > 0 ? hyps[second].support / answer.support : 1.0;
-    }
-  }
-  // A verified answer that agrees poorly with the map is doubtful even without a rival (its true
-  // competitor may simply not be among the hypotheses). The agreement is a share, so a scan of mostly
-  // half-weight classes (vegetation, cars, terrain) is not judged worse than one of buildings and road,
-  // and it is taken with the plain stability weights (at the pose the verification chose), so rare
-  // classes' label noise does not read as disagreement.
-  answer_pose_ = hyps[best].map_T_scan;
-  if (verify) {
-    PoseVerification plain = answer.verification;
-    answer_pose_ = scoring_pose_of(best, refined_count);
-    if (vc.rarity_exponent > 0.0f) plain = score(answer_pose_, vc.max_points, weights);
-    terms.quality = agreement_ambiguity(plain, vc.quality_low, vc.quality_high);
-  }
-  out.ambiguity = terms.value();
+  answer_pose_ = verify ? scoring_pose_of(best, refined_count) : hyps[best].map_T_scan;
 }
 
 }  // namespace gsf

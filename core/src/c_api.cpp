@@ -149,7 +149,6 @@ void fill(const gsf::LocalizeResult& r, gsf_result* out) {
   out->inliers = r.inliers;
   out->clique_size = r.clique_size;
   out->score = r.score;
-  out->ambiguity = r.ambiguity;
   out->confidence = r.confidence;
   out->confident = r.confident ? 1u : 0u;
   out->query_instances = r.query_instances;

@@ -6,7 +6,7 @@
 namespace gsf {
 
 // bench/fit_confidence.py on the training suites (docs/confidence.md).
-const ConfidenceModel kConfidenceModel = {-0.51f, 2.91f, 3.09f, 1.64f, -4.51f, 2.45f};
+const ConfidenceModel kConfidenceModel = {-1.817f, 3.540f, 3.391f, 1.827f, -10.350f, 3.164f, -3.891f, 27.352f};
 
 namespace {
 
@@ -38,15 +38,15 @@ Eigen::Isometry3d shifted(const Eigen::Isometry3d& T, double forward, double lef
 // The answer turned about the sensor (map_T_scan * Rz keeps the scan origin where it is).
 Eigen::Isometry3d turned(const Eigen::Isometry3d& T, double deg) {
   Eigen::Isometry3d c = T;
-  c.linear() = T.linear() * Eigen::AngleAxisd(deg * 3.14159265358979323846 / 180.0, Eigen::Vector3d::UnitZ())
-                                .toRotationMatrix();
+  c.linear() =
+      T.linear() * Eigen::AngleAxisd(deg * 3.14159265358979323846 / 180.0, Eigen::Vector3d::UnitZ()).toRotationMatrix();
   return c;
 }
 
 double logistic(double x) { return 1.0 / (1.0 + std::exp(-x)); }
 
-double factor(float offset, float slope, float z) {
-  return logistic(double(offset) + double(slope) * std::min(kZMax, std::max(kZMin, z)));
+double factor(float offset, float slope, float v, float lo, float hi) {
+  return logistic(double(offset) + double(slope) * std::min(hi, std::max(lo, v)));
 }
 
 }  // namespace
@@ -62,8 +62,10 @@ struct AnswerConfidence::Sample {
 
 double confidence_probability(const ConfidenceEvidence& e, const ConfidenceModel& m) {
   if (e.samples == 0) return 0.0;
-  return factor(m.rival_offset, m.rival_slope, e.z_rival) * factor(m.shift_offset, m.shift_slope, e.z_shift) *
-         factor(m.turn_offset, m.turn_slope, e.z_turn);
+  return factor(m.rival_offset, m.rival_slope, e.z_rival, kZMin, kZMax) *
+         factor(m.shift_offset, m.shift_slope, e.z_shift, kZMin, kZMax) *
+         factor(m.turn_offset, m.turn_slope, e.z_turn, kZMin, kZMax) *
+         factor(m.inlier_offset, m.inlier_slope, e.inlier_share, 0.0f, 1.0f);
 }
 
 size_t AnswerConfidence::required_bytes(uint32_t max_points) { return counted_bytes<AnswerConfidence>(max_points); }
@@ -93,9 +95,8 @@ float AnswerConfidence::paired_z(const Sample& s, const Eigen::Isometry3d& other
 }
 
 ConfidenceEvidence AnswerConfidence::measure(const VerifyPoint* points, uint32_t n, const SemanticGridView& grid,
-                                             const float* weights, float disagree_weight,
-                                             const Eigen::Isometry3d& answer, const Eigen::Isometry3d* rivals,
-                                             uint32_t rival_count, uint32_t max_points) {
+                                             const float* weights, float disagree_weight, const Answer& a,
+                                             uint32_t max_points) {
   ConfidenceEvidence e;
   max_points = std::min(max_points, capacity_);
   if (n == 0 || max_points == 0 || grid.empty() || points == nullptr || block_sum_ == nullptr) return e;
@@ -112,20 +113,22 @@ ConfidenceEvidence AnswerConfidence::measure(const VerifyPoint* points, uint32_t
     }
   }
   for (uint32_t b = 0; b < block_count_; ++b) block_sum_[blocks_[b]] = 0.0f;
-  const PoseVerification at = verify_pose_evidence(points, n, grid, answer, max_points, weights, disagree_weight,
-                                                   answer_evidence_);
+  const PoseVerification at =
+      verify_pose_evidence(points, n, grid, a.pose, max_points, weights, disagree_weight, answer_evidence_);
+  e.inlier_share = float(a.inliers) / float(std::max<uint32_t>(1, a.instances));
   e.samples = samples_;
   e.blocks = block_count_;
   e.known_share = float(at.scored) / float(samples_);
+  e.agreement = at.agree + at.disagree > 0.0f ? at.agree / (at.agree + at.disagree) : 0.0f;
   e.z_shift = e.z_turn = kZMax;
   for (double d : {2.0, 8.0}) {
     const double moves[4][2] = {{d, 0.0}, {-d, 0.0}, {0.0, d}, {0.0, -d}};
-    for (const auto& m : moves) e.z_shift = std::min(e.z_shift, paired_z(s, shifted(answer, m[0], m[1])));
+    for (const auto& m : moves) e.z_shift = std::min(e.z_shift, paired_z(s, shifted(a.pose, m[0], m[1])));
   }
-  for (double deg : {10.0, -10.0, 180.0}) e.z_turn = std::min(e.z_turn, paired_z(s, turned(answer, deg)));
-  e.rivals = std::min(rival_count, kMaxRivals);
+  for (double deg : {10.0, -10.0, 180.0}) e.z_turn = std::min(e.z_turn, paired_z(s, turned(a.pose, deg)));
+  e.rivals = std::min(a.rival_count, kMaxRivals);
   e.z_rival = e.rivals > 0 ? kZMax : std::min(e.z_shift, e.z_turn);
-  for (uint32_t r = 0; r < e.rivals; ++r) e.z_rival = std::min(e.z_rival, paired_z(s, rivals[r]));
+  for (uint32_t r = 0; r < e.rivals; ++r) e.z_rival = std::min(e.z_rival, paired_z(s, a.rivals[r]));
   return e;
 }
 

@@ -29,10 +29,9 @@ Status validate(const LocalizerConfig& c) {
       (h.shift_vote_support && h.tls_threshold > h.shift_bin) || h.height_consensus > 1 ||
       h.shift_vote_pairs > (1u << 20))
     return Status::InvalidArgument;
-  if (c.verify.max_points == 0 || !(c.verify.margin_scale > 0) || !(c.verify.quality_high > c.verify.quality_low) ||
-      c.verify.refine_top > 64 || c.verify.coarse_divisor == 0 || c.verify.search_divisor == 0 ||
-      c.verify.polish_divisor == 0 || c.verify.full_top == 0 || !(c.verify.refine_step_m >= 0) ||
-      !(c.verify.refine_step_deg >= 0) || c.verify.refine_rounds > 16 ||
+  if (c.verify.max_points == 0 || c.verify.refine_top > 64 || c.verify.coarse_divisor == 0 ||
+      c.verify.search_divisor == 0 || c.verify.polish_divisor == 0 || c.verify.full_top == 0 ||
+      !(c.verify.refine_step_m >= 0) || !(c.verify.refine_step_deg >= 0) || c.verify.refine_rounds > 16 ||
       !(c.verify.rarity_exponent >= 0 && c.verify.rarity_exponent <= 2) ||
       !(c.verify.disagree_weight >= 0 && c.verify.disagree_weight <= 100))
     return Status::InvalidArgument;

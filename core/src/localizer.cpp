@@ -445,10 +445,11 @@ void Localizer::Impl::settle_height(const LocalizerConfig& cfg, uint32_t C, Loca
 void Localizer::Impl::measure_confidence(const LocalizerConfig& cfg, LocalizeResult& out) {
   out.confidence = 0.0;  // without verification nothing vouches for the answer
   if (out.verified && answer.compact_points() != nullptr && answer.compact_point_count() > 0) {
+    const AnswerConfidence::Answer a{answer.answer_pose(), answer.rival_poses(), answer.rival_count(), out.inliers,
+                                     out.query_instances};
     out.confidence_evidence =
         confidence.measure(answer.compact_points(), answer.compact_point_count(), semantic, answer.verify_weights(),
-                           cfg.verify.disagree_weight, answer.answer_pose(), answer.rival_poses(), answer.rival_count(),
-                           cfg.verify.max_points);
+                           cfg.verify.disagree_weight, a, cfg.verify.max_points);
     out.confidence = confidence_probability(out.confidence_evidence);
   }
   out.confident = out.confidence >= cfg.confidence.min_probability;
@@ -514,8 +515,9 @@ Status Localizer::localize(const ScanView& scan, LocalizeResult* out_ptr) {
   if (s != Status::Ok) return finish(Status::NoSolution);
   im.choose_answer(cfg, out);
   im.settle_height(cfg, C, out);
-  im.measure_confidence(cfg, out);
   lap(&out.times.pose);
+  im.measure_confidence(cfg, out);
+  lap(&out.times.confidence);
   if (cfg.refine.enabled && map_.counts.refine_points > 0) {
     im.refine_answer(out);
     lap(&out.times.refine);

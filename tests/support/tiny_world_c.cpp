@@ -21,7 +21,7 @@ void to_c(const gsf::LocalizeResult& r, gsf_result* out) {
     out->map_frame_T_scan[4 * row + 3] = r.map_frame_T_scan.translation()(row);
   }
   out->inliers = r.inliers;
-  out->ambiguity = r.ambiguity;
+  out->confidence = r.confidence;
   out->score = r.score;
   out->clique_nodes = r.clique_nodes;
   out->clique_size = r.clique_size;
@@ -35,6 +35,7 @@ void to_c(const gsf::LocalizeResult& r, gsf_result* out) {
   out->refined = r.refined;
   out->budget_exhausted = r.budget_exhausted;
   out->capacity_truncated = r.capacity_truncated;
+  out->confident = r.confident;
 }
 
 }  // namespace

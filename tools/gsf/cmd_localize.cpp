@@ -90,7 +90,6 @@ int cmd_localize(int argc, char** argv) {
     write_pose(j, "pose_map_local", r.map_T_scan);
     j.field("inliers", r.inliers);
     j.field("score", r.score);
-    j.field("ambiguity", r.ambiguity);
     j.field("confidence", r.confidence);
     j.field("answered", r.status == Status::Ok && r.confident);  // the default decision rule
     j.field("time_ms", double(r.times.total) / 1e6);

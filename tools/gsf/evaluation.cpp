@@ -103,21 +103,22 @@ void summarize_success(const std::vector<QueryRecord>& records, ModeSummary* s) 
 // Median / p95 / mean time per query and the median of each stage.
 void summarize_times(const std::vector<QueryRecord>& records, ModeSummary* s) {
   std::vector<double> times;
-  std::vector<double> st[9];
+  std::vector<double> st[10];
   for (const auto& r : records) {
     times.push_back(r.time_ms);
-    const double v[9] = {r.stages.voxel, r.stages.cluster, r.stages.field, r.stages.triangle, r.stages.match,
-                         r.stages.gsf,   r.stages.clique,  r.stages.pose,  r.stages.refine};
-    for (int k = 0; k < 9; ++k) st[k].push_back(v[k]);
+    const double v[10] = {r.stages.voxel, r.stages.cluster, r.stages.field, r.stages.triangle,   r.stages.match,
+                          r.stages.gsf,   r.stages.clique,  r.stages.pose,  r.stages.confidence, r.stages.refine};
+    for (int k = 0; k < 10; ++k) st[k].push_back(v[k]);
   }
   s->median_ms = percentile(times, 0.5);
   s->p95_ms = percentile(times, 0.95);
   for (double t : times) s->mean_ms += t;
   if (!times.empty()) s->mean_ms /= static_cast<double>(times.size());
-  double* ms[9] = {&s->median_stage.voxel,    &s->median_stage.cluster, &s->median_stage.field,
-                   &s->median_stage.triangle, &s->median_stage.match,   &s->median_stage.gsf,
-                   &s->median_stage.clique,   &s->median_stage.pose,    &s->median_stage.refine};
-  for (int k = 0; k < 9; ++k) *ms[k] = percentile(st[k], 0.5);
+  double* ms[10] = {&s->median_stage.voxel,    &s->median_stage.cluster, &s->median_stage.field,
+                    &s->median_stage.triangle, &s->median_stage.match,   &s->median_stage.gsf,
+                    &s->median_stage.clique,   &s->median_stage.pose,    &s->median_stage.confidence,
+                    &s->median_stage.refine};
+  for (int k = 0; k < 10; ++k) *ms[k] = percentile(st[k], 0.5);
 }
 
 // Precision against share answered when answering the queries with a pose and confidence >= t, for t

@@ -30,7 +30,8 @@ inline bool is_success(const PoseError& e) {
 }
 
 struct StageMs {  // per-stage wall time of one query, milliseconds
-  double voxel = 0, cluster = 0, field = 0, triangle = 0, match = 0, gsf = 0, clique = 0, pose = 0, refine = 0;
+  double voxel = 0, cluster = 0, field = 0, triangle = 0, match = 0, gsf = 0, clique = 0, pose = 0, confidence = 0,
+         refine = 0;
 };
 
 struct QueryRecord {
@@ -45,7 +46,6 @@ struct QueryRecord {
   PoseError error;
   double time_ms = 0;
   StageMs stages;
-  double ambiguity = 1.0;   // the localizer's ambiguity (diagnostic; lower = less ambiguous)
   double confidence = 0.0;  // the localizer's probability that the pose is right; 0 without a pose
   uint32_t inliers = 0;
   // Poses in the dataset's frame (= the map's frame, georeference.h): errors are measured there.

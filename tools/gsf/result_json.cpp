@@ -10,8 +10,8 @@ double ms(uint64_t ns) { return double(ns) / 1e6; }
 }  // namespace
 
 StageMs stage_ms(const StageTimes& t) {
-  return StageMs{ms(t.voxel), ms(t.cluster), ms(t.field), ms(t.triangle), ms(t.match),
-                 ms(t.gsf),   ms(t.clique),  ms(t.pose),  ms(t.refine)};
+  return StageMs{ms(t.voxel), ms(t.cluster), ms(t.field), ms(t.triangle),   ms(t.match),
+                 ms(t.gsf),   ms(t.clique),  ms(t.pose),  ms(t.confidence), ms(t.refine)};
 }
 
 void write_stage_ms(JsonWriter& j, const char* key, const StageMs& t) {
@@ -25,6 +25,7 @@ void write_stage_ms(JsonWriter& j, const char* key, const StageMs& t) {
   j.field("gsf", t.gsf);
   j.field("clique", t.clique);
   j.field("pose", t.pose);
+  j.field("confidence", t.confidence);
   j.field("refine", t.refine);
   j.end_object();
 }
@@ -80,7 +81,9 @@ void write_result_diagnostics(JsonWriter& j, const LocalizeResult& x, const Quer
     j.field("rivals", e.rivals);
     j.field("samples", e.samples);
     j.field("blocks", e.blocks);
+    j.field("inlier_share", e.inlier_share);
     j.field("known_share", e.known_share);
+    j.field("agreement", e.agreement);
     j.end_object();
   }
   if (truth) {

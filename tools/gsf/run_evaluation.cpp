@@ -114,7 +114,6 @@ void write_query_json(JsonWriter& j, const QueryRecord& r, bool diagnostics) {
   j.field("translation_error_m", r.has_pose ? r.error.translation_m : -1.0);
   j.field("rotation_error_deg", r.has_pose ? r.error.rotation_deg : -1.0);
   j.field("time_ms", r.time_ms);
-  j.field("ambiguity", r.ambiguity);  // diagnostic; the rule is on confidence
   j.field("inliers", r.inliers);
   if (r.has_pose) write_pose(j, "pose", r.estimate);  // the map's frame (the dataset's)
   if (diagnostics) write_diagnostics(j, r);
@@ -371,7 +370,6 @@ void localize_query(LocalizerMode& lm, const ScanView& scan, Status read_status,
   r.has_pose = res.status == Status::Ok;
   r.answered = r.has_pose && res.confident;  // the library's decision rule
   r.estimate = res.map_frame_T_scan;
-  r.ambiguity = res.ambiguity;
   r.confidence = r.has_pose ? res.confidence : 0.0;
   r.inliers = res.inliers;
   r.result = res;
@@ -416,8 +414,8 @@ int run_scan_context(const EvalOptions& o, const LabelSet& labels, port::ScanSou
       r.status = m.found ? "Ok" : "NoSolution";
       r.has_pose = m.found;
       r.estimate = m.pose;
-      r.ambiguity = m.second_distance > 0 ? std::min(1.0, double(m.distance) / m.second_distance) : 1.0;
-      r.confidence = r.has_pose ? 1.0 - r.ambiguity : 0.0;
+      const double ratio = m.second_distance > 0 ? std::min(1.0, double(m.distance) / m.second_distance) : 1.0;
+      r.confidence = r.has_pose ? 1.0 - ratio : 0.0;
       r.answered = r.has_pose && r.confidence >= min_confidence;
       judge(&r);
     }
@@ -456,9 +454,10 @@ void print_table(const std::vector<ModeSummary>& sums, const std::vector<ModeRun
     if (x.mode != "scan-context")
       std::printf(
           "  %s median stage ms: voxel %.1f  cluster %.1f  field %.1f  triangle %.1f  match %.1f  gsf %.1f  "
-          "clique %.1f  pose %.1f  refine %.1f\n",
+          "clique %.1f  pose %.1f  confidence %.1f  refine %.1f\n",
           x.mode.c_str(), x.median_stage.voxel, x.median_stage.cluster, x.median_stage.field, x.median_stage.triangle,
-          x.median_stage.match, x.median_stage.gsf, x.median_stage.clique, x.median_stage.pose, x.median_stage.refine);
+          x.median_stage.match, x.median_stage.gsf, x.median_stage.clique, x.median_stage.pose,
+          x.median_stage.confidence, x.median_stage.refine);
   std::printf(
       "  (prec@rule / answered: precision and share answered under the decision rule, status Ok and confidence "
       ">= %.2f)\n",

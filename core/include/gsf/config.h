@@ -60,16 +60,6 @@ struct VerifyConfig {
   uint32_t max_points = 4096;   // query voxels scored per hypothesis (uniform stride over the scan)
   uint32_t coarse_divisor = 8;  // every hypothesis is first scored on max_points / coarse_divisor voxels,
   uint32_t full_top = 16;       // and the best full_top of them on max_points
-  // Ambiguity from verification: exp(-(best - rival) / (margin_scale * scored voxels)), the rival being
-  // the best fully scored hypothesis at another place or heading (hypotheses.same_pose_m / _deg). The
-  // margin is a share of the scored voxels so the same setting serves sparse and dense scans. And from
-  // the answer's own agreement, (agree - disagree) / (agree + disagree) of the stability weights: 0 at
-  // quality_high, 1 at quality_low. Chosen by replaying the recorded diagnostics (bench/ambiguity_replay.py)
-  // of suite seeds 1-5 with SemanticKITTI and with nuScenes-style labels, checked on seeds 6-10 and the
-  // real data (docs/results.md).
-  float margin_scale = 0.03f;
-  float quality_low = 0.80f;
-  float quality_high = 0.95f;
   // The best `refine_top` hypotheses (by first score) are re-scored after a bird's-eye pattern search
   // (semantic_grid.h: verify_pose_refined), so a near-truth clique pose is compared at its best.
   uint32_t refine_top = 4;

@@ -140,7 +140,6 @@ typedef struct gsf_result {
   // The pose, row-major 3x4 [R | t] (p = R p_scan + t), in two frames with the same R:
   double map_T_scan[12];        // map-local frame: t relative to the map origin (gsf_map_info.origin)
   double map_frame_T_scan[12];  // the map's frame (gsf_map_info.frame): t = map-local t + origin, in double
-  double ambiguity;             // 0 = unambiguous ... 1 = decline (see gsf::LocalizeResult)
   double confidence;            // calibrated probability that the pose is right (t < 5 m, r < 10 deg)
   double score;                 // sum of inlier weights
   uint64_t clique_nodes;

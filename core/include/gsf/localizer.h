@@ -20,9 +20,10 @@ namespace gsf {
 
 struct StageTimes {  // nanoseconds from the Clock given at init (all zero without one)
   // match: index lookups and ranking (with the heading votes); gsf: the GSF filter and correspondence accumulation;
-  // clique: the hypotheses (cliques + TLS poses); pose: verification and ambiguity.
-  uint64_t voxel = 0, cluster = 0, field = 0, triangle = 0, match = 0, gsf = 0, clique = 0, pose = 0, refine = 0,
-           total = 0;
+  // clique: the hypotheses (cliques + TLS poses); pose: verification and the answer's height; confidence: the
+  // answer's comparisons with wrong poses (confidence.h).
+  uint64_t voxel = 0, cluster = 0, field = 0, triangle = 0, match = 0, gsf = 0, clique = 0, pose = 0, confidence = 0,
+           refine = 0, total = 0;
 };
 
 // One pose hypothesis as the localizer saw it (diagnostics).
@@ -51,10 +52,6 @@ struct LocalizeResult {
   uint32_t inliers = 0;  // correspondences agreeing with the pose (after TLS)
   uint32_t clique_size = 0;
   double score = 0.0;  // sum of inlier weights
-  // Best / second-best hypothesis: score of the largest clique that disagrees with the answer, divided by
-  // the answer's score, and at least min_inliers / inliers (weak support). 0 = unambiguous, 1 = a
-  // different pose is as well supported, or the answer rests on the bare minimum (decline to answer).
-  double ambiguity = 1.0;
   // Calibrated probability that map_T_scan is right (translation < 5 m and rotation < 10 deg from the
   // truth); 0 without an answer. `confident` is the default decision rule, confidence >=
   // config.confidence.min_probability: act on the pose only when it is true.

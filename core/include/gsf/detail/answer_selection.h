@@ -3,9 +3,8 @@
 // platform.h, class_table.h, georeference.h and the C API gsf.h.
 // Choosing the answer among the pose hypotheses (after the max clique): whole-scan verification
 // against the map's semantic layer ranks them (coarse for all, full for the best, pattern-refined for
-// the leaders: each step ranks, then caps), and the answer's ambiguity says how far to trust it: how
-// clearly it beats the best rival at another place or heading, how many inliers carry it, and how well
-// the scan agrees with the map there.
+// the leaders: each step ranks, then caps). It keeps what the confidence (confidence.h) compares: the
+// answer at the pose it was scored at and its best rivals at another place or heading.
 #pragma once
 #include <cstdint>
 
@@ -28,18 +27,6 @@ struct LocalizeResult;
 // rows that agree at every lattice shift. exponent 0: out = base.
 void rarity_weights(const VoxelLayer& voxels, const float* base, float exponent, uint32_t max_points, float* out);
 
-// The ambiguity in [0, 1] of an answer (1 = do not trust). The largest of:
-// - rival: with verification exp(-max(0, best - rival score) / (margin_scale x scored voxels)), without
-//   it the rival's clique support over the answer's (0 without a rival);
-// - support: min_inliers / inliers (a bare-minimum clique with nothing competing is still a guess);
-// - quality: the answer's agreement q = (agree - disagree) / (agree + disagree) of the plain stability
-//   weights, mapped to 0 at quality_high and 1 at quality_low (only with verification).
-struct AmbiguityTerms {
-  double rival = 0.0, support = 0.0, quality = 0.0;
-  double value() const;
-};
-double agreement_ambiguity(const PoseVerification& plain, float quality_low, float quality_high);
-
 class AnswerSelector {
  public:
   // max_voxels: the voxel layer's capacity (the compact copy verification reads holds that many).
@@ -47,7 +34,7 @@ class AnswerSelector {
   Status bind(Arena& arena, uint32_t refine_top, uint32_t max_voxels);
 
   // Verifies `hyps` (when verification is on and the map has a semantic layer), chooses the answer and
-  // fills out's pose, inliers, hypothesis reports and ambiguity. `weights`: the stability weights.
+  // fills out's pose, inliers and hypothesis reports. `weights`: the stability weights.
   void choose(PoseHypotheses& hyps, const VoxelLayer& voxels, const SemanticGridView& semantic, const float* weights,
               const HypothesisConfig& hypothesis_config, const VerifyConfig& verify_config, LocalizeResult& out);
   uint32_t chosen() const { return chosen_; }

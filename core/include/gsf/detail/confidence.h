@@ -17,12 +17,16 @@
 // per voxel (semantic_grid.h),
 //   z = sum_B D_B / sqrt(sum_B D_B^2),
 // a self-normalised (t-like) statistic: label noise that lowers both poses' agreement alike cancels in
-// D_B, and the spread of D_B over the blocks is the scan's own noise level. The probability is a product
-// of one logistic factor per kind of comparison, the answer must beat each kind of wrong pose:
-//   P = s(a_r + b_r z_rival) s(a_s + b_s z_shift) s(a_t + b_t z_turn),  s(x) = 1 / (1 + e^-x),
-// z of a kind being its closest comparison (the smallest z). The six numbers are fitted on simulated
-// suites of several segmentation-error families (bench/fit_confidence.py; docs/confidence.md has the
-// command and the data) and checked on other seeds and on real data.
+// D_B, and the spread of D_B over the blocks is the scan's own noise level. A fourth piece of evidence is
+// the share of the scan's instances the answer explains (its inliers over the query instances): an
+// answer in a map of somewhere else (a vehicle off its map) can beat every other pose of that map, but
+// it explains a few instances by coincidence. The probability is a product of one logistic factor per
+// piece of evidence, the answer must pass each:
+//   P = s(a_r + b_r z_rival) s(a_s + b_s z_shift) s(a_t + b_t z_turn) s(a_i + b_i inlier_share),
+// s(x) = 1 / (1 + e^-x), z of a kind being its closest comparison (the smallest z). The eight numbers are
+// fitted on simulated suites of twelve segmentation-error and sensor families, with queries against other
+// worlds' maps among them (bench/fit_confidence.py; docs/confidence.md has the command and the data), and
+// checked on other seeds and on real data.
 #pragma once
 #include <cstdint>
 
@@ -44,19 +48,22 @@ struct ConfidenceModel {
   float rival_offset, rival_slope;
   float shift_offset, shift_slope;
   float turn_offset, turn_slope;
+  float inlier_offset, inlier_slope;
 };
 // Fitted by bench/fit_confidence.py (docs/confidence.md).
 extern const ConfidenceModel kConfidenceModel;
 
 // What the confidence was computed from (LocalizeResult diagnostics).
 struct ConfidenceEvidence {
-  float z_rival = 0.0f;      // against the closest rival; without one, the closest probe of either kind
-  float z_shift = 0.0f;      // against the closest shifted probe
-  float z_turn = 0.0f;       // against the closest turned probe
-  uint32_t rivals = 0;       // rivals compared (at most AnswerConfidence::kMaxRivals)
-  uint32_t samples = 0;      // sampled voxels compared
-  uint32_t blocks = 0;       // scan blocks holding them
-  float known_share = 0.0f;  // share of the samples that landed on the map's semantic layer at the answer
+  float z_rival = 0.0f;       // against the closest rival; without one, the closest probe of either kind
+  float z_shift = 0.0f;       // against the closest shifted probe
+  float z_turn = 0.0f;        // against the closest turned probe
+  uint32_t rivals = 0;        // rivals compared (at most AnswerConfidence::kMaxRivals)
+  uint32_t samples = 0;       // sampled voxels compared
+  uint32_t blocks = 0;        // scan blocks holding them
+  float inlier_share = 0.0f;  // the answer's inliers / the scan's instances
+  float known_share = 0.0f;   // share of the samples that landed on the map's semantic layer at the answer
+  float agreement = 0.0f;     // agree / (agree + disagree) at the answer (diagnostic, not in the model)
 };
 
 // P from the evidence (the model above).
@@ -70,10 +77,16 @@ class AnswerConfidence {
   Status bind(Arena& arena, uint32_t max_points);
 
   // The evidence for `answer` (map-local, the pose verification scored) against `rivals`, over the
-  // same strided sample of the n compact points verification used (weights and disagree_weight too).
+  // same strided sample of the n compact points verification used (weights and disagree_weight too);
+  // inliers: the answer's, instances: the scan's.
+  struct Answer {
+    const Eigen::Isometry3d& pose;
+    const Eigen::Isometry3d* rivals;
+    uint32_t rival_count;
+    uint32_t inliers, instances;
+  };
   ConfidenceEvidence measure(const VerifyPoint* points, uint32_t n, const SemanticGridView& grid, const float* weights,
-                             float disagree_weight, const Eigen::Isometry3d& answer, const Eigen::Isometry3d* rivals,
-                             uint32_t rival_count, uint32_t max_points);
+                             float disagree_weight, const Answer& answer, uint32_t max_points);
 
  private:
   struct Sample;

@@ -1,0 +1,208 @@
+#!/usr/bin/env python3
+"""Fits the confidence model of core/src/confidence.cpp (kConfidenceModel) to recorded queries, and
+replays any model on held-out ones.
+
+The model (core/include/gsf/detail/confidence.h): P = s(a_r + b_r z_rival) s(a_s + b_s z_shift)
+s(a_t + b_t z_turn) s(a_i + b_i inlier_share), s the logistic function, each z clipped to [-3, 10].
+The evidence is the library's own measurement, written per query by `gsf evaluate --json`
+(diagnostics.confidence_evidence), so a fit needs no re-run of the localizer: fit on some runs, paste
+the printed C++ line, rebuild, and report on other runs (other seeds) from the library itself.
+
+Records: DIR is a suite directory (DIR/*/results.json), a directory of evaluate JSON files (DIR/*.json,
+e.g. bench/distractors.sh's DIR/distractor) or one file; a families directory (DIR/<family>/...) is
+expanded to its suites and their distractor directories. A query is a positive when it succeeded
+(t < 5 m, r < 10 deg); queries without a pose are left out (their confidence is 0 by definition).
+Distractor queries (a map of another world) are all negatives: without them the fit never sees a wrong
+answer whose truth is absent from the map, the case a vehicle outside its map is in. (A distractor
+query answered at its own true coordinates is left out: the simulated worlds share their road grid,
+so there the other world can look the same.) --distractor-share sets their share of the total weight
+(default 0.1).
+
+Usage:
+  bench/fit_confidence.py --train DIR [DIR ...] [--test DIR [DIR ...]] [--mode gsf] [--min-confidence 0.9]
+  bench/fit_confidence.py --model a_r,b_r,a_s,b_s,a_t,b_t,a_i,b_i --test DIR [DIR ...]   (replay only)
+Prints the fitted numbers as the C++ initializer of kConfidenceModel, then per DIR (train and test) the
+replayed rule: success, answered, precision, wrong, declined right, ECE. Standard library only."""
+import argparse
+import glob
+import json
+import math
+import os
+
+# The factors of the model, in kConfidenceModel's order: evidence field and the range it is clipped to
+# (core/src/confidence.cpp clips the same way).
+FACTORS = [("z_rival", -3.0, 10.0), ("z_shift", -3.0, 10.0), ("z_turn", -3.0, 10.0), ("inlier_share", 0.0, 1.0)]
+
+
+def logistic(x):
+    return 1.0 / (1.0 + math.exp(-x)) if x > -40.0 else 0.0
+
+
+RESULTS = "results.json"  # --results: the file name of a suite's per-world results
+DISTRACTOR = "distractor"  # --distractor-dir: bench/distractors.sh's directory in a suite dir
+
+
+def result_files(path):
+    if os.path.isfile(path):
+        return [path]
+    suite = sorted(glob.glob(os.path.join(path, "*", RESULTS)))
+    return suite if suite else sorted(glob.glob(os.path.join(path, "*.json")))
+
+
+def expand(dirs):
+    """Families directories -> their suite dirs and distractor dirs; other paths as given."""
+    out = []
+    for d in dirs:
+        subs = sorted(p for p in glob.glob(os.path.join(d, "*")) if os.path.isdir(p) and
+                      glob.glob(os.path.join(p, "*", RESULTS)))
+        if os.path.isdir(d) and not glob.glob(os.path.join(d, "*", RESULTS)) and subs:
+            for s in subs:
+                out.append(s)
+                if os.path.isdir(os.path.join(s, DISTRACTOR)):
+                    out.append(os.path.join(s, DISTRACTOR))
+        else:
+            out.append(d)
+    return out
+
+
+def records(path, mode):
+    """(z triple, success, distractor) per query with a pose."""
+    distractor = os.path.basename(os.path.normpath(path)).startswith("distractor")
+    out = []
+    for f in result_files(path):
+        try:
+            r = json.load(open(f))
+        except (OSError, ValueError):
+            continue
+        for q in r.get("modes", {}).get(mode, {}).get("queries", []):
+            e = q.get("diagnostics", {}).get("confidence_evidence")
+            if q.get("status") != "Ok" or not e or e.get("samples", 0) == 0:
+                continue
+            if distractor and q["success"]:
+                continue  # the other world happens to match here (same road grid): neither right nor wrong
+            z = tuple(min(hi, max(lo, evidence(e, name))) for name, lo, hi in FACTORS)
+            out.append((z, bool(q["success"]) and not distractor, distractor))
+    return out
+
+
+def evidence(e, name):
+    return float(e[name])
+
+
+def probability(m, z):
+    p = 1.0
+    for k, v in enumerate(z):
+        p *= logistic(m[2 * k] + m[2 * k + 1] * v)
+    return p
+
+
+def loss_and_gradient(m, data, l2):
+    """Weighted negative log-likelihood of the product model and its gradient."""
+    n = len(m)
+    loss, grad = 0.0, [0.0] * n
+    for z, y, w in data:
+        s = [logistic(m[2 * k] + m[2 * k + 1] * v) for k, v in enumerate(z)]
+        p = 1.0
+        for v in s:
+            p *= v
+        p = max(1e-12, min(1.0 - 1e-12, p))
+        loss -= w * (math.log(p) if y else math.log(1.0 - p))
+        scale = -w if y else w * p / (1.0 - p)  # d loss / d log p
+        for k, v in enumerate(z):
+            g = scale * (1.0 - s[k])  # d log s_k / d u_k = 1 - s_k
+            grad[2 * k] += g
+            grad[2 * k + 1] += g * v
+    for i in range(n):
+        loss += l2 * m[i] * m[i]
+        grad[i] += 2.0 * l2 * m[i]
+    return loss, grad
+
+
+def fit(data, l2=1e-3, iterations=400):
+    """iRprop-: a per-parameter step that grows while the gradient keeps its sign and shrinks when it
+    flips (a smooth loss of a few parameters; converges in a few hundred passes)."""
+    n = 2 * len(FACTORS)
+    # z factors start at s(2 + z); share factors (range 0..1) at s(10 (share - 0.5)).
+    m = [v for _, lo, hi in FACTORS for v in ((2.0, 1.0) if hi > 1.0 else (-5.0, 10.0))]
+    step, last = [0.1] * n, [0.0] * n
+    loss = 0.0
+    for _ in range(iterations):
+        loss, grad = loss_and_gradient(m, data, l2)
+        for i in range(n):
+            if grad[i] * last[i] > 0:
+                step[i] = min(step[i] * 1.2, 1.0)
+            elif grad[i] * last[i] < 0:
+                step[i] = max(step[i] * 0.5, 1e-6)
+                grad[i] = 0.0
+            if grad[i] > 0:
+                m[i] -= step[i]
+            elif grad[i] < 0:
+                m[i] += step[i]
+            last[i] = grad[i]
+        if max(step) < 1e-5:
+            break
+    return m, loss
+
+
+def report(name, recs, m, threshold):
+    n = len(recs)
+    if n == 0:
+        return
+    right = sum(y for _, y, _ in recs)
+    probs = [probability(m, z) for z, _, _ in recs]
+    ans = [y for p, (_, y, _) in zip(probs, recs) if p >= threshold]
+    bins = [[0, 0.0, 0] for _ in range(10)]
+    for p, (_, y, _) in zip(probs, recs):
+        b = bins[min(9, int(p * 10))]
+        b[0] += 1
+        b[1] += p
+        b[2] += y
+    ece = sum(abs(b[1] - b[2]) for b in bins) / n
+    print(f"{name} n={n} success={100 * right / n:.1f}% answered={100 * len(ans) / n:.1f}% "
+          f"answered_of_right={100 * sum(ans) / max(right, 1):.1f}% precision={100 * sum(ans) / max(len(ans), 1):.2f}% "
+          f"wrong={len(ans) - sum(ans)} declined_right={right - sum(ans)} ece={100 * ece:.2f}%")
+
+
+def main():
+    global RESULTS, DISTRACTOR, FACTORS
+    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("--train", nargs="*", default=[])
+    ap.add_argument("--test", nargs="*", default=[])
+    ap.add_argument("--mode", default="gsf")
+    ap.add_argument("--model", help="offset,slope per factor: replay this model instead of fitting")
+    ap.add_argument("--min-confidence", type=float, default=0.9)
+    ap.add_argument("--distractor-share", type=float, default=0.1)
+    ap.add_argument("--l2", type=float, default=1e-3)
+    ap.add_argument("--results", default="results.json", help="per-world results file name in suite dirs")
+    ap.add_argument("--distractor-dir", default="distractor", help="distractor directory name in suite dirs")
+    ap.add_argument("--factors", default=",".join(f[0] for f in FACTORS),
+                    help="evidence fields to use, a subset of the default in its order")
+    a = ap.parse_args()
+    RESULTS, DISTRACTOR = a.results, a.distractor_dir
+    FACTORS = [f for f in FACTORS if f[0] in a.factors.split(",")]
+    train = {d: records(d, a.mode) for d in expand(a.train)}
+    test = {d: records(d, a.mode) for d in expand(a.test)}
+    if a.model:
+        m = [float(v) for v in a.model.split(",")]
+    else:
+        pooled = [r for rs in train.values() for r in rs]
+        if not pooled:
+            raise SystemExit("fit_confidence.py: no training records")
+        n_d = sum(1 for r in pooled if r[2])
+        n_m = len(pooled) - n_d
+        w_d = a.distractor_share / (1.0 - a.distractor_share) * n_m / n_d if n_d else 0.0
+        data = [(z, y, w_d if d else 1.0) for z, y, d in pooled]
+        m, loss = fit(data, a.l2)
+        print(f"fitted on {n_m} in-map and {n_d} distractor queries (weight {w_d:.3f} each), loss {loss:.1f}")
+        print("factors:", ", ".join(f[0] for f in FACTORS))
+        print("const ConfidenceModel kConfidenceModel = {" + ", ".join(f"{v:.3f}f" for v in m) + "};")
+    for label, runs in (("train", train), ("test", test)):
+        for d, rs in runs.items():
+            report(f"{label} {d}", rs, m, a.min_confidence)
+        pooled = [r for rs in runs.values() for r in rs]
+        report(f"{label} all in-map", [r for r in pooled if not r[2]], m, a.min_confidence)
+        report(f"{label} all distractor", [r for r in pooled if r[2]], m, a.min_confidence)
+
+
+if __name__ == "__main__":
+    main()
