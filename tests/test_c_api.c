@@ -107,6 +107,10 @@ static void test_sizes(void) {
   gsf_config refine = cfg;
   refine.refine_enabled = 1;
   CHECK(gsf_workspace_bytes(&refine) > ws);
+  CHECK(cfg.confidence_min_probability > 0.5f && cfg.confidence_min_probability < 1.0f);  // the decision rule
+  bad = cfg;
+  bad.confidence_min_probability = 1.5f;  // not a probability
+  CHECK(gsf_workspace_bytes(&bad) == 0);
 }
 
 static void test_map_load(const void* blob, size_t bytes) {

@@ -112,6 +112,7 @@ bool to_cpp(const gsf_config* c, gsf::LocalizerConfig* out) {
   if (!flag(c->verify_enabled, &k.verify.enabled)) return false;
   k.triangle.max_triangles = c->triangle_max_triangles;
   if (!flag(c->refine_enabled, &k.refine.enabled)) return false;
+  k.confidence.min_probability = c->confidence_min_probability;
   k.voxel.voxel_size = c->voxel_size;
   k.field.length_scale = c->field_length_scale;
   k.field.radius = c->field_radius;
@@ -204,6 +205,7 @@ void gsf_config_default(gsf_config* c) noexcept {
   c->verify_enabled = k.verify.enabled ? 1 : 0;
   c->triangle_max_triangles = k.triangle.max_triangles;
   c->refine_enabled = k.refine.enabled ? 1 : 0;
+  c->confidence_min_probability = k.confidence.min_probability;
   c->voxel_size = k.voxel.voxel_size;
   c->field_length_scale = k.field.length_scale;
   c->field_radius = k.field.radius;

@@ -77,6 +77,8 @@ typedef struct gsf_config {
   uint32_t verify_enabled;             // whole-scan verification (needs the map's semantic layer)
   uint32_t triangle_max_triangles;     // per scan (capacity)
   uint32_t refine_enabled;             // uses the map's refinement layer (if any); grows the workspace
+  // The decision rule: gsf_result.confident = confidence >= this (0..1; default 0.9, docs/confidence.md).
+  float confidence_min_probability;
   // Map side: must equal the values the map was built with (else GSF_STATUS_CONFIG_MISMATCH at init).
   float voxel_size;  // m
   float field_length_scale, field_radius, field_grid_spacing, field_noise_variance;
