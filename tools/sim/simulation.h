@@ -14,6 +14,7 @@
 #include <Eigen/Geometry>
 
 #include "gsf/status.h"
+#include "label_errors/label_errors.h"
 #include "sim/lidar.h"
 #include "sim/world.h"
 
@@ -83,24 +84,16 @@ Drive mapping_drive(const World& world, const SimConfig& config);
 Drive query_drive(const World& world, const SimConfig& config);
 uint64_t scan_seed(uint64_t seed, int sequence, uint32_t frame);
 
-// The plausible confusion partners of a SemanticKITTI class (pole<->trunk, terrain<->vegetation,
-// sidewalk<->road, building<->fence, ...); 0 partners for classes the simulator does not write.
-int label_partner_count(uint16_t semantic);
-uint16_t label_partner(uint16_t semantic, int k);
-// Replaces the semantic part of a share `p` of labels by a partner (instance bits kept); seeded.
-void apply_label_noise(uint32_t* labels, uint32_t count, float p, uint64_t seed);
-// Whole-object confusion: each instance (instance id != 0) with partner classes is, with probability p,
-// relabelled whole to one partner (the first 3 times in 4 when it has two); instance bits kept. The draw
-// is a function of (seed, instance id) alone: every point of the instance agrees, whatever their order.
-void apply_object_confusion(uint32_t* labels, uint32_t count, float p, uint64_t seed);
-// Range-dependent misses of thin classes: a pole (80), traffic-sign (81) or trunk (71) point at
-// horizontal range r from the sensor (its x, y in the sensor frame) loses its class with probability
-// thin_miss_probability(p, r): a pole or sign point becomes building (50), a trunk point vegetation (70),
-// what a network says of a thin thing against its background; its instance bits are cleared (it is no
-// longer part of the thing). One draw per point, whatever its class.
-constexpr float kThinMissNear = 10.0f, kThinMissFar = 60.0f;  // m: never missed below, at rate p beyond
-float thin_miss_probability(float p, float range);            // p * clamp((r - near) / (far - near), 0, 1)
-void apply_thin_miss(const float* xyzi, uint32_t* labels, uint32_t count, float p, uint64_t seed);
+// The label-error families (object confusion, thin misses, label noise on SemanticKITTI ids) live in
+// tools/label_errors, shared with the CLI's real-data runs; the simulator applies them as it writes.
+using label_errors::apply_label_noise;
+using label_errors::apply_object_confusion;
+using label_errors::apply_thin_miss;
+using label_errors::kThinMissFar;
+using label_errors::kThinMissNear;
+using label_errors::label_partner;
+using label_errors::label_partner_count;
+using label_errors::thin_miss_probability;
 void strip_instance_ids(uint32_t* labels, uint32_t count);
 
 using SimProgress = std::function<void(const char* stage, uint32_t done, uint32_t total)>;

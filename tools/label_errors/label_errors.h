@@ -1,0 +1,51 @@
+// Simulated segmentation-network errors on ground-truth labels (issue 24): what a real network's
+// predicted labels look like, so that clean labels - simulated or real - can be evaluated as if a
+// network had written them. Used by the simulator (`gsf simulate`, on its SemanticKITTI labels as it
+// writes them) and by `gsf build-map / evaluate / localize` (on real labels as each scan is read).
+//
+// A host-side evaluation instrument, not part of what firmware links: it lives in tools/ as its own small
+// library (gsf_label_errors, depending on libgsf's PRNG only) so that tools/sim and tools/gsf both use
+// it without one depending on the other; the component search allocates.
+//
+// Three families, in the order the simulator (and apply_label_errors) applies them:
+//   object confusion - whole objects relabelled to one partner class (a network calls a whole pole a
+//                      trunk, not a point here and there);
+//   thin misses      - pole / sign / trunk points lost with range (SemanticKITTI ids only);
+//   label noise      - single points relabelled to a partner class.
+// Each family draws from its own stream of the scan's seed; same seed and labels -> the same output.
+// docs/simulator.md has the partner tables and the rules.
+#pragma once
+#include <cstdint>
+#include <string>
+
+namespace gsf::label_errors {
+
+// The ids the labels are in: SemanticKITTI words (semantic id in the low 16 bits, instance id in the high
+// 16), or raw nuScenes-lidarseg classes 0..31 (no instance ids).
+enum class LabelSpace : uint8_t { SemanticKitti, NuScenesLidarseg };
+const char* label_space_name(LabelSpace space);  // "semantic-kitti", "nuscenes-lidarseg"
+
+// The plausible confusion partners of a class: 0..2 of them, the first the likelier (3 confusions in 4
+// when there are two); 0 for classes nothing is confused with (unlabeled, noise, ego, moving-*).
+int label_partner_count(uint16_t semantic, LabelSpace space = LabelSpace::SemanticKitti);
+uint16_t label_partner(uint16_t semantic, int k, LabelSpace space = LabelSpace::SemanticKitti);
+
+// Replaces the class of a share `p` of points by a partner (instance bits kept); one draw per point.
+void apply_label_noise(uint32_t* labels, uint32_t count, float p, uint64_t seed,
+                       LabelSpace space = LabelSpace::SemanticKitti);
+
+// Whole-object confusion by instance id (SemanticKITTI words): each instance (id != 0) with partner classes
+// is, with probability p, relabelled whole to one partner; instance bits kept. The draw is a function of
+// (seed, instance id) alone: every point of the instance agrees, whatever their order.
+void apply_object_confusion(uint32_t* labels, uint32_t count, float p, uint64_t seed);
+
+// Range-dependent misses of thin classes (SemanticKITTI ids): a pole (80), traffic-sign (81) or trunk (71)
+// point at horizontal range r from the sensor (its x, y in the sensor frame) loses its class with
+// probability thin_miss_probability(p, r): a pole or sign point becomes building (50), a trunk point
+// vegetation (70), what a network says of a thin thing against its background; its instance bits are
+// cleared. One draw per point, whatever its class.
+constexpr float kThinMissNear = 10.0f, kThinMissFar = 60.0f;  // m: never missed below, at rate p beyond
+float thin_miss_probability(float p, float range);            // p * clamp((r - near) / (far - near), 0, 1)
+void apply_thin_miss(const float* xyzi, uint32_t* labels, uint32_t count, float p, uint64_t seed);
+
+}  // namespace gsf::label_errors
