@@ -145,4 +145,148 @@ void apply_thin_miss(const float* xyzi, uint32_t* labels, uint32_t count, float 
   }
 }
 
+namespace {
+
+// Object grouping without instance ids: points of one class in 26-connected cells of a kObjectCell grid.
+// Cell keys pack (class, x, y, z) so that sorting them orders cells by class first; the cell indices are
+// kept within 1..65534 so every neighbour key is a plain offset of the key.
+constexpr int64_t kCellBias = 32768;
+
+bool object_cell_key(uint16_t cls, const float* xyz, uint64_t* key) {
+  uint64_t packed = uint64_t(cls) << 48;
+  for (int a = 0; a < 3; ++a) {
+    if (!std::isfinite(xyz[a])) return false;
+    const double c = std::floor(double(xyz[a]) / kObjectCell) + double(kCellBias);
+    if (!(c >= 1.0 && c <= 65534.0)) return false;  // beyond 16 km: not grouped
+    packed |= uint64_t(c) << (32 - 16 * a);
+  }
+  *key = packed;
+  return true;
+}
+
+int cell_coord(uint64_t key, int axis) { return static_cast<int>((key >> (32 - 16 * axis)) & 0xFFFFu); }
+
+// Whether a component's class only counts as an object when thin (nuScenes static.manmade,
+// static.vegetation: their poles and trunks are objects, their walls and hedges are not).
+bool needs_thin_extent(uint16_t cls, LabelSpace space) {
+  return space == LabelSpace::NuScenesLidarseg && (cls == 28 || cls == 30);
+}
+
+struct ObjectCells {
+  std::vector<std::pair<uint64_t, uint32_t>> point_cells;  // (cell key, point), sorted
+  std::vector<uint64_t> cells;                             // unique keys, sorted
+  std::vector<uint32_t> cell_of;                           // per point_cells entry: index into cells
+};
+
+ObjectCells collect_object_cells(const float* xyzi, const uint32_t* labels, uint32_t count, LabelSpace space) {
+  ObjectCells oc;
+  for (uint32_t i = 0; i < count; ++i) {
+    const uint16_t cls = static_cast<uint16_t>(labels[i] & 0xFFFFu);
+    uint64_t key;
+    if ((labels[i] >> 16) != 0 || !object_component_class(cls, space)) continue;  // instances have their ids
+    if (object_cell_key(cls, xyzi + 4 * size_t(i), &key)) oc.point_cells.emplace_back(key, i);
+  }
+  std::sort(oc.point_cells.begin(), oc.point_cells.end());  // by key: the order of the points does not matter
+  oc.cell_of.reserve(oc.point_cells.size());
+  for (const auto& pc : oc.point_cells) {
+    if (oc.cells.empty() || oc.cells.back() != pc.first) oc.cells.push_back(pc.first);
+    oc.cell_of.push_back(static_cast<uint32_t>(oc.cells.size() - 1));
+  }
+  return oc;
+}
+
+uint32_t find_root(std::vector<uint32_t>& parent, uint32_t c) {
+  while (parent[c] != c) c = parent[c] = parent[parent[c]];  // path halving
+  return c;
+}
+
+// Union-find over the sorted cells, 26-connected within a class; each root is its component's smallest
+// cell (the smaller root always wins), a key that does not depend on the point order.
+std::vector<uint32_t> connect_cells(const std::vector<uint64_t>& cells) {
+  std::vector<uint32_t> parent(cells.size());
+  for (uint32_t c = 0; c < parent.size(); ++c) parent[c] = c;
+  for (uint32_t c = 0; c < cells.size(); ++c)
+    for (int dx = -1; dx <= 1; ++dx)
+      for (int dy = -1; dy <= 1; ++dy)
+        for (int dz = -1; dz <= 1; ++dz) {
+          const int64_t offset = (int64_t(dx) << 32) + (int64_t(dy) << 16) + dz;
+          if (offset <= 0) continue;  // each pair once, from its smaller key
+          const uint64_t nb = cells[c] + uint64_t(offset);
+          const auto it = std::lower_bound(cells.begin() + c, cells.end(), nb);
+          if (it == cells.end() || *it != nb) continue;
+          const uint32_t a = find_root(parent, c), b = find_root(parent, uint32_t(it - cells.begin()));
+          if (a != b) parent[std::max(a, b)] = std::min(a, b);
+        }
+  // parent[c] <= c throughout, so in increasing order each parent is a root already when c is reached.
+  for (uint32_t c = 0; c < parent.size(); ++c) parent[c] = parent[parent[c]];
+  return parent;
+}
+
+// Per root cell: whether its component is an object (thin enough where the class needs it).
+std::vector<bool> object_roots(const std::vector<uint64_t>& cells, const std::vector<uint32_t>& root,
+                               LabelSpace space) {
+  std::vector<int> lo(cells.size() * 2, 65535), hi(cells.size() * 2, 0);
+  for (uint32_t c = 0; c < cells.size(); ++c)
+    for (int a = 0; a < 2; ++a) {
+      lo[2 * root[c] + a] = std::min(lo[2 * root[c] + a], cell_coord(cells[c], a));
+      hi[2 * root[c] + a] = std::max(hi[2 * root[c] + a], cell_coord(cells[c], a));
+    }
+  std::vector<bool> object(cells.size(), false);
+  const int thin_cells = static_cast<int>(std::floor(kThinObjectExtent / kObjectCell + 1e-3f));
+  for (uint32_t c = 0; c < cells.size(); ++c) {
+    if (root[c] != c) continue;
+    const bool thin = hi[2 * c] - lo[2 * c] < thin_cells && hi[2 * c + 1] - lo[2 * c + 1] < thin_cells;
+    object[c] = thin || !needs_thin_extent(static_cast<uint16_t>(cells[c] >> 48), space);
+  }
+  return object;
+}
+
+}  // namespace
+
+bool object_component_class(uint16_t semantic, LabelSpace space) {
+  if (space == LabelSpace::NuScenesLidarseg)
+    return (semantic >= 2 && semantic <= 23) || semantic == 28 || semantic == 30;
+  return semantic == 10 || semantic == 71 || semantic == 80 || semantic == 81;
+}
+
+void apply_component_confusion(const float* xyzi, uint32_t* labels, uint32_t count, float p, uint64_t seed,
+                               LabelSpace space) {
+  if (!(p > 0)) return;
+  const ObjectCells oc = collect_object_cells(xyzi, labels, count, space);
+  const std::vector<uint32_t> root = connect_cells(oc.cells);
+  const std::vector<bool> object = object_roots(oc.cells, root, space);
+  std::vector<uint16_t> to(oc.cells.size(), 0);  // per root: the partner it becomes; 0 (no partner is 0): kept
+  for (uint32_t c = 0; c < oc.cells.size(); ++c) {
+    if (root[c] != c || !object[c]) continue;
+    gsf::Rng rng(gsf::mix64(seed ^ gsf::mix64(oc.cells[c])));
+    const bool confused = rng.uniform01() < p;
+    const uint32_t pick = rng.uniform(4);
+    const uint16_t cls = static_cast<uint16_t>(oc.cells[c] >> 48);
+    if (confused && label_partner_count(cls, space) > 0) to[c] = drawn_partner(cls, pick, space);
+  }
+  for (size_t k = 0; k < oc.point_cells.size(); ++k) {
+    const uint16_t t = to[root[oc.cell_of[k]]];
+    if (t != 0) labels[oc.point_cells[k].second] = t;  // instance id 0 (grouped points have none)
+  }
+}
+
+void apply_label_errors(const LabelErrorRates& rates, LabelSpace space, const float* xyzi, uint32_t* labels,
+                        uint32_t count, uint64_t scan_seed) {
+  if (rates.object_confusion > 0) {
+    const uint64_t seed = gsf::mix64(scan_seed ^ kObjectSalt);
+    if (space == LabelSpace::SemanticKitti) apply_object_confusion(labels, count, rates.object_confusion, seed);
+    apply_component_confusion(xyzi, labels, count, rates.object_confusion, gsf::mix64(seed ^ kComponentSalt), space);
+  }
+  if (rates.thin_miss > 0 && space == LabelSpace::SemanticKitti)
+    apply_thin_miss(xyzi, labels, count, rates.thin_miss, gsf::mix64(scan_seed ^ kThinSalt));
+  if (rates.label_noise > 0)
+    apply_label_noise(labels, count, rates.label_noise, gsf::mix64(scan_seed ^ kNoiseSalt), space);
+}
+
+uint64_t real_scan_seed(uint64_t noise_seed, const std::string& sequence, uint32_t frame) {
+  uint64_t name = 0xCBF29CE484222325ULL;  // FNV-1a of the sequence's name
+  for (const char ch : sequence) name = (name ^ static_cast<uint8_t>(ch)) * 0x100000001B3ULL;
+  return gsf::mix64(gsf::mix64(noise_seed ^ gsf::mix64(name)) + frame);
+}
+
 }  // namespace gsf::label_errors

@@ -39,6 +39,20 @@ void apply_label_noise(uint32_t* labels, uint32_t count, float p, uint64_t seed,
 // (seed, instance id) alone: every point of the instance agrees, whatever their order.
 void apply_object_confusion(uint32_t* labels, uint32_t count, float p, uint64_t seed);
 
+// Whole-object confusion for objects without instance ids: the points of the space's object classes
+// (object_component_class) with instance id 0 are grouped per class into components of a kObjectCell grid,
+// 26-connected; each component is, with probability p, relabelled whole to one partner. The draw is a
+// function of (seed, class, the component's smallest cell): the same whatever the point order.
+// SemanticKITTI: car, trunk, pole, traffic-sign (the library's instance classes; real SemanticKITTI
+// gives poles, signs and trunks no instance id). nuScenes-lidarseg: the thing classes 2..23 (humans,
+// movable objects, bicycle racks, vehicles) and thin components of static.manmade / static.vegetation
+// (xy extent <= kThinObjectExtent: poles, posts, trunks, what the library extracts as geometric poles).
+constexpr float kObjectCell = 0.5f;        // m
+constexpr float kThinObjectExtent = 1.5f;  // m, per horizontal axis
+bool object_component_class(uint16_t semantic, LabelSpace space);
+void apply_component_confusion(const float* xyzi, uint32_t* labels, uint32_t count, float p, uint64_t seed,
+                               LabelSpace space);
+
 // Range-dependent misses of thin classes (SemanticKITTI ids): a pole (80), traffic-sign (81) or trunk (71)
 // point at horizontal range r from the sensor (its x, y in the sensor frame) loses its class with
 // probability thin_miss_probability(p, r): a pole or sign point becomes building (50), a trunk point
@@ -47,5 +61,30 @@ void apply_object_confusion(uint32_t* labels, uint32_t count, float p, uint64_t 
 constexpr float kThinMissNear = 10.0f, kThinMissFar = 60.0f;  // m: never missed below, at rate p beyond
 float thin_miss_probability(float p, float range);            // p * clamp((r - near) / (far - near), 0, 1)
 void apply_thin_miss(const float* xyzi, uint32_t* labels, uint32_t count, float p, uint64_t seed);
+
+// The rates of the three families (each 0..1).
+struct LabelErrorRates {
+  float label_noise = 0.0f;
+  float object_confusion = 0.0f;
+  float thin_miss = 0.0f;
+  bool any() const { return label_noise > 0 || object_confusion > 0 || thin_miss > 0; }
+};
+
+// Salts of the families' streams (the simulator's since issue 24: its outputs stay byte-identical).
+constexpr uint64_t kObjectSalt = 0x4F424A434F4E4655ULL, kThinSalt = 0x5448494E4D495353ULL,
+                   kNoiseSalt = 0x4C4142454C4E4F49ULL, kComponentSalt = 0x434F4D504F4E454EULL;
+
+// One scan of real labels as a network would have written them: object confusion (instance ids, then
+// components), thin misses, label noise. nuScenes-lidarseg has no thin-miss effect: its labels have no
+// pole, sign or trunk class, and a missed one takes its background's class, static.manmade /
+// static.vegetation, which it already has.
+void apply_label_errors(const LabelErrorRates& rates, LabelSpace space, const float* xyzi, uint32_t* labels,
+                        uint32_t count, uint64_t scan_seed);
+
+// The seed of a real scan's errors: from the run's noise seed, the sequence's name and the file's frame
+// number, so the map's drive and the queries' get independent errors, and the same scan always the
+// same ones (a network's output is a function of its input).
+constexpr uint64_t kDefaultNoiseSeed = 1;
+uint64_t real_scan_seed(uint64_t noise_seed, const std::string& sequence, uint32_t frame);
 
 }  // namespace gsf::label_errors

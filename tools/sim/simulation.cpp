@@ -231,12 +231,12 @@ void apply_sensing(const SimConfig& c, int sequence, uint32_t frame, SimScan* sc
   const uint64_t seed = scan_seed(c.world.seed, sequence, frame);
   if (c.object_confusion > 0)
     apply_object_confusion(scan->labels.data(), scan->size(), c.object_confusion,
-                           gsf::mix64(seed ^ 0x4F424A434F4E4655ULL));
+                           gsf::mix64(seed ^ label_errors::kObjectSalt));
   if (c.thin_miss > 0)
     apply_thin_miss(scan->xyzi.data(), scan->labels.data(), scan->size(), c.thin_miss,
-                    gsf::mix64(seed ^ 0x5448494E4D495353ULL));
+                    gsf::mix64(seed ^ label_errors::kThinSalt));
   if (c.label_noise > 0)
-    apply_label_noise(scan->labels.data(), scan->size(), c.label_noise, gsf::mix64(seed ^ 0x4C4142454C4E4F49ULL));
+    apply_label_noise(scan->labels.data(), scan->size(), c.label_noise, gsf::mix64(seed ^ label_errors::kNoiseSalt));
   if (!c.instance_ids) strip_instance_ids(scan->labels.data(), scan->size());
 }
 
