@@ -26,6 +26,11 @@ expect 2 "expects an integer" -- "$gsf" evaluate --map m --dataset d --limit ten
 expect 2 "min-confidence must be in" -- "$gsf" evaluate --map m --dataset d --min-confidence 1.01
 expect 2 "min-confidence must be in" -- "$gsf" evaluate --map m --dataset d --min-confidence -0.1
 expect 2 "unknown config name" -- "$gsf" build-map --dataset d --out m --set match.nonsense=1
+# Simulated network errors on the labels read (build-map, evaluate, localize): rates in 0..1, seed >= 0.
+expect 2 "label-noise must be a number in 0..1" -- "$gsf" evaluate --map m --dataset d --label-noise 1.5
+expect 2 "object-confusion must be a number in 0..1" -- "$gsf" build-map --dataset d --out m --object-confusion -0.1
+expect 2 "thin-miss must be a number in 0..1" -- "$gsf" localize --map m --dataset d --thin-miss x
+expect 2 "noise-seed must be a whole number" -- "$gsf" evaluate --map m --dataset d --noise-seed -3
 expect 1 "cannot open map file" -- "$gsf" evaluate --map "$tmp/none.gsfmap" --dataset "$tmp"
 expect 1 "cannot open sequence" -- "$gsf" build-map --dataset "$tmp/nothing" --out "$tmp/m.gsfmap"
 printf 'not a map' > "$tmp/bad.gsfmap"
@@ -44,6 +49,8 @@ echo "$built" | grep -q "origin 0.000, -2.000, 2.000 m in frame 'local'" || fail
 "$gsf" evaluate --map "$tmp/map.gsfmap" --dataset "$tmp/ds" --sequence 01 --json "$tmp/all.json" --mode gsf,scan-context \
   --min-confidence 0 --limit 12 --quiet >/dev/null || fail "evaluate --min-confidence 0"
 "$gsf" localize --map "$tmp/map.gsfmap" --dataset "$tmp/ds" --sequence 01 --frame 3 > "$tmp/one.json" || fail "localize"
+"$gsf" evaluate --map "$tmp/map.gsfmap" --dataset "$tmp/ds" --sequence 01 --json "$tmp/noisy.json" --mode gsf --limit 2 \
+  --label-noise 0.1 --object-confusion 0.15 --noise-seed 7 --quiet >/dev/null || fail "evaluate --label-noise"
 python3 - "$tmp" <<'PY' || exit 1
 import json, sys, os
 t = sys.argv[1]
@@ -106,6 +113,12 @@ assert "match_dropped" in one["diagnostics"] and "hypotheses" in one["diagnostic
 for f in ["map_trajectory.svg", "correspondences_instance.svg", "correspondences_gsf.svg", "reliability.svg"]:
     assert open(f"{t}/svg/{f}").read().startswith("<svg"), f
 assert "ECE" in open(f"{t}/svg/reliability.svg").read()
+# The label errors a run applied are in its JSON (all 0: ground-truth labels).
+assert r["label_errors"] == {"label_noise": 0, "object_confusion": 0, "thin_miss": 0, "noise_seed": 1,
+                             "label_space": "semantic-kitti"}, r["label_errors"]
+noisy = json.load(open(f"{t}/noisy.json"))["label_errors"]
+assert abs(noisy["label_noise"] - 0.1) < 1e-6 and abs(noisy["object_confusion"] - 0.15) < 1e-6, noisy
+assert noisy["noise_seed"] == 7, noisy
 print("cli ok:", g["successes"], "GSF successes,", i["successes"], "instance-only")
 PY
 echo "1 passed, 0 failed"

@@ -1,18 +1,20 @@
 // gsf build-map --dataset DIR --sequence 00 --out MAP [--logits synthetic|none] [--classes SET] [--origin X,Y[,Z]]
 // [--frame NAME] [--tile-size M] [--resident-tiles N] [--spill-dir DIR]
+// [--label-noise P] [--object-confusion P] [--thin-miss P] [--noise-seed N]   (label_error_options.h)
 #include <cstdio>
 #include <cstdlib>
 
 #include "args.h"
 #include "commands.h"
 #include "gsf/map_format.h"
+#include "label_error_options.h"
 #include "peak_rss.h"
 #include "pipeline.h"
 
 namespace gsf::cli {
 
 int cmd_build_map(int argc, char** argv) {
-  const std::vector<OptionSpec> specs = {
+  std::vector<OptionSpec> specs = {
       {"dataset", "SemanticKITTI-layout root (or nuScenes-lidarseg samples)", "", false, true},
       {"sequence", "mapping sequence", "00"},
       {"out", "map file to write", "", false, true},
@@ -47,6 +49,7 @@ int cmd_build_map(int argc, char** argv) {
        ""},
       {"quiet", "no progress on stderr", "", true},
   };
+  for (const OptionSpec& o : label_error_option_specs()) specs.push_back(o);
   if (wants_help(argc, argv)) {
     std::printf("%s", usage_text("build-map", "Build a map file from a labelled sequence with poses.", specs).c_str());
     return 0;
@@ -63,6 +66,13 @@ int cmd_build_map(int argc, char** argv) {
   if (!resolve_label_set(args.get("classes"), args.get("dataset"), args.get("sequence"), &labels, &err))
     return usage_error("build-map", err);
   cfg.classes = labels.config_table();
+  LabelErrorOptions error_options;
+  ScanLabelErrors label_errors;
+  std::string note;
+  if (!parse_label_error_options(args, &error_options, &err) ||
+      !resolve_scan_label_errors(error_options, labels, args.get("sequence"), &label_errors, &note, &err))
+    return usage_error("build-map", err);
+  if (!note.empty()) std::fprintf(stderr, "gsf build-map: note: %s\n", note.c_str());
   mapping::MapBuildConfig options;
   if (args.has("origin")) {
     double o[3] = {0, 0, 0};
@@ -127,7 +137,7 @@ int cmd_build_map(int argc, char** argv) {
     std::fprintf(stderr, "gsf build-map: cannot create '%s.partial'\n", args.get("out").c_str());
     return 1;
   }
-  s = build_map(*src, options, logits, sink, &bytes, &st, !args.flag("quiet"), &failed_scan);
+  s = build_map(*src, options, logits, sink, &bytes, &st, !args.flag("quiet"), &failed_scan, &label_errors);
   if (s != Status::Ok) {
     if (failed_scan != UINT32_MAX && s == Status::InvalidInput)
       std::fprintf(stderr,
@@ -165,6 +175,8 @@ int cmd_build_map(int argc, char** argv) {
         "  %u of the triangles from the mapping scans' views (what a query there forms; %u more left out: "
         "their key was crowded)\n",
         st.scan_triangles, st.scan_triangles_crowded);
+  if (label_errors.rates.any())
+    std::printf("  simulated network errors on the scans' labels: %s\n", describe(label_errors).c_str());
   std::printf("  origin %.3f, %.3f, %.3f m in frame '%s' (map coordinates are relative to it)\n", st.georef.origin[0],
               st.georef.origin[1], st.georef.origin[2], st.georef.frame);
   if (st.instances_dropped > 0 || st.field_points_dropped > 0 || st.scan_points_dropped > 0)

@@ -1,10 +1,11 @@
 // gsf evaluate --map MAP --dataset DIR --sequence 01 --json OUT.json [--mode gsf|instance|scan-context|all]
-// [--min-confidence P] [--svg DIR]
+// [--min-confidence P] [--svg DIR] [--label-noise P] [--object-confusion P] [--thin-miss P] [--noise-seed N]
 #include <cstdio>
 #include <sstream>
 
 #include "args.h"
 #include "commands.h"
+#include "label_error_options.h"
 #include "run_evaluation.h"
 
 namespace gsf::cli {
@@ -26,7 +27,7 @@ bool parse_modes(const std::string& s, std::vector<std::string>* modes) {
 }
 
 int cmd_evaluate(int argc, char** argv) {
-  const std::vector<OptionSpec> specs = {
+  std::vector<OptionSpec> specs = {
       {"map", "map file (gsf build-map)", "", false, true},
       {"dataset", "dataset root with the query sequence", "", false, true},
       {"sequence", "query sequence", "01"},
@@ -46,6 +47,7 @@ int cmd_evaluate(int argc, char** argv) {
       {"set", "config overrides name=value[,name=value] (see pipeline.cpp), e.g. gsf.tau=0.1", ""},
       {"quiet", "no progress on stderr", "", true},
   };
+  for (const OptionSpec& o : label_error_option_specs()) specs.push_back(o);
   if (wants_help(argc, argv)) {
     std::printf("%s", usage_text("evaluate",
                                  "Localize a query sequence with ground truth; report success rate "
@@ -67,6 +69,7 @@ int cmd_evaluate(int argc, char** argv) {
   o.progress = !args.flag("quiet");
   o.overrides = args.get("set");
   o.classes = args.get("classes");
+  if (!parse_label_error_options(args, &o.label_errors, &err)) return usage_error("evaluate", err);
   if (!parse_modes(args.get("mode"), &o.modes)) return usage_error("evaluate", "bad --mode '" + args.get("mode") + "'");
   if (!parse_logit_mode(args.get("logits"), &o.logits))
     return usage_error("evaluate", "--logits must be synthetic or none");

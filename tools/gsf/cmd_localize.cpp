@@ -1,5 +1,6 @@
-// gsf localize --map MAP --dataset DIR --sequence 01 [--frame N] [--mode gsf|instance]: one JSON line per scan,
-// the pose in the map's frame ("pose", with the map origin applied) and in the map-local frame.
+// gsf localize --map MAP --dataset DIR --sequence 01 [--frame N] [--mode gsf|instance] [--label-noise P]
+// [--object-confusion P] [--thin-miss P] [--noise-seed N]: one JSON line per scan, the pose in the map's frame
+// ("pose", with the map origin applied) and in the map-local frame.
 #include <cstdio>
 
 #include "args.h"
@@ -8,13 +9,14 @@
 #include "gsf/map_format.h"
 #include "gsf/port/clock.h"
 #include "json_writer.h"
+#include "label_error_options.h"
 #include "pipeline.h"
 #include "result_json.h"
 
 namespace gsf::cli {
 
 int cmd_localize(int argc, char** argv) {
-  const std::vector<OptionSpec> specs = {
+  std::vector<OptionSpec> specs = {
       {"map", "map file", "", false, true},
       {"dataset", "dataset root", "", false, true},
       {"sequence", "sequence with the scans", "01"},
@@ -25,6 +27,7 @@ int cmd_localize(int argc, char** argv) {
        "label set of the dataset's labels: auto, semantic-kitti, nuscenes or a class-table file (docs/data-formats.md)",
        "auto"},
   };
+  for (const OptionSpec& o : label_error_option_specs()) specs.push_back(o);
   if (wants_help(argc, argv)) {
     std::printf(
         "%s", usage_text("localize", "Localize scans against a map; prints one JSON object per scan.", specs).c_str());
@@ -40,6 +43,8 @@ int cmd_localize(int argc, char** argv) {
     return usage_error("localize", "--logits must be synthetic or none");
   long long frame = -1;
   if (args.has("frame") && !args.get_int("frame", &frame, &err)) return usage_error("localize", err);
+  LabelErrorOptions error_options;
+  if (!parse_label_error_options(args, &error_options, &err)) return usage_error("localize", err);
   MapFile file;
   if (read_map_file(args.get("map"), &file, &err) != Status::Ok) {
     std::fprintf(stderr, "gsf localize: %s\n", err.c_str());
@@ -52,8 +57,12 @@ int cmd_localize(int argc, char** argv) {
     return 1;
   }
   LabelSet labels;
-  if (!resolve_label_set(args.get("classes"), args.get("dataset"), args.get("sequence"), &labels, &err))
+  ScanLabelErrors label_errors;
+  std::string note;
+  if (!resolve_label_set(args.get("classes"), args.get("dataset"), args.get("sequence"), &labels, &err) ||
+      !resolve_scan_label_errors(error_options, labels, args.get("sequence"), &label_errors, &note, &err))
     return usage_error("localize", err);
+  if (!note.empty()) std::fprintf(stderr, "gsf localize: note: %s\n", note.c_str());
   auto src = open_source(args.get("dataset"), args.get("sequence"), &s, &labels);
   if (s != Status::Ok) {
     std::fprintf(stderr, "gsf localize: cannot open sequence: %s\n", to_string(s));
@@ -76,7 +85,7 @@ int cmd_localize(int argc, char** argv) {
     if (frame >= 0 && src->frame_id(i) != frame) continue;
     found = true;
     LocalizeResult r;
-    s = read_scan(*src, i, buf.buffer(), logits, 2000000u + src->frame_id(i), cfg.classes);
+    s = read_scan(*src, i, buf.buffer(), logits, 2000000u + src->frame_id(i), cfg.classes, &label_errors);
     if (s == Status::Ok) loc.localize(buf.buffer().view(), &r);
     else r.status = s;
     JsonWriter j;

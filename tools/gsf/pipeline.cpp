@@ -158,7 +158,39 @@ bool resolve_label_set(const std::string& spec, const std::string& root, const s
     }
   }
   out->nuscenes_raw = nuscenes_data && !out->semantic_kitti;
+  out->nuscenes_data = nuscenes_data;
   return true;
+}
+
+bool resolve_scan_label_errors(const LabelErrorOptions& o, const LabelSet& labels, const std::string& sequence,
+                               ScanLabelErrors* out, std::string* note, std::string* error) {
+  using label_errors::LabelSpace;
+  note->clear();
+  out->rates = o.rates;
+  out->noise_seed = o.noise_seed;
+  out->sequence = sequence;
+  out->space = labels.nuscenes_raw ? LabelSpace::NuScenesLidarseg : LabelSpace::SemanticKitti;
+  if (!o.rates.any()) return true;
+  if (labels.nuscenes_data && !labels.nuscenes_raw) {
+    *error =
+        "--label-noise / --object-confusion / --thin-miss on nuScenes-lidarseg data need its lidarseg ids "
+        "(--classes auto or nuscenes or a lidarseg class table): the errors are drawn in lidarseg classes";
+    return false;
+  }
+  if (out->space == LabelSpace::NuScenesLidarseg && o.rates.thin_miss > 0)
+    *note =
+        "--thin-miss has no effect on nuScenes-lidarseg labels: they have no pole, sign or trunk class, and a "
+        "missed one would take its background's class (static.manmade / static.vegetation), which it has";
+  return true;
+}
+
+std::string describe(const ScanLabelErrors& e) {
+  if (!e.rates.any()) return "none (ground-truth labels)";
+  char line[200];
+  std::snprintf(line, sizeof line, "label noise %g, object confusion %g, thin miss %g on %s labels, noise seed %llu",
+                e.rates.label_noise, e.rates.object_confusion, e.rates.thin_miss,
+                label_errors::label_space_name(e.space), static_cast<unsigned long long>(e.noise_seed));
+  return line;
 }
 
 std::unique_ptr<port::ScanSource> open_source(const std::string& root, const std::string& seq, Status* status,
@@ -176,9 +208,13 @@ std::unique_ptr<port::ScanSource> open_source(const std::string& root, const std
 }
 
 Status read_scan(port::ScanSource& src, uint32_t index, port::ScanBuffer& buf, LogitMode mode, uint64_t scan_id,
-                 const ClassTable* classes) {
+                 const ClassTable* classes, const ScanLabelErrors* errors) {
   const Status s = src.read(index, buf);
   if (s != Status::Ok) return s;
+  if (errors && errors->rates.any())  // before the logits: the network's errors are in its labels
+    label_errors::apply_label_errors(
+        errors->rates, errors->space, buf.points, buf.labels, buf.count,
+        label_errors::real_scan_seed(errors->noise_seed, errors->sequence, src.frame_id(index)));
   if (mode == LogitMode::Synthetic && buf.logits && !buf.has_logits) {
     port::LogitModel model;
     port::synthesize_logits(model, scan_id, buf.labels, buf.count, buf.logits, buf.labels, classes);
@@ -235,7 +271,8 @@ double path_length(port::ScanSource& src) {
 }
 
 Status build_map(port::ScanSource& src, const mapping::MapBuildConfig& config, LogitMode logits, mapping::MapSink& sink,
-                 size_t* bytes, mapping::MapBuildStats* stats, bool progress, uint32_t* failed_scan) {
+                 size_t* bytes, mapping::MapBuildStats* stats, bool progress, uint32_t* failed_scan,
+                 const ScanLabelErrors* errors) {
   if (failed_scan) *failed_scan = UINT32_MAX;
   mapping::MapBuilder builder(config);
   port::OwnedScanBuffer buf(kMaxScanPoints, true);
@@ -243,7 +280,7 @@ Status build_map(port::ScanSource& src, const mapping::MapBuildConfig& config, L
     Eigen::Isometry3d pose;
     Status s = src.pose(i, &pose);
     if (s != Status::Ok) return s;
-    s = read_scan(src, i, buf.buffer(), logits, 1000000u + src.frame_id(i), config.stages.classes);
+    s = read_scan(src, i, buf.buffer(), logits, 1000000u + src.frame_id(i), config.stages.classes, errors);
     if (s != Status::Ok) return s;
     s = builder.add_scan(buf.buffer().view(), pose);
     if (s != Status::Ok) {

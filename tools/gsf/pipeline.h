@@ -10,6 +10,7 @@
 #include "gsf/port/logit_synthesis.h"
 #include "gsf/port/scan_source.h"
 #include "gsf/port/semantic_kitti.h"
+#include "label_errors/label_errors.h"
 #include "mapping/map_builder.h"
 
 namespace gsf::cli {
@@ -31,6 +32,7 @@ struct LabelSet {
   ClassTable table;
   bool semantic_kitti = true;  // the library default: config.classes stays nullptr
   bool nuscenes_raw = false;
+  bool nuscenes_data = false;  // the dataset is nuScenes-lidarseg (lidarseg/ folder), raw ids or not
   const ClassTable* config_table() const { return semantic_kitti ? nullptr : &table; }
 };
 bool resolve_label_set(const std::string& spec, const std::string& dataset_root, const std::string& sequence,
@@ -40,11 +42,35 @@ bool resolve_label_set(const std::string& spec, const std::string& dataset_root,
 std::unique_ptr<port::ScanSource> open_source(const std::string& root, const std::string& sequence, Status* status,
                                               const LabelSet* labels = nullptr);
 
+// Simulated network errors on the scans' labels (label_error_options.h): the rates and the run's seed.
+struct LabelErrorOptions {
+  label_errors::LabelErrorRates rates;
+  uint64_t noise_seed = label_errors::kDefaultNoiseSeed;
+};
+// What read_scan applies to the scans of one sequence: the rates, the label space of the labels as read,
+// and the seed's parts (each scan: real_scan_seed(noise_seed, sequence, frame number)).
+struct ScanLabelErrors {
+  label_errors::LabelErrorRates rates;
+  label_errors::LabelSpace space = label_errors::LabelSpace::SemanticKitti;
+  uint64_t noise_seed = label_errors::kDefaultNoiseSeed;
+  std::string sequence;
+};
+// The errors for `sequence` of a dataset with label set `labels`: nuScenes data read with raw lidarseg ids
+// gets the nuScenes space, everything else the SemanticKITTI one. False (a usage error) for nuScenes data
+// read as SemanticKITTI ids (--classes semantic-kitti): its mapped labels have lost the classes the
+// nuScenes partners are in. *note: what to tell the user (thin misses do nothing on nuScenes labels).
+bool resolve_scan_label_errors(const LabelErrorOptions& options, const LabelSet& labels, const std::string& sequence,
+                               ScanLabelErrors* out, std::string* note, std::string* error);
+// One line for output: "label noise 0.1, object confusion 0.15, thin miss 0 on nuscenes-lidarseg labels,
+// noise seed 1", or "none (ground-truth labels)".
+std::string describe(const ScanLabelErrors& errors);
+
 // Reads scan `index` and, for LogitMode::Synthetic, replaces labels by the confusion model's argmax
 // ("what a network predicted") and fills logits. scan_id keeps map and query draws independent.
-// `classes`: the label set of the scan's ids (nullptr: SemanticKITTI).
+// `classes`: the label set of the scan's ids (nullptr: SemanticKITTI). `errors` (optional): simulated
+// network errors applied to the labels first, seeded by the scan's frame number.
 Status read_scan(port::ScanSource& src, uint32_t index, port::ScanBuffer& buf, LogitMode mode, uint64_t scan_id,
-                 const ClassTable* classes = nullptr);
+                 const ClassTable* classes = nullptr, const ScanLabelErrors* errors = nullptr);
 
 struct Meta {
   bool present = false;
@@ -63,8 +89,10 @@ double path_length(port::ScanSource& src);
 // Builds the map of every scan of `src`. On failure *failed_scan is the index of the scan add_scan
 // refused (UINT32_MAX when the failure came later, at build()). The map goes to `sink` section by
 // section (mapping/map_writer.h; a FileMapSink writes the file without holding the map).
+// `errors` (optional): simulated network errors on every mapping scan's labels (read_scan).
 Status build_map(port::ScanSource& src, const mapping::MapBuildConfig& config, LogitMode logits, mapping::MapSink& sink,
-                 size_t* bytes, mapping::MapBuildStats* stats, bool progress, uint32_t* failed_scan = nullptr);
+                 size_t* bytes, mapping::MapBuildStats* stats, bool progress, uint32_t* failed_scan = nullptr,
+                 const ScanLabelErrors* errors = nullptr);
 
 constexpr uint32_t kMaxScanPoints = 262144;
 

@@ -120,8 +120,20 @@ void write_query_json(JsonWriter& j, const QueryRecord& r, bool diagnostics) {
   j.end_object();
 }
 
+// The simulated network errors the query scans' labels carried (none: all rates 0).
+void write_label_errors_json(JsonWriter& j, const ScanLabelErrors& e) {
+  j.key("label_errors");
+  j.begin_object();
+  j.field("label_noise", static_cast<double>(e.rates.label_noise));
+  j.field("object_confusion", static_cast<double>(e.rates.object_confusion));
+  j.field("thin_miss", static_cast<double>(e.rates.thin_miss));
+  j.field("noise_seed", static_cast<unsigned long long>(e.noise_seed));
+  j.field("label_space", label_errors::label_space_name(e.space));
+  j.end_object();
+}
+
 void write_json(const std::string& path, const EvalOptions& o, const MapView& map, const std::vector<ModeRun>& runs,
-                const std::vector<ModeSummary>& sums, const Meta& meta) {
+                const std::vector<ModeSummary>& sums, const Meta& meta, const ScanLabelErrors& errors) {
   JsonWriter j;
   j.begin_object();
   j.field("map", o.map_path);
@@ -142,6 +154,7 @@ void write_json(const std::string& path, const EvalOptions& o, const MapView& ma
   j.field("success_rotation_deg", kSuccessRotationDeg);
   j.field("zone_type", meta.zone_type);
   j.field("cue_density", static_cast<double>(meta.cue_density));
+  write_label_errors_json(j, errors);
   j.key("modes");
   j.begin_object();
   for (size_t m = 0; m < runs.size(); ++m) {
@@ -523,11 +536,15 @@ int run_evaluation(const EvalOptions& o) {
   }
   LabelSet labels;
   float min_confidence = 0;
+  ScanLabelErrors label_errors;
+  std::string note;
   if (!resolve_label_set(o.classes, o.dataset, o.sequence, &labels, &err) ||
-      !resolve_min_confidence(o, &min_confidence, &err)) {
+      !resolve_min_confidence(o, &min_confidence, &err) ||
+      !resolve_scan_label_errors(o.label_errors, labels, o.sequence, &label_errors, &note, &err)) {
     std::fprintf(stderr, "gsf evaluate: %s\n", err.c_str());
     return 2;
   }
+  if (!note.empty()) std::fprintf(stderr, "gsf evaluate: note: %s\n", note.c_str());
   auto src = open_source(o.dataset, o.sequence, &s, &labels);
   if (s != Status::Ok || src->size() == 0) {
     std::fprintf(stderr, "gsf evaluate: cannot open query sequence '%s' under '%s': %s\n", o.sequence.c_str(),
@@ -546,7 +563,8 @@ int run_evaluation(const EvalOptions& o) {
   std::vector<Localizer::Correspondence> corr(4096);
   for (uint32_t q = 0; q < nq && !locs.empty(); ++q) {
     const QueryRecord blank = new_record(*src, q, meta, map);
-    const Status rs = read_scan(*src, q, buf.buffer(), o.logits, 2000000u + src->frame_id(q), labels.config_table());
+    const Status rs =
+        read_scan(*src, q, buf.buffer(), o.logits, 2000000u + src->frame_id(q), labels.config_table(), &label_errors);
     for (LocalizerMode& lm : locs) localize_query(lm, buf.buffer().view(), rs, map, corr, blank, &runs[lm.run]);
     if (o.progress && (q % 10 == 0 || q + 1 == nq)) std::fprintf(stderr, "\r  evaluate: %u / %u queries", q + 1, nq);
   }
@@ -556,13 +574,15 @@ int run_evaluation(const EvalOptions& o) {
       if (const int rc = run_scan_context(o, labels, *src, map, meta, nq, min_confidence, buf.buffer(), &run))
         return rc;
   const std::vector<ModeSummary> sums = summarize_runs(runs, min_confidence);
+  if (label_errors.rates.any())
+    std::printf("\nsimulated network errors on the query scans' labels: %s\n", describe(label_errors).c_str());
   print_header(map, meta, sums, nq);
   print_table(sums, runs);
   if (!sums.empty()) {
     print_calibration(sums);
     print_reliability(sums);
   }
-  if (!o.json_out.empty()) write_json(o.json_out, o, map, runs, sums, meta);
+  if (!o.json_out.empty()) write_json(o.json_out, o, map, runs, sums, meta, label_errors);
   if (!o.svg_dir.empty()) write_svgs(o, map, runs, sums);
   return 0;
 }

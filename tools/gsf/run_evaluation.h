@@ -22,8 +22,9 @@ struct EvalOptions {
   std::string svg_dir;   // empty: no pictures (else map + trajectory, correspondences, reliability)
   uint32_t limit = 0;    // evaluate only the first N queries (0 = all)
   bool progress = true;
-  std::string classes = "auto";  // label set (pipeline.h resolve_label_set)
-  std::string overrides;         // config overrides (name=value,...) applied to every localizer mode
+  std::string classes = "auto";    // label set (pipeline.h resolve_label_set)
+  std::string overrides;           // config overrides (name=value,...) applied to every localizer mode
+  LabelErrorOptions label_errors;  // simulated network errors on the query scans' labels (none by default)
 };
 
 // Returns the process exit code.
