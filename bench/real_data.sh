@@ -6,7 +6,10 @@
 #    scene 0001 as a distractor map.
 # Usage: bench/real_data.sh [DATA_DIR (default ../shared/data)] [OUT_DIR (default out/real)]
 # Environment: GSF=path (a gsf binary to use instead of building one), CLASSES=auto|nuscenes|FILE (the
-# nuScenes runs' label set, default auto), NUSCENES_ONLY=1 (skip the SemanticKITTI revisits).
+# nuScenes runs' label set, default auto), NUSCENES_ONLY=1 (skip the SemanticKITTI revisits),
+# NOISE="--label-noise P --object-confusion P [--thin-miss P] [--noise-seed N]" (simulated network errors
+# on the labels, passed to every build-map and evaluate: map and queries get independent errors; e.g.
+# NOISE="--label-noise 0.10 --object-confusion 0.15", a realistic network; default: ground-truth labels).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 data=$(cd "${1:-../shared/data}" && pwd)
@@ -18,7 +21,9 @@ else
   gsf=$PWD/build/release/tools/gsf
 fi
 classes=${CLASSES:-auto}
+noise=${NOISE:-}
 rm -rf "$out" && mkdir -p "$out"
+echo "labels: ${noise:-ground truth (no simulated network errors)}" | tee "$out/labels.txt"
 S=$data/semantickitti-samples/sequences
 link() {  # link DEST_ROOT SEQ FRAME...
   local root=$1 seq=$2; shift 2
@@ -35,9 +40,11 @@ link "$out/kitti-map" 08 000720
 link "$out/kitti-query" 08 001500
 for seq in 00 08; do
   [ "${NUSCENES_ONLY:-0}" = 1 ] && break
-  $gsf build-map --dataset "$out/kitti-map" --sequence $seq --out "$out/kitti-$seq.gsfmap" --quiet
+  # shellcheck disable=SC2086  # $noise: a list of options
+  $gsf build-map --dataset "$out/kitti-map" --sequence $seq --out "$out/kitti-$seq.gsfmap" --quiet $noise
+  # shellcheck disable=SC2086
   $gsf evaluate --map "$out/kitti-$seq.gsfmap" --dataset "$out/kitti-query" --sequence $seq --map-sequence $seq \
-    --mode instance,gsf,gsf+refine --quiet --json "$out/kitti-$seq.json" >/dev/null
+    --mode instance,gsf,gsf+refine --quiet --json "$out/kitti-$seq.json" $noise >/dev/null
   python3 - "$out/kitti-$seq.json" "$seq" <<'PY'
 import json, sys
 r = json.load(open(sys.argv[1]))
@@ -55,12 +62,14 @@ done
 # not a hand-picked frame list); elsewhere the only right outcome is to decline.
 N=$data/nuscenes-lidarseg-samples
 for seq in 0001 0002 0004; do
-  $gsf build-map --dataset "$N" --sequence $seq --classes "$classes" --out "$out/nuscenes-$seq.gsfmap" --quiet
+  # shellcheck disable=SC2086
+  $gsf build-map --dataset "$N" --sequence $seq --classes "$classes" --out "$out/nuscenes-$seq.gsfmap" --quiet $noise
 done
 for pair in 0004:0002 0002:0004 0001:0002; do
   m=${pair%%:*} q=${pair##*:}
+  # shellcheck disable=SC2086
   $gsf evaluate --map "$out/nuscenes-$m.gsfmap" --dataset "$N" --sequence $q --map-sequence $m --quiet --classes "$classes" \
-    --mode instance,gsf,gsf+refine --json "$out/nuscenes-$m-$q.json" >/dev/null
+    --mode instance,gsf,gsf+refine --json "$out/nuscenes-$m-$q.json" $noise >/dev/null
 done
 python3 - "$N" "$out" <<'PY'
 import json, math, sys
