@@ -66,13 +66,9 @@ int cmd_build_map(int argc, char** argv) {
   if (!resolve_label_set(args.get("classes"), args.get("dataset"), args.get("sequence"), &labels, &err))
     return usage_error("build-map", err);
   cfg.classes = labels.config_table();
-  LabelErrorOptions error_options;
   ScanLabelErrors label_errors;
-  std::string note;
-  if (!parse_label_error_options(args, &error_options, &err) ||
-      !resolve_scan_label_errors(error_options, labels, args.get("sequence"), &label_errors, &note, &err))
+  if (!scan_label_errors_from_args(args, labels, args.get("sequence"), "build-map", &label_errors, &err))
     return usage_error("build-map", err);
-  if (!note.empty()) std::fprintf(stderr, "gsf build-map: note: %s\n", note.c_str());
   mapping::MapBuildConfig options;
   if (args.has("origin")) {
     double o[3] = {0, 0, 0};

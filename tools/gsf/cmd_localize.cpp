@@ -43,8 +43,12 @@ int cmd_localize(int argc, char** argv) {
     return usage_error("localize", "--logits must be synthetic or none");
   long long frame = -1;
   if (args.has("frame") && !args.get_int("frame", &frame, &err)) return usage_error("localize", err);
-  LabelErrorOptions error_options;
-  if (!parse_label_error_options(args, &error_options, &err)) return usage_error("localize", err);
+  // Usage errors first: the label set and the label errors need only the dataset's folder.
+  LabelSet labels;
+  ScanLabelErrors label_errors;
+  if (!resolve_label_set(args.get("classes"), args.get("dataset"), args.get("sequence"), &labels, &err) ||
+      !scan_label_errors_from_args(args, labels, args.get("sequence"), "localize", &label_errors, &err))
+    return usage_error("localize", err);
   MapFile file;
   if (read_map_file(args.get("map"), &file, &err) != Status::Ok) {
     std::fprintf(stderr, "gsf localize: %s\n", err.c_str());
@@ -56,13 +60,6 @@ int cmd_localize(int argc, char** argv) {
     std::fprintf(stderr, "gsf localize: invalid map: %s\n", map_load_error(file, s).c_str());
     return 1;
   }
-  LabelSet labels;
-  ScanLabelErrors label_errors;
-  std::string note;
-  if (!resolve_label_set(args.get("classes"), args.get("dataset"), args.get("sequence"), &labels, &err) ||
-      !resolve_scan_label_errors(error_options, labels, args.get("sequence"), &label_errors, &note, &err))
-    return usage_error("localize", err);
-  if (!note.empty()) std::fprintf(stderr, "gsf localize: note: %s\n", note.c_str());
   auto src = open_source(args.get("dataset"), args.get("sequence"), &s, &labels);
   if (s != Status::Ok) {
     std::fprintf(stderr, "gsf localize: cannot open sequence: %s\n", to_string(s));

@@ -1,5 +1,7 @@
 #include "label_error_options.h"
 
+#include <cstdio>
+
 namespace gsf::cli {
 namespace {
 
@@ -44,6 +46,17 @@ bool parse_label_error_options(const Args& args, LabelErrorOptions* out, std::st
     return false;
   }
   out->noise_seed = static_cast<uint64_t>(seed);
+  return true;
+}
+
+bool scan_label_errors_from_args(const Args& args, const LabelSet& labels, const std::string& sequence,
+                                 const std::string& command, ScanLabelErrors* out, std::string* error) {
+  LabelErrorOptions options;
+  std::string note;
+  if (!parse_label_error_options(args, &options, error) ||
+      !resolve_scan_label_errors(options, labels, sequence, out, &note, error))
+    return false;
+  if (!note.empty()) std::fprintf(stderr, "gsf %s: note: %s\n", command.c_str(), note.c_str());
   return true;
 }
 

@@ -14,5 +14,10 @@ namespace gsf::cli {
 std::vector<OptionSpec> label_error_option_specs();
 // Reads the options (usage error: a rate outside 0..1, a seed that is not a whole number >= 0).
 bool parse_label_error_options(const Args& args, LabelErrorOptions* out, std::string* error);
+// Parses the options and resolves them for `sequence` of a dataset with label set `labels`
+// (resolve_scan_label_errors), printing its note as "gsf COMMAND: note: ..." on stderr. False: a usage
+// error, in *error.
+bool scan_label_errors_from_args(const Args& args, const LabelSet& labels, const std::string& sequence,
+                                 const std::string& command, ScanLabelErrors* out, std::string* error);
 
 }  // namespace gsf::cli

@@ -438,8 +438,11 @@ int run_scan_context(const EvalOptions& o, const LabelSet& labels, port::ScanSou
   return 0;
 }
 
-void print_header(const MapView& map, const Meta& meta, const std::vector<ModeSummary>& sums, uint32_t nq) {
+void print_header(const MapView& map, const Meta& meta, const std::vector<ModeSummary>& sums, uint32_t nq,
+                  const ScanLabelErrors& label_errors) {
   const double km = map.counts.road_length_m / 1000.0;
+  if (label_errors.rates.any())
+    std::printf("\nsimulated network errors on the query scans' labels: %s\n", describe(label_errors).c_str());
   std::printf(
       "\nmap: %zu bytes, %u instances, %u triangles, %.0f m of road -> %.2f MB/km; origin %.3f, %.3f, %.3f in '%s'\n",
       map.total_bytes, map.counts.instances, map.counts.triangles, map.counts.road_length_m,
@@ -519,6 +522,19 @@ void print_reliability(const std::vector<ModeSummary>& sums) {
   }
 }
 
+// What the options name: the label set, the decision rule's threshold, the label errors of the query
+// scans (printing its note). False: a usage error, in *error.
+bool resolve_inputs(const EvalOptions& o, LabelSet* labels, float* min_confidence, ScanLabelErrors* errors,
+                    std::string* error) {
+  std::string note;
+  if (!resolve_label_set(o.classes, o.dataset, o.sequence, labels, error) ||
+      !resolve_min_confidence(o, min_confidence, error) ||
+      !resolve_scan_label_errors(o.label_errors, *labels, o.sequence, errors, &note, error))
+    return false;
+  if (!note.empty()) std::fprintf(stderr, "gsf evaluate: note: %s\n", note.c_str());
+  return true;
+}
+
 }  // namespace
 
 int run_evaluation(const EvalOptions& o) {
@@ -537,14 +553,10 @@ int run_evaluation(const EvalOptions& o) {
   LabelSet labels;
   float min_confidence = 0;
   ScanLabelErrors label_errors;
-  std::string note;
-  if (!resolve_label_set(o.classes, o.dataset, o.sequence, &labels, &err) ||
-      !resolve_min_confidence(o, &min_confidence, &err) ||
-      !resolve_scan_label_errors(o.label_errors, labels, o.sequence, &label_errors, &note, &err)) {
+  if (!resolve_inputs(o, &labels, &min_confidence, &label_errors, &err)) {
     std::fprintf(stderr, "gsf evaluate: %s\n", err.c_str());
     return 2;
   }
-  if (!note.empty()) std::fprintf(stderr, "gsf evaluate: note: %s\n", note.c_str());
   auto src = open_source(o.dataset, o.sequence, &s, &labels);
   if (s != Status::Ok || src->size() == 0) {
     std::fprintf(stderr, "gsf evaluate: cannot open query sequence '%s' under '%s': %s\n", o.sequence.c_str(),
@@ -574,9 +586,7 @@ int run_evaluation(const EvalOptions& o) {
       if (const int rc = run_scan_context(o, labels, *src, map, meta, nq, min_confidence, buf.buffer(), &run))
         return rc;
   const std::vector<ModeSummary> sums = summarize_runs(runs, min_confidence);
-  if (label_errors.rates.any())
-    std::printf("\nsimulated network errors on the query scans' labels: %s\n", describe(label_errors).c_str());
-  print_header(map, meta, sums, nq);
+  print_header(map, meta, sums, nq, label_errors);
   print_table(sums, runs);
   if (!sums.empty()) {
     print_calibration(sums);
