@@ -100,6 +100,11 @@ int cmd_simulate(int argc, char** argv) {
        "share 0..1 of the world the map covers: the mapping drive keeps its poses in the western share of its x "
        "extent, so queries beyond are off the map and those at its edge see it partly (default 1)",
        ""},
+      {"stretches",
+       "write sequence 02: N runs of --stretch-scans consecutive scans 0.5-1.5 m apart (10 Hz driving) along query "
+       "lanes, for tracking and several-scan localization (default 0: none)",
+       ""},
+      {"stretch-scans", "scans per stretch (default 20)", ""},
       {"blocks-x", "city blocks along x (overrides the preset)", ""},
       {"blocks-y", "city blocks along y (overrides the preset)", ""},
       {"offset",
@@ -151,6 +156,16 @@ int cmd_simulate(int argc, char** argv) {
     cfg.world.cue_density = static_cast<float>(d);
   }
   if (!parse_sensing(args, &cfg, &err)) return usage_error("simulate", err);
+  if (args.has("stretches")) {
+    if (!args.get_int("stretches", &v, &err) || v < 0 || v > 1000)
+      return usage_error("simulate", "--stretches must be 0..1000");
+    cfg.stretches = static_cast<uint32_t>(v);
+  }
+  if (args.has("stretch-scans")) {
+    if (!args.get_int("stretch-scans", &v, &err) || v < 2 || v > 1000)
+      return usage_error("simulate", "--stretch-scans must be 2..1000");
+    cfg.stretch_scans = static_cast<uint32_t>(v);
+  }
   if (args.has("blocks-x")) {
     if (!args.get_int("blocks-x", &v, &err) || v < 1 || v > 64)
       return usage_error("simulate", "--blocks-x must be 1..64");

@@ -225,6 +225,62 @@ Drive query_drive(const World& w, const SimConfig& c) {
 
 namespace {
 
+// The query lane of segment r at arc length s: position and heading (query_drive's lane rule: reverse
+// segments in the mapping drive's left lane against it, the others on the centre line with it).
+Eigen::Vector3d lane_point(const World& w, const RoadSegment& r, bool reverse, float s) {
+  const float lane_r = r.width > 0 ? r.width / 4 : w.params.road_width / 4;
+  const float len = std::fabs(r.x1 - r.x0) + std::fabs(r.y1 - r.y0);
+  const float dx = (r.x1 - r.x0) / len, dy = (r.y1 - r.y0) / len;
+  const float side = reverse ? lane_r : 0.0f;
+  return Eigen::Vector3d(r.x0 + s * dx - side * dy, r.y0 + s * dy + side * dx,
+                         std::atan2(reverse ? -dy : dy, reverse ? -dx : dx));
+}
+
+// One stretch along segment r: `n` poses 0.5-1.5 m apart in the driving direction, a smooth path (a
+// constant lateral offset within 0.3 m, heading noise 0.5 deg).
+void add_stretch(const World& w, const SimConfig& c, const RoadSegment& r, bool reverse, gsf::Rng& rng, Drive* d) {
+  const float len = std::fabs(r.x1 - r.x0) + std::fabs(r.y1 - r.y0);
+  const float need = 1.5f * float(c.stretch_scans);
+  float s = len > need ? rng.uniform01() * (len - need) : 0.0f;
+  const float offset = 0.3f * (2.0f * rng.uniform01() - 1.0f);
+  const double deg = M_PI / 180.0;
+  for (uint32_t k = 0; k < c.stretch_scans; ++k, s += 0.5f + rng.uniform01()) {
+    const float along = reverse ? len - s : s;  // reverse lanes drive from the segment's end
+    const Eigen::Vector3d p = lane_point(w, r, reverse, std::min(along, len));
+    const double yaw = p.z() + 0.5 * deg * (2 * rng.uniform01() - 1);
+    const float nx = -std::sin(float(p.z())), ny = std::cos(float(p.z()));
+    const float x = float(p.x()) + offset * nx, y = float(p.y()) + offset * ny;
+    d->poses.push_back(make_pose(x, y, c.sensor_height, yaw));
+    d->in_zone.push_back(w.in_zone(x, y));
+    d->near_zone.push_back(w.near_zone(x, y));
+  }
+}
+
+}  // namespace
+
+Drive stretch_drive(const World& w, const SimConfig& c, std::vector<uint32_t>* starts) {
+  Drive d;
+  starts->clear();
+  std::vector<uint32_t> segments;  // query segments with their query_drive direction rule
+  std::vector<bool> reverse;
+  int segment = 0;
+  for (uint32_t i = 0; i < w.roads.size(); ++i) {
+    if (!(w.roads[i].drives & kQueryDrive)) continue;
+    segments.push_back(i);
+    reverse.push_back((segment++ % 2) == 0 || w.roads[i].in_zone);
+  }
+  if (segments.empty() || c.stretch_scans == 0) return d;
+  gsf::Rng rng(w.params.seed ^ 0x5742E7C4E5ULL);
+  for (uint32_t k = 0; k < c.stretches; ++k) {
+    const uint32_t pick = uint32_t((uint64_t(k) * segments.size()) / c.stretches);  // evenly over segments
+    starts->push_back(static_cast<uint32_t>(d.poses.size()));
+    add_stretch(w, c, w.roads[segments[pick]], reverse[pick], rng, &d);
+  }
+  return d;
+}
+
+namespace {
+
 // The labels a segmentation network would write for one scan of drive `sequence`: its errors are drawn
 // from the scan's seed (independent per scan and between the drives), then instance ids are stripped.
 void apply_sensing(const SimConfig& c, int sequence, uint32_t frame, SimScan* scan) {
@@ -240,7 +296,7 @@ void apply_sensing(const SimConfig& c, int sequence, uint32_t frame, SimScan* sc
   if (!c.instance_ids) strip_instance_ids(scan->labels.data(), scan->size());
 }
 
-// Scans one drive and writes it as sequence "00" (sequence 0) or "01" (1) with its poses.
+// Scans one drive and writes it as sequence "00" (sequence 0), "01" (1) or "02" (2) with its poses.
 Status write_drive(const SimConfig& c, const std::string& root, int sequence, const Drive& d, const Raycaster& caster,
                    SimSummary* sum, const SimProgress& progress) {
   gsf::port::SemanticKittiWriter writer;
@@ -248,7 +304,7 @@ Status write_drive(const SimConfig& c, const std::string& root, int sequence, co
   std::vector<uint8_t> lidarseg;
   SimScan scan;
   const LidarParams lidar = drive_lidar(c, sequence);
-  const char* name = sequence == 0 ? "00" : "01";
+  const char* name = sequence == 0 ? "00" : (sequence == 1 ? "01" : "02");
   Status s = c.nuscenes_labels ? nus_writer.open(root, name) : writer.open(root, name);
   if (s != Status::Ok) return s;
   for (uint32_t f = 0; f < d.poses.size(); ++f) {
@@ -264,7 +320,8 @@ Status write_drive(const SimConfig& c, const std::string& root, int sequence, co
     if (s != Status::Ok) return s;
     sum->points += scan.size();
     if (progress)
-      progress(sequence == 0 ? "mapping drive" : "query drive", f + 1, static_cast<uint32_t>(d.poses.size()));
+      progress(sequence == 0 ? "mapping drive" : (sequence == 1 ? "query drive" : "10 Hz stretches"), f + 1,
+               static_cast<uint32_t>(d.poses.size()));
   }
   std::vector<Eigen::Isometry3d> posed = d.poses;  // the scans stay in the sensor frame; only poses move
   for (Eigen::Isometry3d& p : posed)
@@ -312,8 +369,22 @@ void write_flags(std::ostream& meta, const std::vector<bool>& flags) {
 }
 
 // meta.json: the original keys first, then the zone, sensing and per-query near-zone keys added later.
+// meta.json's stretch keys (sequence 02): each stretch's first scan and length, and per scan whether it
+// is in / near the zone.
+void write_stretch_meta(std::ostream& meta, const SimConfig& c, const Drive& stretches,
+                        const std::vector<uint32_t>& starts) {
+  meta << "  \"stretch_sequence\": \"02\",\n  \"stretches\": [";
+  for (size_t i = 0; i < starts.size(); ++i)
+    meta << (i ? ", " : "") << "[" << starts[i] << ", " << c.stretch_scans << "]";
+  meta << "],\n  \"stretch_in_repetitive_zone\": [";
+  write_flags(meta, stretches.in_zone);
+  meta << "],\n  \"stretch_near_zone\": [";
+  write_flags(meta, stretches.near_zone);
+  meta << "],\n";
+}
+
 Status write_meta(const SimConfig& c, const World& world, const Drive& queries, const SimSummary& sum,
-                  const std::string& root) {
+                  const std::string& root, const Drive& stretches, const std::vector<uint32_t>& starts) {
   std::ofstream meta(std::filesystem::path(root) / "meta.json", std::ios::trunc);
   meta << "{\n  \"generator\": \"gsf simulate\",\n  \"seed\": " << c.world.seed << ",\n";
   meta << "  \"world\": {\"blocks_x\": " << c.world.blocks_x << ", \"blocks_y\": " << c.world.blocks_y
@@ -338,6 +409,7 @@ Status write_meta(const SimConfig& c, const World& world, const Drive& queries, 
   meta << "],\n";
   write_zone_meta(meta, c, world, sum);
   write_sensing_meta(meta, c);
+  if (!starts.empty()) write_stretch_meta(meta, c, stretches, starts);
   meta << "  \"query_near_zone\": [";
   write_flags(meta, queries.near_zone);
   meta << "]\n}\n";
@@ -355,14 +427,19 @@ Status run_simulation(const SimConfig& c, const std::string& root, SimSummary* s
   sum.road_length_m = world.road_length();
   Status s = write_drive(c, root, 0, map, Raycaster(world), &sum, progress);
   if (s == Status::Ok) s = write_drive(c, root, 1, queries, Raycaster(later), &sum, progress);
+  std::vector<uint32_t> starts;
+  const Drive stretches = stretch_drive(world, c, &starts);
+  if (s == Status::Ok && !stretches.poses.empty())
+    s = write_drive(c, root, 2, stretches, Raycaster(later), &sum, progress);
   if (s != Status::Ok) return s;
+  sum.stretch_scans = static_cast<uint32_t>(stretches.poses.size());
   sum.map_scans = static_cast<uint32_t>(map.poses.size());
   sum.queries = static_cast<uint32_t>(queries.poses.size());
   for (bool z : queries.in_zone) sum.zone_queries += z ? 1u : 0u;
   for (bool z : queries.near_zone) sum.near_zone_queries += z ? 1u : 0u;
   sum.zone_instances = static_cast<uint32_t>(world.zone_instances.size());
   for (const ZoneInstance& zi : world.zone_instances) sum.cued_instances += zi.cued ? 1u : 0u;
-  s = write_meta(c, world, queries, sum, root);
+  s = write_meta(c, world, queries, sum, root, stretches, starts);
   if (s == Status::Ok && summary) *summary = sum;
   return s;
 }

@@ -42,6 +42,12 @@ struct SimConfig {
   // map_coverage of its x extent (the query drive is unchanged), so queries beyond are off the map and
   // queries at its edge see it partly, as a vehicle does at the edge of its mapped area. 1 = all.
   float map_coverage = 1.0f;
+  // 10 Hz stretches (sequence "02", for tracking and several-scan localization): `stretches` runs of
+  // `stretch_scans` consecutive scans 0.5-1.5 m apart (5-15 m/s at 10 Hz), each along the query lane of
+  // one road segment, segments chosen evenly over the query drive's, in the world after the time gap.
+  // meta.json lists each stretch's first scan and length. 0 = no sequence 02.
+  uint32_t stretches = 0;
+  uint32_t stretch_scans = 20;
   // Sensing: share of points whose written label is confused with a plausible other class (a network's
   // mistakes), and whether labels keep the instance id in their high 16 bits.
   float label_noise = 0.0f;
@@ -82,6 +88,8 @@ struct Drive {
 
 Drive mapping_drive(const World& world, const SimConfig& config);
 Drive query_drive(const World& world, const SimConfig& config);
+// The stretches of SimConfig::stretches (empty when 0); starts[i] is stretch i's first pose.
+Drive stretch_drive(const World& world, const SimConfig& config, std::vector<uint32_t>* starts);
 uint64_t scan_seed(uint64_t seed, int sequence, uint32_t frame);
 
 // The label-error families (object confusion, thin misses, label noise on SemanticKITTI ids) live in
@@ -101,6 +109,7 @@ using SimProgress = std::function<void(const char* stage, uint32_t done, uint32_
 struct SimSummary {
   float road_length_m = 0;
   uint32_t map_scans = 0, queries = 0, zone_queries = 0, near_zone_queries = 0;
+  uint32_t stretch_scans = 0;  // sequence 02 (SimConfig::stretches)
   uint32_t zone_instances = 0, cued_instances = 0;
   uint64_t points = 0;
 };
