@@ -439,8 +439,28 @@ void write_correspondence_svgs(const EvalOptions& o, const MapView& map, const M
   for (const ModeRun* run : {&inst, &gsf}) write_correspondence_svg(o, map, *run, size_t(pick), written);
 }
 
-// The pictures.
-void write_svgs(const EvalOptions& o, const MapView& map, const std::vector<ModeRun>& runs,
+// Each written SVG as a PNG beside it (rsvg-convert, librsvg2-bin); false if any could not be written.
+bool write_pngs(const std::vector<std::string>& svgs) {
+  const std::string rsvg = find_rsvg_convert();
+  if (rsvg.empty()) {
+    std::fprintf(stderr,
+                 "gsf evaluate: --png: rsvg-convert not found on PATH (Debian: apt-get install librsvg2-bin); wrote "
+                 "the SVGs only\n");
+    return false;
+  }
+  bool ok = true;
+  for (const std::string& svg : svgs) {
+    std::string err;
+    if (!svg_to_png(rsvg, svg, png_path_for(svg), &err)) {
+      std::fprintf(stderr, "gsf evaluate: --png: %s\n", err.c_str());
+      ok = false;
+    }
+  }
+  return ok;
+}
+
+// The pictures (and with --png their PNGs); false if a PNG could not be written.
+bool write_svgs(const EvalOptions& o, const MapView& map, const std::vector<ModeRun>& runs,
                 const std::vector<ModeSummary>& sums) {
   std::filesystem::create_directories(o.svg_dir);
   std::vector<std::string> written;
@@ -454,6 +474,7 @@ void write_svgs(const EvalOptions& o, const MapView& map, const std::vector<Mode
   const ModeRun* shown = gsf ? gsf : (runs.empty() ? nullptr : &runs[0]);
   if (shown) write_map_trajectory_svg(o, map, *shown, &written);
   if (gsf && inst) write_correspondence_svgs(o, map, *inst, *gsf, &written);
+  return !o.png || write_pngs(written);
 }
 
 // One localizer mode: its config, workspace and localizer (the modes run interleaved, query by query).
@@ -806,7 +827,7 @@ int run_evaluation(const EvalOptions& o) {
     print_reliability(sums);
   }
   if (!o.json_out.empty()) write_json(o.json_out, o, map, runs, sums, meta, label_errors);
-  if (!o.svg_dir.empty()) write_svgs(o, map, runs, sums);
+  if (!o.svg_dir.empty() && !write_svgs(o, map, runs, sums)) return 1;  // a PNG could not be written
   return 0;
 }
 

@@ -1,11 +1,21 @@
 #include "svg.h"
 
+#include <spawn.h>
+#include <sys/stat.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
 #include <algorithm>
+#include <cerrno>
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
+#include <cstring>
 #include <fstream>
 
 #include "gsf/semantic_classes.h"
+
+extern char** environ;
 
 namespace gsf::cli {
 
@@ -200,6 +210,52 @@ std::string class_colour(int c) {
     case kTrafficSign: return "#ff0000";
     default: return "#888888";
   }
+}
+
+std::string find_rsvg_convert() {
+  const char* path = std::getenv("PATH");
+  std::string dirs = path ? path : "/usr/local/bin:/usr/bin:/bin";
+  size_t start = 0;
+  while (start <= dirs.size()) {
+    const size_t end = std::min(dirs.find(':', start), dirs.size());
+    const std::string dir = end > start ? dirs.substr(start, end - start) : ".";
+    const std::string candidate = dir + "/rsvg-convert";
+    struct stat st;
+    if (stat(candidate.c_str(), &st) == 0 && S_ISREG(st.st_mode) && access(candidate.c_str(), X_OK) == 0)
+      return candidate;
+    start = end + 1;
+  }
+  return "";
+}
+
+bool svg_to_png(const std::string& rsvg_convert, const std::string& svg_path, const std::string& png_path,
+                std::string* error) {
+  std::vector<std::string> args = {rsvg_convert, "--format", "png", "--output", png_path, svg_path};
+  std::vector<char*> argv;
+  for (auto& a : args) argv.push_back(a.data());
+  argv.push_back(nullptr);
+  pid_t pid = 0;
+  const int rc = posix_spawn(&pid, rsvg_convert.c_str(), nullptr, nullptr, argv.data(), environ);
+  if (rc != 0) {
+    *error = "cannot run " + rsvg_convert + ": " + std::strerror(rc);
+    return false;
+  }
+  int status = 0;
+  while (waitpid(pid, &status, 0) < 0)
+    if (errno != EINTR) {
+      *error = std::string("waitpid: ") + std::strerror(errno);
+      return false;
+    }
+  if (!WIFEXITED(status) || WEXITSTATUS(status) != 0) {
+    *error = "rsvg-convert failed on " + svg_path;
+    return false;
+  }
+  return true;
+}
+
+std::string png_path_for(const std::string& svg_path) {
+  const size_t n = svg_path.size();
+  return (n >= 4 && svg_path.compare(n - 4, 4, ".svg") == 0 ? svg_path.substr(0, n - 4) : svg_path) + ".png";
 }
 
 }  // namespace gsf::cli

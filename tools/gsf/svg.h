@@ -1,5 +1,5 @@
 // Dependency-free SVG output for the pictures the tools write (map + trajectory, correspondences, the
-// confidence's reliability diagram, bench_pole_picture).
+// confidence's reliability diagram, bench_pole_picture), and their conversion to PNG.
 #pragma once
 #include <array>
 #include <functional>
@@ -76,5 +76,13 @@ SvgPicture::Box draw_legend(SvgPicture& svg, double x, double y, const std::vect
 
 // A colour per dense semantic class (SemanticKITTI's palette where it has one).
 std::string class_colour(int dense_class);
+
+// PNG output through Debian's librsvg2-bin: the path of `rsvg-convert` on PATH, or "" when it is missing.
+std::string find_rsvg_convert();
+// Runs `rsvg-convert -o png_path svg_path` (no shell). False with *error set on failure.
+bool svg_to_png(const std::string& rsvg_convert, const std::string& svg_path, const std::string& png_path,
+                std::string* error);
+// The PNG next to an SVG: DIR/name.svg -> DIR/name.png.
+std::string png_path_for(const std::string& svg_path);
 
 }  // namespace gsf::cli
