@@ -1,9 +1,12 @@
 // Bird's-eye picture of pole/trunk extraction on one real scan: points coloured by class, extracted
 // poles (red) and trunks (orange) circled; on SemanticKITTI (whose poles/trunks are first relabelled
-// into their hosts, building/vegetation) the true poles/trunks are marked with black crosses.
+// into their hosts, building/vegetation) the true poles/trunks are marked with black crosses. Legend and
+// scale bar included; the SVG's viewBox fits its content (tools/gsf/svg.h). For a PNG:
+// `rsvg-convert -o out.png out.svg` (Debian's librsvg2-bin).
 //   bench_pole_picture nuscenes <dataset_root> <scene> <frame_index> <out.svg> [half_width_m]
 //   bench_pole_picture kitti <dataset_root> <seq> <frame_index> <out.svg> [half_width_m]
 // Prints the instances (position, kind, height, tilt, thickness, score) to stdout.
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
@@ -17,6 +20,7 @@
 #include "gsf/detail/voxel_layer.h"
 #include "gsf/port/nuscenes.h"
 #include "gsf/port/semantic_kitti.h"
+#include "gsf/svg.h"
 
 using namespace gsf;
 
@@ -46,6 +50,9 @@ const char* colour(int c) {
     default: return "#dddddd";
   }
 }
+
+const char* const kPoleRing = "#ff1010";
+const char* const kTrunkRing = "#ff9900";
 
 }  // namespace
 
@@ -116,17 +123,15 @@ int main(int argc, char** argv) {
     gt_count = gt.size();
   }
 
-  // SVG: x right, y up (sensor frame), `half` metres around the sensor, 10 px per metre.
-  const double px_per_m = 10.0, size = 2 * half * px_per_m;
-  auto X = [&](double x) { return (x + half) * px_per_m; };
-  auto Y = [&](double y) { return (half - y) * px_per_m; };
-  std::string svg;
-  char tmp[512];
-  std::snprintf(tmp, sizeof(tmp),
-                "<svg xmlns=\"http://www.w3.org/2000/svg\" width=\"%.0f\" height=\"%.0f\" viewBox=\"0 0 %.0f %.0f\">\n"
-                "<rect width=\"100%%\" height=\"100%%\" fill=\"white\"/>\n",
-                size, size + 60, size, size + 60);
-  svg += tmp;
+  // The picture: x right, y up (sensor frame, bird's-eye), `half` metres around the sensor, 10 px per
+  // metre; its viewBox fits what is drawn (svg.h), legend and scale bar included.
+  cli::MapProjection proj;
+  proj.x0 = -half;
+  proj.y0 = half;
+  proj.scale = 10.0;
+  const double size = 2 * half * proj.scale;
+  cli::SvgPicture svg;
+  svg.rect(0, 0, size, size, "#ffffff", 1.0, "#bbbbbb");
   // Ground first, then everything else, so structures sit on top; one dot per 0.2 m cell and class
   // (keeps the file small without changing the picture).
   std::vector<std::vector<uint32_t>> drawn(static_cast<size_t>(size / 2) + 1);
@@ -138,6 +143,7 @@ int main(int argc, char** argv) {
     row.push_back(key);
     return true;
   };
+  std::vector<uint32_t> shown(kNumClasses, 0);
   for (int pass = 0; pass < 2; ++pass)
     for (uint32_t i = 0; i < b.count; ++i) {
       const float* p = b.points + 4 * size_t(i);
@@ -145,19 +151,18 @@ int main(int argc, char** argv) {
       const int c = class_from_kitti(truth[i]);
       if (c < 0) continue;
       const bool flat = c == kRoad || c == kParking || c == kSidewalk || c == kOtherGround || c == kTerrain;
-      if (flat != (pass == 0) || !first_in_cell(X(p[0]), Y(p[1]), c)) continue;
-      std::snprintf(tmp, sizeof(tmp), "<rect x=\"%.1f\" y=\"%.1f\" width=\"1.6\" height=\"1.6\" fill=\"%s\"/>\n",
-                    X(p[0]) - 0.8, Y(p[1]) - 0.8, colour(c));
-      svg += tmp;
+      if (flat != (pass == 0) || !first_in_cell(proj.px(p[0]), proj.py(p[1]), c)) continue;
+      ++shown[c];
+      svg.rect(proj.px(p[0]) - 0.8, proj.py(p[1]) - 0.8, 1.6, 1.6, colour(c));
     }
+  uint32_t true_shown = 0, extracted_shown[2] = {0, 0};
   for (uint32_t k = 0; k < gt_count; ++k) {
     const Instance& g = gt.instance(k);
     if (std::fabs(g.centroid[0]) > half || std::fabs(g.centroid[1]) > half) continue;
-    const double x = X(g.centroid[0]), y = Y(g.centroid[1]);
-    std::snprintf(tmp, sizeof(tmp),
-                  "<path d=\"M%.1f %.1fL%.1f %.1fM%.1f %.1fL%.1f %.1f\" stroke=\"black\" stroke-width=\"1.5\"/>\n",
-                  x - 5, y - 5, x + 5, y + 5, x - 5, y + 5, x + 5, y - 5);
-    svg += tmp;
+    const double x = proj.px(g.centroid[0]), y = proj.py(g.centroid[1]);
+    svg.line(x - 5, y - 5, x + 5, y + 5, "#000000", 1.5);
+    svg.line(x - 5, y + 5, x + 5, y - 5, "#000000", 1.5);
+    ++true_shown;
   }
   for (uint32_t k = 0; k < poles.size(); ++k) {
     const Instance& in = poles.instance(k);
@@ -166,25 +171,47 @@ int main(int argc, char** argv) {
                 in.label == kPole ? "pole " : "trunk", in.centroid[0], in.centroid[1], in.centroid[2], info.height,
                 info.tilt_deg, info.thickness, info.score, in.point_count);
     if (std::fabs(in.centroid[0]) > half || std::fabs(in.centroid[1]) > half) continue;  // outside the picture
-    std::snprintf(tmp, sizeof(tmp),
-                  "<circle cx=\"%.1f\" cy=\"%.1f\" r=\"9\" fill=\"none\" stroke=\"%s\" stroke-width=\"2.5\"/>\n",
-                  X(in.centroid[0]), Y(in.centroid[1]), in.label == kPole ? "#ff1010" : "#ff9900");
-    svg += tmp;
+    ++extracted_shown[in.label == kPole ? 0 : 1];
+    svg.circle(proj.px(in.centroid[0]), proj.py(in.centroid[1]), 9, "none", 1.0,
+               in.label == kPole ? kPoleRing : kTrunkRing, 2.5);
   }
-  std::snprintf(tmp, sizeof(tmp),
-                "<text x=\"10\" y=\"%.0f\" font-family=\"sans-serif\" font-size=\"15\">%s %s frame %u: %u extracted "
-                "(red circle: pole, orange: trunk)%s</text>\n"
-                "<text x=\"10\" y=\"%.0f\" font-family=\"sans-serif\" font-size=\"13\" fill=\"#444\">%.0f m square "
-                "around the sensor. Blue-grey: %s; green: vegetation; blue: vehicles.</text>\n",
-                size + 22, kitti ? "SemanticKITTI" : "nuScenes-lidarseg", argv[3], src->frame_id(index), poles.size(),
-                kitti ? "; black x: true pole/trunk" : "", size + 45, 2 * half,
-                kitti ? "building (true poles in black)" : "static.manmade");
-  svg += tmp;
-  svg += "</svg>\n";
-  FILE* f = std::fopen(argv[5], "w");
-  if (!f) return 1;
-  std::fwrite(svg.data(), 1, svg.size(), f);
-  std::fclose(f);
+  // The sensor, facing +x.
+  svg.polygon({{proj.px(1.5), proj.py(0)}, {proj.px(-1), proj.py(1)}, {proj.px(-1), proj.py(-1)}}, "#000000");
+
+  char title[200], sub[300];
+  std::snprintf(title, sizeof(title), "%s %s frame %u: %u poles/trunks extracted from geometry (%u in the picture)",
+                kitti ? "SemanticKITTI" : "nuScenes-lidarseg", argv[3], src->frame_id(index), poles.size(),
+                extracted_shown[0] + extracted_shown[1]);
+  std::snprintf(sub, sizeof(sub), "bird's-eye, %.0f m square around the sensor, points by label; %s", 2 * half,
+                kitti
+                    ? "the extraction saw pole points as building and trunk points as vegetation, as on nuScenes"
+                    : "nuScenes has no pole or trunk class: they are inside static.manmade (building) and vegetation");
+  svg.text(0, -32, title, 16, "start", 0, "#222", true);
+  svg.text(0, -12, sub, 12, "start", 0, "#444");
+  std::vector<cli::LegendEntry> classes;  // one row per colour, naming its classes in the picture
+  std::vector<std::string> colours;
+  for (int c = 0; c < kNumClasses; ++c) {
+    if (shown[c] == 0) continue;
+    const auto at = std::find(colours.begin(), colours.end(), colour(c));
+    if (at != colours.end()) {
+      classes[size_t(at - colours.begin())].label += std::string(", ") + class_name(c);
+      continue;
+    }
+    colours.push_back(colour(c));
+    classes.push_back(cli::legend_square(colour(c), 7, class_name(c)));
+  }
+  const double y = cli::draw_legend(svg, size + 16, 0, classes, "points by class").max_y;
+  std::vector<cli::LegendEntry> marks = {
+      cli::legend_ring(kPoleRing, 7, "extracted pole (" + std::to_string(extracted_shown[0]) + ")", 2.5),
+      cli::legend_ring(kTrunkRing, 7, "extracted trunk (" + std::to_string(extracted_shown[1]) + ")", 2.5),
+      {[](cli::SvgPicture& s, double cx, double cy) {
+         s.polygon({{cx + 7, cy}, {cx - 5, cy - 6}, {cx - 5, cy + 6}}, "#000000");
+       },
+       "sensor (x forward)"}};
+  if (kitti) marks.push_back(cli::legend_cross("#000000", 5, "true pole/trunk (" + std::to_string(true_shown) + ")"));
+  cli::draw_legend(svg, size + 16, y + 12, marks, "instances");
+  cli::draw_scale_bar(svg, 0, size + 14, proj.scale);
+  if (!svg.save(argv[5])) return 1;
   std::printf(
       "%u instances (%u segments, %u wide, %u crowded, %u chains, %u short, %u tilted, %u thick); %u true; wrote %s\n",
       poles.size(), ps.segments, ps.segments_wide, ps.segments_crowded, ps.chains, ps.rejected_short, ps.rejected_tilt,

@@ -4,7 +4,8 @@ set -euo pipefail
 SUDO=""
 if [ "$(id -u)" -ne 0 ]; then SUDO="sudo"; fi
 pkgs=(cmake ninja-build g++ libeigen3-dev catch2 g++-aarch64-linux-gnu qemu-user
-      clang-14 libclang-rt-14-dev clang-format-14 valgrind python3)
+      clang-14 libclang-rt-14-dev clang-format-14 valgrind python3
+      librsvg2-bin)   # librsvg2-bin: rsvg-convert, for gsf evaluate --png and the docs' PNG pictures
 missing=()
 for p in "${pkgs[@]}"; do
   dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")

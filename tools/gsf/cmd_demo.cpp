@@ -1,4 +1,4 @@
-// gsf demo [--out DIR] [--preset demo|tiny]: simulate -> build map -> evaluate every mode -> table + SVGs.
+// gsf demo [--out DIR] [--preset demo|tiny] [--png]: simulate -> build map -> evaluate every mode -> table + SVGs.
 #include <chrono>
 #include <cstdio>
 #include <filesystem>
@@ -15,6 +15,8 @@ int cmd_demo(int argc, char** argv) {
   const std::vector<OptionSpec> specs = {
       {"out", "output directory (dataset, map, results.json, SVGs)", "out/demo"},
       {"preset", "demo (a few km of road) or tiny", "demo"},
+      {"png", "also each picture as PNG (runs rsvg-convert, Debian package librsvg2-bin; exit 1 if it cannot)", "",
+       true},
       {"quiet", "no progress on stderr", "", true},
   };
   if (wants_help(argc, argv)) {
@@ -84,11 +86,13 @@ int cmd_demo(int argc, char** argv) {
   o.modes = {"instance", "gsf", "gsf+refine", "scan-context"};
   o.json_out = out + "/results.json";
   o.svg_dir = out;
+  o.png = args.flag("png");
   o.progress = !quiet;
   const int rc = run_evaluation(o);
+  const char* pic = o.png ? "{svg,png}" : "svg";
   std::printf(
-      "\nwrote %s/results.json, %s/map_trajectory.svg, %s/correspondences_*.svg, %s/reliability.svg  [total %.0f s]\n",
-      out.c_str(), out.c_str(), out.c_str(), out.c_str(), elapsed());
+      "\nwrote %s/results.json, %s/map_trajectory.%s, %s/correspondences_*.%s, %s/reliability.%s  [total %.0f s]\n",
+      out.c_str(), out.c_str(), pic, out.c_str(), pic, out.c_str(), pic, elapsed());
   return rc;
 }
 

@@ -1,5 +1,5 @@
 // gsf evaluate --map MAP --dataset DIR --sequence 01 --json OUT.json [--mode gsf|instance|scan-context|all]
-// [--min-confidence P] [--svg DIR] [--label-noise P] [--object-confusion P] [--thin-miss P] [--noise-seed N]
+// [--min-confidence P] [--svg DIR [--png]] [--label-noise P] [--object-confusion P] [--thin-miss P] [--noise-seed N]
 #include <cstdio>
 #include <sstream>
 
@@ -7,6 +7,7 @@
 #include "commands.h"
 #include "label_error_options.h"
 #include "run_evaluation.h"
+#include "svg.h"
 
 namespace gsf::cli {
 
@@ -35,6 +36,10 @@ int cmd_evaluate(int argc, char** argv) {
       {"mode", "comma list of instance (GSF off, Outram), gsf, gsf+refine, scan-context, or all", "all"},
       {"json", "write per-mode summaries and per-query results here", ""},
       {"svg", "directory for the pictures (map + trajectory, correspondences, reliability diagram)", ""},
+      {"png",
+       "with --svg: also each picture as PNG beside it (runs rsvg-convert, Debian package librsvg2-bin; exit 1 if "
+       "it cannot)",
+       "", true},
       {"logits", "synthetic or none (see build-map)", "synthetic"},
       {"min-confidence",
        "decision rule: answer when status Ok and confidence >= VALUE (0..1; sets confidence.min_probability; default: "
@@ -66,6 +71,12 @@ int cmd_evaluate(int argc, char** argv) {
   o.map_sequence = args.get("map-sequence");
   o.json_out = args.get("json");
   o.svg_dir = args.get("svg");
+  o.png = args.flag("png");
+  if (o.png && o.svg_dir.empty()) return usage_error("evaluate", "--png needs --svg DIR");
+  if (o.png && find_rsvg_convert().empty())
+    std::fprintf(stderr,
+                 "gsf evaluate: --png: rsvg-convert not found on PATH (Debian: apt-get install librsvg2-bin); the "
+                 "SVGs will be written, the PNGs not\n");
   o.progress = !args.flag("quiet");
   o.overrides = args.get("set");
   o.classes = args.get("classes");

@@ -86,26 +86,26 @@ void draw_curves(SvgPicture& svg, const std::vector<ModeSummary>& modes) {
   }
 }
 
-void draw_legend(SvgPicture& svg, const std::vector<ModeSummary>& modes) {
-  const double x = kLeft + kSide + 24;
-  double y = kTop + 10;
-  for (size_t m = 0; m < modes.size(); ++m, y += 22) {
+void draw_mode_legend(SvgPicture& svg, const std::vector<ModeSummary>& modes) {
+  std::vector<LegendEntry> rows;
+  for (size_t m = 0; m < modes.size(); ++m) {
     const Calibration& c = modes[m].calibration;
-    svg.line(x, y - 4, x + 22, y - 4, colour(m), 2);
-    svg.circle(x + 11, y - 4, 4, colour(m));
     char label[160];
     std::snprintf(label, sizeof(label), "%s: ECE %.1f%%, Brier %.3f, n=%u", modes[m].mode.c_str(), 100 * c.ece, c.brier,
                   c.queries);
-    svg.text(x + 30, y, label, 12);
+    const std::string col = colour(m);
+    rows.push_back({[col](SvgPicture& s, double cx, double cy) {
+                      s.line(cx - 11, cy, cx + 11, cy, col, 2);
+                      s.circle(cx, cy, 4, col);
+                    },
+                    label});
   }
-  svg.line(x, y - 4, x + 22, y - 4, "#888888", 1.2, "5 4");
-  svg.text(x + 30, y, "perfect calibration", 12);
-  y += 22;
-  svg.line(x + 11, y - 12, x + 11, y + 4, "#cc3311", 1.4, "3 3");
-  svg.text(x + 30, y, "decision rule threshold", 12);
-  y += 22;
-  svg.rect(x + 6, y - 12, 10, 12, "#888888", 0.85);
-  svg.text(x + 30, y, "bars: queries per bin, one per mode", 12);
+  rows.push_back(legend_line("#888888", 1.2, "perfect calibration", "5 4"));
+  rows.push_back({[](SvgPicture& s, double cx, double cy) { s.line(cx, cy - 8, cx, cy + 8, "#cc3311", 1.4, "3 3"); },
+                  "decision rule threshold"});
+  rows.push_back({[](SvgPicture& s, double cx, double cy) { s.rect(cx - 5, cy - 6, 10, 12, "#888888", 0.85); },
+                  "bars: queries per bin, one per mode"});
+  draw_legend(svg, kLeft + kSide + 24, kTop, rows, "modes");
 }
 
 }  // namespace
@@ -116,7 +116,7 @@ bool save_reliability_svg(const std::string& path, const std::vector<ModeSummary
   if (!modes.empty()) draw_counts(svg, modes);
   draw_threshold(svg, min_confidence);
   draw_curves(svg, modes);
-  draw_legend(svg, modes);
+  draw_mode_legend(svg, modes);
   return svg.save(path);
 }
 

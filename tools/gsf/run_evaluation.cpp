@@ -6,6 +6,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <functional>
 #include <memory>
 
 #include "baselines/scan_context.h"
@@ -14,6 +15,7 @@
 #include "gsf/localizer.h"
 #include "gsf/map_format.h"
 #include "gsf/port/clock.h"
+#include "gsf/semantic_classes.h"
 #include "json_writer.h"
 #include "reliability_svg.h"
 #include "result_json.h"
@@ -24,10 +26,17 @@ namespace {
 
 double ms(uint64_t ns) { return double(ns) / 1e6; }
 
+// A query instance for the correspondence picture: centroid in the scan frame and dense class.
+struct PictureInstance {
+  float xyz[3];
+  uint8_t label;
+};
+
 struct ModeRun {
   std::string mode;
   std::vector<QueryRecord> records;
   std::vector<std::vector<Localizer::Correspondence>> corr;  // per query (for the figure)
+  std::vector<std::vector<PictureInstance>> instances;       // per query of a localizer mode (for the figure)
   uint64_t workspace_bytes = 0;
 };
 
@@ -174,34 +183,250 @@ void write_json(const std::string& path, const EvalOptions& o, const MapView& ma
 }
 
 // The reliability diagram of the localizer modes (Scan Context's confidence is only a stand-in).
-void write_reliability_svg(const EvalOptions& o, const std::vector<ModeSummary>& sums) {
+void write_reliability_svg(const EvalOptions& o, const std::vector<ModeSummary>& sums,
+                           std::vector<std::string>* written) {
   std::vector<ModeSummary> shown;
   for (const ModeSummary& s : sums)
     if (s.mode != "scan-context") shown.push_back(s);
-  if (!shown.empty()) save_reliability_svg(o.svg_dir + "/reliability.svg", shown, shown[0].min_confidence);
+  const std::string path = o.svg_dir + "/reliability.svg";
+  if (!shown.empty() && save_reliability_svg(path, shown, shown[0].min_confidence)) written->push_back(path);
 }
 
-// Map instances by class + the shown mode's query trajectory coloured by success.
-void write_map_trajectory_svg(const EvalOptions& o, const MapView& map, const ModeRun& shown) {
-  const float* lo = map.counts.bounds_min;
-  const float* hi = map.counts.bounds_max;
-  SvgCanvas c(lo[0] - 20, lo[1] - 20, hi[0] + 20, hi[1] + 20, 1400);
-  for (uint32_t i = 0; i < map.counts.instances; ++i)
-    c.circle(map.instances[i].centroid[0], map.instances[i].centroid[1], 1.6, class_colour(map.instances[i].label),
-             0.8);
-  for (const auto& r : shown.records) {
-    const auto t = r.truth_local.translation();  // map-local, like the map's instances
-    c.circle(t.x(), t.y(), 5, r.success ? "#1a9850" : (r.has_pose ? "#d73027" : "#999999"), 0.9);
+// Pictures' colours for a query's outcome.
+const char* const kRight = "#1a9850";
+const char* const kWrong = "#d73027";
+const char* const kNoPose = "#999999";
+constexpr double kCliqueWidth = 4.0;
+
+// A bounding box in metres.
+struct WorldBox {
+  double min_x = 1e300, min_y = 1e300, max_x = -1e300, max_y = -1e300;
+  void add(double x, double y) {
+    min_x = std::min(min_x, x);
+    max_x = std::max(max_x, x);
+    min_y = std::min(min_y, y);
+    max_y = std::max(max_y, y);
   }
-  c.text_px(20, 16,
-            "map instances by class; queries (" + shown.mode + "): green = success, red = wrong pose, grey = no pose",
-            13);
-  c.save(o.svg_dir + "/map_trajectory.svg");
+  bool contains(double x, double y) const { return x >= min_x && x <= max_x && y >= min_y && y <= max_y; }
+};
+
+// Legend rows for the classes of `counts` (per dense class), each drawn by `swatch_of` in its colour.
+std::vector<LegendEntry> class_legend(const std::vector<uint32_t>& counts,
+                                      const std::function<LegendEntry(const std::string&, const std::string&)>& row) {
+  std::vector<LegendEntry> rows;
+  for (int c = 0; c < kNumClasses; ++c)
+    if (counts[c] > 0)
+      rows.push_back(row(class_colour(c), std::string(class_name(c)) + " (" + std::to_string(counts[c]) + ")"));
+  return rows;
 }
 
-// Correspondences before/after the GSF filter for one repetitive-zone query (paper Fig. 3): one where GSF
-// succeeds and instance-only fails if there is one.
-void write_correspondence_svgs(const EvalOptions& o, const MapView& map, const ModeRun& inst, const ModeRun& gsf) {
+// Two legends beside a map of w x h pixels: to the right of it, stacked, or under it side by side (below
+// the scale bar) when the map is much wider than tall.
+void draw_legends(SvgPicture& svg, double w, double h, const std::vector<LegendEntry>& first,
+                  const std::string& first_title, const std::vector<LegendEntry>& second,
+                  const std::string& second_title) {
+  if (w > 2 * h) {
+    const SvgPicture::Box a = draw_legend(svg, 0, h + 46, first, first_title);
+    draw_legend(svg, a.max_x + 16, h + 46, second, second_title);
+  } else {
+    const SvgPicture::Box a = draw_legend(svg, w + 16, 0, first, first_title);
+    draw_legend(svg, w + 16, a.max_y + 12, second, second_title);
+  }
+}
+
+// The title (bold) and a subtitle above a picture whose content starts at y = 0.
+void draw_title(SvgPicture& svg, const std::string& title, const std::string& subtitle) {
+  svg.text(0, -32, title, 16, "start", 0, "#222", true);
+  svg.text(0, -12, subtitle, 12, "start", 0, "#444");
+}
+
+// Map instances by class, and each query of the shown mode at its true position coloured by its outcome
+// (filled: answered under the decision rule, ring: declined), a wrong pose joined to where it was put.
+void write_map_trajectory_svg(const EvalOptions& o, const MapView& map, const ModeRun& shown,
+                              std::vector<std::string>* written) {
+  WorldBox box;
+  for (uint32_t i = 0; i < map.counts.instances; ++i)
+    box.add(map.instances[i].centroid[0], map.instances[i].centroid[1]);
+  std::vector<Eigen::Vector3d> estimate(shown.records.size());
+  for (size_t q = 0; q < shown.records.size(); ++q) {
+    const QueryRecord& r = shown.records[q];
+    box.add(r.truth_local.translation().x(), r.truth_local.translation().y());
+    estimate[q] = to_map_local(map.georef, r.estimate).translation();  // map-local, like the map's instances
+    if (r.has_pose) box.add(estimate[q].x(), estimate[q].y());
+  }
+  if (box.min_x > box.max_x) return;
+  const MapProjection p = fit_projection(box.min_x - 15, box.min_y - 15, box.max_x + 15, box.max_y + 15, 1400, 1100);
+  const double w = p.px(box.max_x + 15), h = p.py(box.min_y - 15);
+  SvgPicture svg;
+  svg.rect(0, 0, w, h, "#fcfcfc", 1.0, "#bbbbbb");
+  std::vector<uint32_t> classes(kNumClasses, 0);
+  for (uint32_t i = 0; i < map.counts.instances; ++i) {
+    const auto& m = map.instances[i];
+    if (m.label < kNumClasses) ++classes[m.label];
+    svg.circle(p.px(m.centroid[0]), p.py(m.centroid[1]), 2.2, class_colour(m.label), 0.85);
+  }
+  uint32_t count[2][3] = {};                           // [answered][right, wrong, no pose]
+  for (size_t q = 0; q < shown.records.size(); ++q) {  // wrong poses first, under the markers
+    const QueryRecord& r = shown.records[q];
+    if (r.has_pose && !r.success)
+      svg.line(p.px(r.truth_local.translation().x()), p.py(r.truth_local.translation().y()), p.px(estimate[q].x()),
+               p.py(estimate[q].y()), kWrong, 1.2, "4 3", 0.8);
+  }
+  for (const QueryRecord& r : shown.records) {
+    const std::string colour = r.success ? kRight : r.has_pose ? kWrong : kNoPose;
+    ++count[r.answered][r.success ? 0 : r.has_pose ? 1 : 2];
+    const double x = p.px(r.truth_local.translation().x()), y = p.py(r.truth_local.translation().y());
+    if (r.answered) svg.circle(x, y, 4.5, colour, 0.95, "#ffffff", 0.8);
+    else svg.circle(x, y, 4, "#ffffff", 1.0, colour, 2);
+  }
+  char sub[300];
+  std::snprintf(
+      sub, sizeof(sub),
+      "%zu queries of mode %s at their true positions: %u right (t < 5 m, r < 10 deg), %u wrong, %u without a "
+      "pose; %u answered (confident); %u in the repetitive zone",
+      shown.records.size(), shown.mode.c_str(), count[0][0] + count[1][0], count[0][1] + count[1][1], count[0][2],
+      count[1][0] + count[1][1],
+      static_cast<unsigned>(
+          std::count_if(shown.records.begin(), shown.records.end(), [](const QueryRecord& r) { return r.in_zone; })));
+  draw_title(svg, "Map and query drive (bird's-eye, north up)", sub);
+  // The outcomes that occur, with their counts (filled: answered, ring: declined).
+  std::vector<LegendEntry> outcomes;
+  const char* const names[3] = {"right pose", "wrong pose", "no pose"};
+  const char* const colours[3] = {kRight, kWrong, kNoPose};
+  for (int k = 0; k < 3; ++k)
+    for (int a = 1; a >= 0; --a) {
+      if (count[a][k] == 0) continue;
+      const std::string c = colours[k];
+      outcomes.push_back({[c, a](SvgPicture& s, double cx, double cy) {
+                            if (a) s.circle(cx, cy, 4.5, c, 0.95, "#ffffff", 0.8);
+                            else s.circle(cx, cy, 4, "#ffffff", 1.0, c, 2);
+                          },
+                          std::string(names[k]) +
+                              (k == 2 ? ""
+                               : a    ? ", answered"
+                                      : ", declined (not confident)") +
+                              " (" + std::to_string(count[a][k]) + ")"});
+    }
+  if (count[0][1] + count[1][1] > 0)
+    outcomes.push_back(legend_line(kWrong, 1.2, "wrong pose: to where it was put", "4 3", 0.8));
+  draw_legends(svg, w, h,
+               class_legend(classes, [](const std::string& c,
+                                        const std::string& label) { return legend_dot(c, 3, label, 0.85); }),
+               "map instances by class", outcomes, "queries (" + shown.mode + ")");
+  draw_scale_bar(svg, 0, h + 14, p.scale);
+  const std::string path = o.svg_dir + "/map_trajectory.svg";
+  if (svg.save(path)) written->push_back(path);
+}
+
+// One query's correspondences in one mode: its instances placed at the mode's estimated pose (the true
+// pose when it has none) over the map's instances, each correspondence a line from the placed query
+// instance to its map instance, green when the ground truth agrees (the pair is within 2 m under the true
+// pose), red when not, thick when in the clique. True pairs under a right pose are short green lines.
+void write_correspondence_svg(const EvalOptions& o, const MapView& map, const ModeRun& run, size_t q,
+                              std::vector<std::string>* written) {
+  const QueryRecord& r = run.records[q];
+  const std::vector<Localizer::Correspondence>& corr = run.corr[q];
+  const std::vector<PictureInstance> none;
+  const std::vector<PictureInstance>& inst = q < run.instances.size() ? run.instances[q] : none;
+  const Eigen::Isometry3d place = r.has_pose ? r.result.map_T_scan : r.truth_local;
+  auto placed = [&](const float* xyz) { return place * Eigen::Vector3d(xyz[0], xyz[1], xyz[2]); };
+  WorldBox box;
+  box.add(place.translation().x(), place.translation().y());
+  box.add(r.truth_local.translation().x(), r.truth_local.translation().y());
+  for (const auto& i : inst) box.add(placed(i.xyz).x(), placed(i.xyz).y());
+  uint32_t n_true = 0, n_clique = 0, clique_true = 0;
+  std::vector<bool> truthful(corr.size());
+  for (size_t k = 0; k < corr.size(); ++k) {
+    const float* m = map.instances[corr[k].map_instance].centroid;
+    const Eigen::Vector3d qt =
+        r.truth_local * Eigen::Vector3d(corr[k].query_xyz[0], corr[k].query_xyz[1], corr[k].query_xyz[2]);
+    truthful[k] = (qt - Eigen::Vector3d(m[0], m[1], m[2])).norm() < 2.0;
+    n_true += truthful[k];
+    n_clique += corr[k].in_clique;
+    clique_true += corr[k].in_clique && truthful[k];
+    box.add(m[0], m[1]);
+    box.add(placed(corr[k].query_xyz).x(), placed(corr[k].query_xyz).y());
+  }
+  box.min_x -= 12, box.min_y -= 12, box.max_x += 12, box.max_y += 12;
+  const MapProjection p = fit_projection(box.min_x, box.min_y, box.max_x, box.max_y, 1400, 850);
+  const double w = p.px(box.max_x), h = p.py(box.min_y);
+  SvgPicture svg;
+  svg.rect(0, 0, w, h, "#fcfcfc", 1.0, "#bbbbbb");
+  std::vector<uint32_t> classes(kNumClasses, 0);
+  for (uint32_t i = 0; i < map.counts.instances; ++i) {
+    const auto& m = map.instances[i];
+    if (!box.contains(m.centroid[0], m.centroid[1])) continue;
+    if (m.label < kNumClasses) ++classes[m.label];
+    svg.circle(p.px(m.centroid[0]), p.py(m.centroid[1]), 3.5, class_colour(m.label), 0.5);
+  }
+  for (const auto& i : inst) {
+    const Eigen::Vector3d v = placed(i.xyz);
+    if (i.label < kNumClasses) ++classes[i.label];
+    svg.circle(p.px(v.x()), p.py(v.y()), 6, "none", 1.0, class_colour(i.label), 1.8);
+  }
+  // The estimated pose (or the true one the instances are placed at): a dot with the heading.
+  const Eigen::Vector3d o0 = place.translation(), o1 = place * Eigen::Vector3d(8, 0, 0);
+  svg.line(p.px(o0.x()), p.py(o0.y()), p.px(o1.x()), p.py(o1.y()), "#000000", 2.5);
+  svg.circle(p.px(o0.x()), p.py(o0.y()), 5.5, "#000000");
+  const Eigen::Vector3d t = r.truth_local.translation();
+  svg.line(p.px(t.x()) - 8, p.py(t.y()) - 8, p.px(t.x()) + 8, p.py(t.y()) + 8, kRight, 2.5);
+  svg.line(p.px(t.x()) - 8, p.py(t.y()) + 8, p.px(t.x()) + 8, p.py(t.y()) - 8, kRight, 2.5);
+  // False pairs outside the clique first (thin, faint: a lattice has hundreds), then true ones, then the
+  // clique's (thick). Round caps: a true pair under a right pose is a line of a metre or less, a green
+  // dash inside its query ring.
+  for (int pass = 0; pass < 3; ++pass)
+    for (size_t k = 0; k < corr.size(); ++k) {
+      const int layer = corr[k].in_clique ? 2 : truthful[k] ? 1 : 0;
+      if (layer != pass) continue;
+      const Eigen::Vector3d a = placed(corr[k].query_xyz);
+      const float* m = map.instances[corr[k].map_instance].centroid;
+      svg.line(p.px(a.x()), p.py(a.y()), p.px(m[0]), p.py(m[1]), truthful[k] ? kRight : kWrong,
+               layer == 2   ? kCliqueWidth
+               : layer == 1 ? 2.0
+                            : 0.7,
+               "", layer == 0 ? 0.4 : 0.95, true);
+    }
+  char title[200], sub[300];
+  std::snprintf(title, sizeof(title), "Correspondences of query frame %u, mode %s: the query's instances over the map",
+                r.frame, run.mode.c_str());
+  char outcome[120];
+  if (r.has_pose)
+    std::snprintf(outcome, sizeof(outcome), "%s pose (%.2f m, %.2f deg off): instances placed at the estimated pose",
+                  r.success ? "right" : "wrong", r.error.translation_m, r.error.rotation_deg);
+  else std::snprintf(outcome, sizeof(outcome), "no pose: instances placed at the true pose");
+  std::snprintf(sub, sizeof(sub), "%zu correspondences, %u true and %zu false; clique of %u, %u of them true; %s%s",
+                corr.size(), n_true, corr.size() - n_true, n_clique, clique_true, outcome,
+                r.in_zone ? "; in the repetitive zone" : "");
+  draw_title(svg, title, sub);
+  draw_legends(svg, w, h,
+               class_legend(classes,
+                            [](const std::string& c, const std::string& label) {
+                              return LegendEntry{[c](SvgPicture& s, double cx, double cy) {
+                                                   s.circle(cx - 6, cy, 3.5, c, 0.5);
+                                                   s.circle(cx + 6, cy, 5, "none", 1.0, c, 1.8);
+                                                 },
+                                                 label};
+                            }),
+               "classes: map instance (dot), query (ring)",
+               {legend_line(kRight, 2.0, "true: the pair is < 2 m apart under the true pose", "", 0.95),
+                legend_line(kWrong, 0.7, "false (thin, faint outside the clique)", "", 0.6),
+                legend_line(kRight, kCliqueWidth, "thick: in the clique (green true, red false)", "", 0.95),
+                {[](SvgPicture& s, double cx, double cy) {
+                   s.line(cx, cy, cx + 10, cy, "#000000", 2.5);
+                   s.circle(cx - 2, cy, 5.5, "#000000");
+                 },
+                 r.has_pose ? "estimated pose and heading" : "true pose (no estimate)"},
+                legend_cross(kRight, 7, "true pose", 2.5)},
+               "correspondences");
+  draw_scale_bar(svg, 0, h + 14, p.scale);
+  const std::string path = o.svg_dir + "/correspondences_" + run.mode + ".svg";
+  if (svg.save(path)) written->push_back(path);
+}
+
+// Correspondences of instance-only and GSF for one repetitive-zone query (paper Fig. 3): one where GSF
+// succeeds and instance-only fails if there is one, else the first zone query.
+void write_correspondence_svgs(const EvalOptions& o, const MapView& map, const ModeRun& inst, const ModeRun& gsf,
+                               std::vector<std::string>* written) {
   int pick = -1;
   for (size_t q = 0; q < gsf.records.size(); ++q)
     if (gsf.records[q].in_zone && gsf.records[q].success && !inst.records[q].success) {
@@ -211,38 +436,35 @@ void write_correspondence_svgs(const EvalOptions& o, const MapView& map, const M
   for (size_t q = 0; q < gsf.records.size() && pick < 0; ++q)
     if (gsf.records[q].in_zone) pick = int(q);
   if (pick < 0) return;
-  for (const ModeRun* run : {&inst, &gsf}) {
-    const QueryRecord& r = run->records[pick];
-    const Eigen::Isometry3d& T = r.truth_local;
-    const Eigen::Vector3d p = T.translation();
-    SvgCanvas f(p.x() - 60, p.y() - 45, p.x() + 60, p.y() + 45, 900);
-    for (uint32_t i = 0; i < map.counts.instances; ++i) {
-      const float* m = map.instances[i].centroid;
-      if (std::fabs(m[0] - p.x()) < 60 && std::fabs(m[1] - p.y()) < 45)
-        f.circle(m[0], m[1], 3, class_colour(map.instances[i].label), 0.5);
-    }
-    for (const auto& k : run->corr[pick]) {
-      const Eigen::Vector3d q = T * Eigen::Vector3d(k.query_xyz[0], k.query_xyz[1], k.query_xyz[2]);
-      const float* m = map.instances[k.map_instance].centroid;
-      const bool right = (q - Eigen::Vector3d(m[0], m[1], m[2])).norm() < 2.0;
-      f.line(q.x(), q.y(), m[0], m[1], right ? "#1a9850" : "#d73027", k.in_clique ? 2.0 : 0.7,
-             k.in_clique ? 0.95 : 0.45);
-      f.circle(q.x(), q.y(), 2, "#000000", 0.8);
-    }
-    f.circle(p.x(), p.y(), 5, "#000000", 1.0);
-    char title[200];
-    std::snprintf(title, sizeof(title),
-                  "query %u, %s: %zu correspondences (green = true, red = false; thick = clique), %s", r.frame,
-                  run->mode.c_str(), run->corr[pick].size(), r.success ? "localized" : "failed");
-    f.text_px(10, 14, title, 12);
-    f.save(o.svg_dir + "/correspondences_" + run->mode + ".svg");
-  }
+  for (const ModeRun* run : {&inst, &gsf}) write_correspondence_svg(o, map, *run, size_t(pick), written);
 }
 
-void write_svgs(const EvalOptions& o, const MapView& map, const std::vector<ModeRun>& runs,
+// Each written SVG as a PNG beside it (rsvg-convert, librsvg2-bin); false if any could not be written.
+bool write_pngs(const std::vector<std::string>& svgs) {
+  const std::string rsvg = find_rsvg_convert();
+  if (rsvg.empty()) {
+    std::fprintf(stderr,
+                 "gsf evaluate: --png: rsvg-convert not found on PATH (Debian: apt-get install librsvg2-bin); wrote "
+                 "the SVGs only\n");
+    return false;
+  }
+  bool ok = true;
+  for (const std::string& svg : svgs) {
+    std::string err;
+    if (!svg_to_png(rsvg, svg, png_path_for(svg), &err)) {
+      std::fprintf(stderr, "gsf evaluate: --png: %s\n", err.c_str());
+      ok = false;
+    }
+  }
+  return ok;
+}
+
+// The pictures (and with --png their PNGs); false if a PNG could not be written.
+bool write_svgs(const EvalOptions& o, const MapView& map, const std::vector<ModeRun>& runs,
                 const std::vector<ModeSummary>& sums) {
   std::filesystem::create_directories(o.svg_dir);
-  write_reliability_svg(o, sums);
+  std::vector<std::string> written;
+  write_reliability_svg(o, sums, &written);
   const ModeRun* gsf = nullptr;
   const ModeRun* inst = nullptr;
   for (const auto& r : runs) {
@@ -250,8 +472,9 @@ void write_svgs(const EvalOptions& o, const MapView& map, const std::vector<Mode
     if (r.mode == "instance") inst = &r;
   }
   const ModeRun* shown = gsf ? gsf : (runs.empty() ? nullptr : &runs[0]);
-  if (shown) write_map_trajectory_svg(o, map, *shown);
-  if (gsf && inst) write_correspondence_svgs(o, map, *inst, *gsf);
+  if (shown) write_map_trajectory_svg(o, map, *shown, &written);
+  if (gsf && inst) write_correspondence_svgs(o, map, *inst, *gsf, &written);
+  return !o.png || write_pngs(written);
 }
 
 // One localizer mode: its config, workspace and localizer (the modes run interleaved, query by query).
@@ -372,6 +595,16 @@ void add_truth_diagnostics(const Localizer& loc, const MapView& map, const std::
   }
 }
 
+// The last query's instances, for the correspondence picture.
+std::vector<PictureInstance> picture_instances(const Localizer& loc) {
+  std::vector<float> xyz(3 * 1024);
+  std::vector<uint8_t> labels(1024);
+  const uint32_t n = std::min<uint32_t>(loc.last_instances(xyz.data(), labels.data(), 1024), 1024);
+  std::vector<PictureInstance> out(n);
+  for (uint32_t i = 0; i < n; ++i) out[i] = {{xyz[3 * i], xyz[3 * i + 1], xyz[3 * i + 2]}, labels[i]};
+  return out;
+}
+
 // Localizes one query (already read into `scan`, or failed with `read_status`) in one mode; corr_buf is
 // scratch for the correspondences.
 void localize_query(LocalizerMode& lm, const ScanView& scan, Status read_status, const MapView& map,
@@ -394,6 +627,7 @@ void localize_query(LocalizerMode& lm, const ScanView& scan, Status read_status,
                                               corr_buf.begin() + std::min<size_t>(nc, corr_buf.size()));
   add_truth_diagnostics(*lm.loc, map, corr, &r);
   if (res.status == Status::Ok) r.truth_verified_score = lm.loc->score_pose(r.truth_local).score;
+  run->instances.push_back(picture_instances(*lm.loc));
   run->corr.push_back(std::move(corr));
   run->records.push_back(std::move(r));
 }
@@ -593,7 +827,7 @@ int run_evaluation(const EvalOptions& o) {
     print_reliability(sums);
   }
   if (!o.json_out.empty()) write_json(o.json_out, o, map, runs, sums, meta, label_errors);
-  if (!o.svg_dir.empty()) write_svgs(o, map, runs, sums);
+  if (!o.svg_dir.empty() && !write_svgs(o, map, runs, sums)) return 1;  // a PNG could not be written
   return 0;
 }
 

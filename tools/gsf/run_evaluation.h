@@ -20,6 +20,7 @@ struct EvalOptions {
   double min_confidence = -1;
   std::string json_out;  // empty: no JSON file
   std::string svg_dir;   // empty: no pictures (else map + trajectory, correspondences, reliability)
+  bool png = false;      // also each picture as PNG (rsvg-convert, Debian's librsvg2-bin)
   uint32_t limit = 0;    // evaluate only the first N queries (0 = all)
   bool progress = true;
   std::string classes = "auto";    // label set (pipeline.h resolve_label_set)
