@@ -209,7 +209,7 @@ std::vector<uint32_t> connect_cells(const std::vector<uint64_t>& cells) {
     for (int dx = -1; dx <= 1; ++dx)
       for (int dy = -1; dy <= 1; ++dy)
         for (int dz = -1; dz <= 1; ++dz) {
-          const int64_t offset = (int64_t(dx) << 32) + (int64_t(dy) << 16) + dz;
+          const int64_t offset = int64_t(dx) * (int64_t(1) << 32) + int64_t(dy) * (int64_t(1) << 16) + dz;
           if (offset <= 0) continue;  // each pair once, from its smaller key
           const uint64_t nb = cells[c] + uint64_t(offset);
           const auto it = std::lower_bound(cells.begin() + c, cells.end(), nb);
