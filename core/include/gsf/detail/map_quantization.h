@@ -9,7 +9,8 @@
 // Error bound (closed form; tests/test_map_format.cpp asserts it): |x' - x| <= step / 2 + 2^-20 (|min| +
 // |max|) (the second term covers the float rounding of the subtraction and of min + q * step). For the
 // demo map's grids, mean ranges are about 1 (step 0.004, error <= 0.002) and variance ranges below the
-// signal variance 1 (step 1.5e-5).
+// signal variance 1 (step 1.5e-5). The levels (kGridMeanLevels, kGridVarLevels) are the format's
+// (map_format.h); this header includes the format, never the other way round.
 #pragma once
 #include <cmath>
 #include <cstdint>
@@ -17,9 +18,6 @@
 #include "gsf/map_format.h"
 
 namespace gsf {
-
-constexpr uint32_t kGridMeanLevels = 255;
-constexpr uint32_t kGridVarLevels = 65535;
 
 // Affine scale of n values: *min and *step (0 when all values are equal or n is 0).
 inline void quantization_scale(const float* x, uint64_t n, uint32_t levels, float* min, float* step) {
