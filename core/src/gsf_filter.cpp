@@ -12,26 +12,6 @@ constexpr double kTwoPi = 6.283185307179586;
 uint64_t now(Clock* c) { return c ? c->now_ns() : 0; }
 }  // namespace
 
-uint32_t triangle_yaw_bin(const float* q[3], const float* m[3], uint32_t bins) {
-  float qc[2] = {0, 0}, mc[2] = {0, 0};
-  for (int v = 0; v < 3; ++v)
-    for (int d = 0; d < 2; ++d) {
-      qc[d] += q[v][d] / 3.0f;
-      mc[d] += m[v][d] / 3.0f;
-    }
-  float dot = 0.0f, cross = 0.0f;
-  for (int v = 0; v < 3; ++v) {
-    const float ax = q[v][0] - qc[0], ay = q[v][1] - qc[1];
-    const float bx = m[v][0] - mc[0], by = m[v][1] - mc[1];
-    dot += ax * bx + ay * by;
-    cross += ax * by - ay * bx;
-  }
-  const double yaw = std::atan2(static_cast<double>(cross), static_cast<double>(dot));
-  int64_t bin = static_cast<int64_t>(std::llround(yaw / kTwoPi * bins));
-  bin = ((bin % int64_t(bins)) + bins) % bins;
-  return static_cast<uint32_t>(bin);
-}
-
 size_t GsfFilter::required_bytes(const GsfFilterConfig& config, const FieldConfig& field) {
   return counted_bytes<GsfFilter>(config, field, nullptr);
 }

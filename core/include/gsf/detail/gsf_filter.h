@@ -74,10 +74,6 @@ struct MatchFilterStats {
   uint64_t filter_ns = 0;                            // time in the heading check, the gate and the accumulation
 };
 
-// Yaw bin of the 2-D Procrustes rotation taking the query vertices qa, qb, qc onto the map vertices
-// (xyz each); the vehicle is near level, the full 3-D pose comes later from the clique.
-uint32_t triangle_yaw_bin(const float* q[3], const float* m[3], uint32_t yaw_bins);
-
 class GsfFilter {
  public:
   static size_t required_bytes(const GsfFilterConfig& config, const FieldConfig& field);
