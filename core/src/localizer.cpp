@@ -218,6 +218,27 @@ namespace {
 
 uint64_t now(Clock* c) { return c ? c->now_ns() : 0; }
 
+static_assert(AnswerChoice::kMaxRanked == kMaxReportedHypotheses, "every ranked hypothesis is reported");
+
+// A pose hypothesis as LocalizeResult reports it.
+HypothesisReport hypothesis_report(const PoseHypothesis& p, bool fully_verified) {
+  constexpr double kRadToDeg = 57.29577951308232;
+  HypothesisReport r;
+  r.x = static_cast<float>(p.map_T_scan.translation().x());
+  r.y = static_cast<float>(p.map_T_scan.translation().y());
+  r.yaw_deg = static_cast<float>(std::atan2(p.map_T_scan.linear()(1, 0), p.map_T_scan.linear()(0, 0)) * kRadToDeg);
+  r.clique_size = p.clique_size;
+  r.inliers = p.inliers;
+  r.support = static_cast<float>(p.support);
+  r.verified_score = p.verification.score;
+  r.verified_voxels = p.verification.scored;
+  r.verified_agree = p.verification.agree;
+  r.verified_disagree = p.verification.disagree;
+  r.verified_unknown = p.verification.unknown;
+  r.fully_verified = fully_verified;
+  return r;
+}
+
 }  // namespace
 
 // ---- The query pipeline, one stage per function; localize() below calls them in order. ----
@@ -371,7 +392,15 @@ Status Localizer::Impl::generate_hypotheses(const LocalizerConfig& cfg, uint32_t
 // 9. Whole-scan verification against the map's semantic layer picks among the hypotheses, and the
 // answer's ambiguity follows from it (answer_selection.h).
 void Localizer::Impl::choose_answer(const LocalizerConfig& cfg, LocalizeResult& out) {
-  answer.choose(hypotheses, voxels, semantic, weights, cfg.hypotheses, cfg.verify, out);
+  const AnswerChoice choice = answer.choose(hypotheses, voxels, semantic, weights, cfg.hypotheses, cfg.verify);
+  out.map_T_scan = choice.answer.map_T_scan;
+  out.inliers = choice.answer.inliers;
+  out.clique_size = choice.answer.clique_size;
+  out.score = choice.answer.support;
+  out.chosen_hypothesis = choice.index;
+  out.verified = choice.verified;
+  for (uint32_t k = 0; k < choice.ranked; ++k)
+    out.hypothesis[k] = hypothesis_report(hypotheses[choice.rank[k]], choice.fully_verified[k]);
 }
 
 // 9b. The answer's height from every correspondence it explains (answer_height.h): verification chose
