@@ -3,7 +3,7 @@
 namespace gsf {
 
 void quantize_instance_grid(const float* mean, const float* var, uint64_t g, uint64_t d, MapInstance* in,
-                                   uint8_t* q_mean, uint16_t* q_var) {
+                            uint8_t* q_mean, uint16_t* q_var) {
   quantization_scale(mean, g * d, kGridMeanLevels, &in->mean_min, &in->mean_step);
   quantization_scale(var, g, kGridVarLevels, &in->var_min, &in->var_step);
   for (uint64_t k = 0; k < g * d; ++k)
