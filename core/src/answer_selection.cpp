@@ -3,8 +3,6 @@
 #include <algorithm>
 #include <cmath>
 
-#include "gsf/localizer.h"
-
 namespace gsf {
 namespace {
 
@@ -74,104 +72,130 @@ void AnswerSelector::set_verify_weights(const float* weights) {
   for (int c = 0; c < kNumClasses; ++c) verify_weights_[c] = weights[c];
 }
 
-void AnswerSelector::choose(PoseHypotheses& hyps, const VoxelLayer& voxels, const SemanticGridView& semantic,
-                            const float* weights, const HypothesisConfig& hc, const VerifyConfig& vc,
-                            LocalizeResult& out) {
-  const uint32_t H = hyps.size();
+// Every score reads the voxels through their compact copy (the same results, bit for bit); a layer
+// larger than the copy (never: the copy has the layer's capacity) would read the voxels.
+struct AnswerSelector::PoseScorer {
+  const VerifyPoint* points;  // the compact copy, or nullptr: read the voxels
+  const VoxelLayer& voxels;
+  const SemanticGridView& semantic;
+  const VerifyConfig& vc;
+  const float* verify_weights;
+
+  PoseVerification score(const Eigen::Isometry3d& T, uint32_t max_points, const float* w) const {
+    const uint32_t nv = voxels.size();
+    const float lambda = vc.disagree_weight;
+    return points ? verify_pose(points, nv, semantic, T, max_points, w, lambda)
+                  : verify_pose(voxels, semantic, T, max_points, w, lambda);
+  }
+  PoseVerification search(const Eigen::Isometry3d& T, Eigen::Isometry3d* refined,
+                          const PoseVerification* at_start) const {
+    const uint32_t nv = voxels.size();
+    const float lambda = vc.disagree_weight;
+    return points ? verify_pose_refined(points, nv, semantic, T, vc.max_points, verify_weights, vc.refine_rounds,
+                                        vc.refine_step_m, vc.refine_step_deg, refined, vc.search_divisor,
+                                        vc.polish_divisor, at_start, lambda)
+                  : verify_pose_refined(voxels, semantic, T, vc.max_points, verify_weights, vc.refine_rounds,
+                                        vc.refine_step_m, vc.refine_step_deg, refined, vc.search_divisor,
+                                        vc.polish_divisor, at_start, lambda);
+  }
+};
+
+AnswerChoice AnswerSelector::choose(PoseHypotheses& hyps, const VoxelLayer& voxels, const SemanticGridView& semantic,
+                                    const float* weights, const HypothesisConfig& hc, const VerifyConfig& vc) {
   hyps_ = &hyps;
   const bool verify = vc.enabled && !semantic.empty();
   uint32_t best = 0;
   uint8_t full_scored[PoseHypotheses::kMaxHypotheses] = {};
   uint32_t refined_count = 0;
   rival_count_ = 0;
+  const bool compact = prepare_scoring(voxels, weights, vc, verify);
+  if (verify) {
+    const PoseScorer scorer{compact ? points_ : nullptr, voxels, semantic, vc, verify_weights_};
+    refined_count = verify_hypotheses(hyps, scorer, vc, full_scored);
+    best = pick_answer_and_rivals(hyps, full_scored, hc, refined_count);
+  }
+  AnswerChoice choice;
+  choice.index = best;
+  choice.answer = hyps[best];
+  choice.verified = verify;
+  chosen_ = best;
+  rank_for_report(hyps, verify, full_scored, &choice);
+  answer_pose_ = verify ? scoring_pose_of(best, refined_count) : hyps[best].map_T_scan;
+  return choice;
+}
+
+// This scan's verification weights (rarity_weights) and the voxels' compact copy, when verification
+// reads it. Returns whether it does.
+bool AnswerSelector::prepare_scoring(const VoxelLayer& voxels, const float* weights, const VerifyConfig& vc,
+                                     bool verify) {
   compact_points_ = 0;
   rarity_weights(voxels, weights, vc.rarity_exponent, vc.max_points, verify_weights_);
-  // Every score below reads the voxels through their compact copy (the same results, bit for bit);
-  // a layer larger than the copy (never: the copy has the layer's capacity) would read the voxels.
   const bool compact = verify && voxels.size() <= point_capacity_ && points_ != nullptr;
   if (compact) {
     fill_verify_points(voxels, points_);
     compact_points_ = voxels.size();
   }
-  const uint32_t nv = voxels.size();
-  const float lambda = vc.disagree_weight;
-  auto score = [&](const Eigen::Isometry3d& T, uint32_t max_points, const float* w) {
-    return compact ? verify_pose(points_, nv, semantic, T, max_points, w, lambda)
-                   : verify_pose(voxels, semantic, T, max_points, w, lambda);
-  };
-  auto search = [&](const Eigen::Isometry3d& T, Eigen::Isometry3d* refined, const PoseVerification* at_start) {
-    return compact ? verify_pose_refined(points_, nv, semantic, T, vc.max_points, verify_weights_, vc.refine_rounds,
-                                         vc.refine_step_m, vc.refine_step_deg, refined, vc.search_divisor,
-                                         vc.polish_divisor, at_start, lambda)
-                   : verify_pose_refined(voxels, semantic, T, vc.max_points, verify_weights_, vc.refine_rounds,
-                                         vc.refine_step_m, vc.refine_step_deg, refined, vc.search_divisor,
-                                         vc.polish_divisor, at_start, lambda);
-  };
-  if (verify) {
-    // Coarse score for every hypothesis, the full score for the best `full_top`, then the best
-    // `refine_top` at their best local alignment. Each step ranks, then caps.
-    uint32_t top[PoseHypotheses::kMaxHypotheses];
-    const uint32_t coarse_points = std::max<uint32_t>(1, vc.max_points / vc.coarse_divisor);
-    for (uint32_t h = 0; h < H; ++h) hyps[h].verification = score(hyps[h].map_T_scan, coarse_points, verify_weights_);
-    uint32_t nt = top_by_score(hyps, H, nullptr, vc.full_top, top);
-    for (uint32_t k = 0; k < nt; ++k) {
-      hyps[top[k]].verification = score(hyps[top[k]].map_T_scan, vc.max_points, verify_weights_);
-      full_scored[top[k]] = 1;
-    }
-    nt = vc.refine_rounds > 0 ? top_by_score(hyps, H, full_scored, std::min(vc.refine_top, refine_top_), top) : 0;
-    refined_count = nt;
-    for (uint32_t k = 0; k < nt; ++k) {
-      refined_id_[k] = top[k];
-      const PoseVerification full = hyps[top[k]].verification;  // verify_pose at max_points, just above
-      hyps[top[k]].verification = search(hyps[top[k]].map_T_scan, &refined_pose_[k], &full);
-    }
-    // The answer, and as runner-up the best fully scored hypothesis at another place or heading: a
-    // near-twin of the answer (within same_pose_m and same_pose_deg in the bird's-eye view the
-    // verification sees) is the same answer, not a rival.
-    nt = top_by_score(hyps, H, full_scored, H, top);
-    best = nt > 0 ? top[0] : 0;
-    const Eigen::Isometry3d& a = hyps[best].map_T_scan;
-    const double yaw_a = yaw_of(a), same_rad = double(hc.same_pose_deg) / kRadToDeg;
-    for (uint32_t k = 1; k < nt && rival_count_ < kMaxRivals; ++k) {
-      const Eigen::Isometry3d& b = hyps[top[k]].map_T_scan;
-      const double dx = b.translation().x() - a.translation().x(), dy = b.translation().y() - a.translation().y();
-      double dyaw = std::fabs(yaw_of(b) - yaw_a);
-      if (dyaw > kPi) dyaw = 2.0 * kPi - dyaw;
-      if (std::sqrt(dx * dx + dy * dy) <= hc.same_pose_m && dyaw <= same_rad) continue;
-      rival_pose_[rival_count_++] = scoring_pose_of(top[k], refined_count);
-    }
+  return compact;
+}
+
+// Coarse score for every hypothesis, the full score for the best `full_top` (marked in full_scored),
+// then the best `refine_top` at their best local alignment. Each step ranks, then caps. Returns how
+// many were refined (their ids and poses in refined_id_, refined_pose_).
+uint32_t AnswerSelector::verify_hypotheses(PoseHypotheses& hyps, const PoseScorer& scorer, const VerifyConfig& vc,
+                                           uint8_t* full_scored) {
+  const uint32_t H = hyps.size();
+  uint32_t top[PoseHypotheses::kMaxHypotheses];
+  const uint32_t coarse_points = std::max<uint32_t>(1, vc.max_points / vc.coarse_divisor);
+  for (uint32_t h = 0; h < H; ++h)
+    hyps[h].verification = scorer.score(hyps[h].map_T_scan, coarse_points, verify_weights_);
+  uint32_t nt = top_by_score(hyps, H, nullptr, vc.full_top, top);
+  for (uint32_t k = 0; k < nt; ++k) {
+    hyps[top[k]].verification = scorer.score(hyps[top[k]].map_T_scan, vc.max_points, verify_weights_);
+    full_scored[top[k]] = 1;
   }
-  const PoseHypothesis& answer = hyps[best];
-  out.map_T_scan = answer.map_T_scan;
-  out.inliers = answer.inliers;
-  out.clique_size = answer.clique_size;
-  out.score = answer.support;
-  out.chosen_hypothesis = best;
-  out.verified = verify;
-  chosen_ = best;
-  // Report the best hypotheses by verified score (the order found without verification).
-  uint32_t shown[kMaxReportedHypotheses];
-  uint32_t reported = std::min(H, kMaxReportedHypotheses);
-  if (verify) reported = top_by_score(hyps, H, nullptr, kMaxReportedHypotheses, shown);
+  nt = vc.refine_rounds > 0 ? top_by_score(hyps, H, full_scored, std::min(vc.refine_top, refine_top_), top) : 0;
+  for (uint32_t k = 0; k < nt; ++k) {
+    refined_id_[k] = top[k];
+    const PoseVerification full = hyps[top[k]].verification;  // verify_pose at max_points, just above
+    hyps[top[k]].verification = scorer.search(hyps[top[k]].map_T_scan, &refined_pose_[k], &full);
+  }
+  return nt;
+}
+
+// The answer, and as runner-up the best fully scored hypotheses at another place or heading (into
+// rival_pose_, at the poses they were scored at): a near-twin of the answer (within same_pose_m and
+// same_pose_deg in the bird's-eye view the verification sees) is the same answer, not a rival.
+// Returns the answer.
+uint32_t AnswerSelector::pick_answer_and_rivals(const PoseHypotheses& hyps, const uint8_t* full_scored,
+                                                const HypothesisConfig& hc, uint32_t refined_count) {
+  const uint32_t H = hyps.size();
+  uint32_t top[PoseHypotheses::kMaxHypotheses];
+  const uint32_t nt = top_by_score(hyps, H, full_scored, H, top);
+  const uint32_t best = nt > 0 ? top[0] : 0;
+  const Eigen::Isometry3d& a = hyps[best].map_T_scan;
+  const double yaw_a = yaw_of(a), same_rad = double(hc.same_pose_deg) / kRadToDeg;
+  for (uint32_t k = 1; k < nt && rival_count_ < kMaxRivals; ++k) {
+    const Eigen::Isometry3d& b = hyps[top[k]].map_T_scan;
+    const double dx = b.translation().x() - a.translation().x(), dy = b.translation().y() - a.translation().y();
+    double dyaw = std::fabs(yaw_of(b) - yaw_a);
+    if (dyaw > kPi) dyaw = 2.0 * kPi - dyaw;
+    if (std::sqrt(dx * dx + dy * dy) <= hc.same_pose_m && dyaw <= same_rad) continue;
+    rival_pose_[rival_count_++] = scoring_pose_of(top[k], refined_count);
+  }
+  return best;
+}
+
+// The hypotheses to report: the best by verified score (the order found without verification).
+void AnswerSelector::rank_for_report(const PoseHypotheses& hyps, bool verify, const uint8_t* full_scored,
+                                     AnswerChoice* choice) {
+  const uint32_t H = hyps.size();
+  uint32_t* shown = choice->rank;
+  uint32_t reported = std::min(H, AnswerChoice::kMaxRanked);
+  if (verify) reported = top_by_score(hyps, H, nullptr, AnswerChoice::kMaxRanked, shown);
   else
     for (uint32_t k = 0; k < reported; ++k) shown[k] = k;
-  for (uint32_t k = 0; k < reported; ++k) {
-    const PoseHypothesis& p = hyps[shown[k]];
-    HypothesisReport& r = out.hypothesis[k];
-    r.x = static_cast<float>(p.map_T_scan.translation().x());
-    r.y = static_cast<float>(p.map_T_scan.translation().y());
-    r.yaw_deg = static_cast<float>(yaw_of(p.map_T_scan) * kRadToDeg);
-    r.clique_size = p.clique_size;
-    r.inliers = p.inliers;
-    r.support = static_cast<float>(p.support);
-    r.verified_score = p.verification.score;
-    r.verified_voxels = p.verification.scored;
-    r.verified_agree = p.verification.agree;
-    r.verified_disagree = p.verification.disagree;
-    r.verified_unknown = p.verification.unknown;
-    r.fully_verified = verify && full_scored[shown[k]];
-  }
-  answer_pose_ = verify ? scoring_pose_of(best, refined_count) : hyps[best].map_T_scan;
+  choice->ranked = reported;
+  for (uint32_t k = 0; k < reported; ++k) choice->fully_verified[k] = verify && full_scored[shown[k]];
 }
 
 }  // namespace gsf

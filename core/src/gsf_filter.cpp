@@ -8,27 +8,9 @@
 namespace gsf {
 namespace {
 constexpr double kTwoPi = 6.283185307179586;
-}  // namespace
 
-uint32_t triangle_yaw_bin(const float* q[3], const float* m[3], uint32_t bins) {
-  float qc[2] = {0, 0}, mc[2] = {0, 0};
-  for (int v = 0; v < 3; ++v)
-    for (int d = 0; d < 2; ++d) {
-      qc[d] += q[v][d] / 3.0f;
-      mc[d] += m[v][d] / 3.0f;
-    }
-  float dot = 0.0f, cross = 0.0f;
-  for (int v = 0; v < 3; ++v) {
-    const float ax = q[v][0] - qc[0], ay = q[v][1] - qc[1];
-    const float bx = m[v][0] - mc[0], by = m[v][1] - mc[1];
-    dot += ax * bx + ay * by;
-    cross += ax * by - ay * bx;
-  }
-  const double yaw = std::atan2(static_cast<double>(cross), static_cast<double>(dot));
-  int64_t bin = static_cast<int64_t>(std::llround(yaw / kTwoPi * bins));
-  bin = ((bin % int64_t(bins)) + bins) % bins;
-  return static_cast<uint32_t>(bin);
-}
+uint64_t now(Clock* c) { return c ? c->now_ns() : 0; }
+}  // namespace
 
 size_t GsfFilter::required_bytes(const GsfFilterConfig& config, const FieldConfig& field) {
   return counted_bytes<GsfFilter>(config, field, nullptr);
@@ -104,6 +86,83 @@ float GsfFilter::similarity(const QueryFields& qf, uint32_t qi, const MapView& m
   }
   if (float* slot = similarity_.find_or_insert(skey)) *slot = omega;
   return omega;
+}
+
+MatchFilterStats GsfFilter::filter_matches(const FixedVector<Triangle>& triangles, const float* query_centroids,
+                                           const QueryFields& qf, TriangleMatcher& matcher,
+                                           const TriangleIndexView& index, const MapView& map,
+                                           const TriangleConfig& triangle_config, const HeadingVotes& headings,
+                                           const MatchFilterParams& params, Clock* clock, CorrespondenceSet& pairs) {
+  reset();
+  pairs.clear();
+  MatchFilterStats st;
+  const uint32_t T = triangles.size();
+  const bool fill = params.use_gsf && params.fill_pairs > 0;
+  for (int pass = 0; pass < (fill ? 2 : 1); ++pass) {
+    if (pass == 1 && pairs.candidates() >= params.fill_pairs) break;
+    for (uint32_t qt_id = 0; qt_id < T; ++qt_id) {
+      const Triangle& qt = triangles[qt_id];
+      const uint64_t t0 = now(clock);
+      const TriangleMatchStats ms =
+          matcher.match(qt, index, map.triangles, triangle_config, params.vertex_tie_tolerance);
+      const uint64_t t1 = now(clock);
+      st.match_ns += t1 - t0;
+      if (pass == 0) {
+        st.match_candidates += ms.accepted;
+        st.match_dropped += ms.dropped();
+        st.mirrored_matches += ms.mirrored;
+        st.triangle_matches += ms.kept;
+        if (ms.orders > 1) ++st.tie_ordered_triangles;
+      }
+      for (uint32_t k = 0; k < matcher.size(); ++k) {
+        const RankedTriangleMatch& rm = matcher.match_at(k);
+        const Triangle& mt = map.triangles[rm.map];
+        uint32_t qv[3];
+        const uint32_t bin = match_yaw_bin(qt, rm, query_centroids, map, config_.yaw_bins, qv);
+        if (!headings.allowed(bin)) {
+          if (pass == 0) ++st.heading_dropped;
+          continue;
+        }
+        float omega[3] = {1.0f, 1.0f, 1.0f};
+        // Pass 0 keeps the matches that pass the gate, pass 1 (the fill) the others, with all three omegas.
+        if (params.use_gsf && passes_gate(qf, qv, mt, map, bin, params.min_similarity, pass == 1, omega) == (pass == 1))
+          continue;
+        ++(pass == 0 ? st.survivors : st.below_gate_matches);
+        for (int v = 0; v < 3; ++v)
+          if (!pairs.add(qv[v], mt.v[v], omega[v], pass == 0 ? 1u : 0u)) ++st.candidate_pairs_dropped;
+      }
+      st.filter_ns += now(clock) - t1;
+    }
+  }
+  st.field_probes = probes();
+  st.field_comparisons = comparisons();
+  st.candidate_pairs = pairs.candidates();
+  return st;
+}
+
+// The cheapest omegas go first and the first failure stops: cached similarities (step 0), then
+// comparisons against a cached probe (step 1), then those needing a new query probe (step 2). The
+// decision and the passing matches' omegas are the vertex-order loop's; only fewer probes and
+// comparisons are made.
+bool GsfFilter::passes_gate(const QueryFields& qf, const uint32_t qv[3], const Triangle& mt, const MapView& map,
+                            uint32_t bin, float min_similarity, bool all, float omega[3]) {
+  bool keep = true;
+  uint32_t done = 0;
+  for (int step = 0; step < 3 && (keep || all); ++step)
+    for (int v = 0; v < 3 && (keep || all); ++v) {
+      if (done & (1u << v)) continue;
+      if (step == 0) {
+        const float* c = cached_similarity(qv[v], mt.v[v], bin);
+        if (c == nullptr) continue;
+        omega[v] = *c;
+      } else {
+        if (step == 1 && !probe_ready(qf, qv[v], bin)) continue;
+        omega[v] = similarity(qf, qv[v], map, mt.v[v], bin);
+      }
+      done |= 1u << v;
+      keep = keep && omega[v] >= min_similarity;
+    }
+  return keep;
 }
 
 }  // namespace gsf

@@ -1,8 +1,31 @@
 #include "gsf/detail/heading_votes.h"
 
-#include "gsf/detail/gsf_filter.h"
+#include <cmath>
 
 namespace gsf {
+namespace {
+constexpr double kTwoPi = 6.283185307179586;
+}  // namespace
+
+uint32_t triangle_yaw_bin(const float* q[3], const float* m[3], uint32_t bins) {
+  float qc[2] = {0, 0}, mc[2] = {0, 0};
+  for (int v = 0; v < 3; ++v)
+    for (int d = 0; d < 2; ++d) {
+      qc[d] += q[v][d] / 3.0f;
+      mc[d] += m[v][d] / 3.0f;
+    }
+  float dot = 0.0f, cross = 0.0f;
+  for (int v = 0; v < 3; ++v) {
+    const float ax = q[v][0] - qc[0], ay = q[v][1] - qc[1];
+    const float bx = m[v][0] - mc[0], by = m[v][1] - mc[1];
+    dot += ax * bx + ay * by;
+    cross += ax * by - ay * bx;
+  }
+  const double yaw = std::atan2(static_cast<double>(cross), static_cast<double>(dot));
+  int64_t bin = static_cast<int64_t>(std::llround(yaw / kTwoPi * bins));
+  bin = ((bin % int64_t(bins)) + bins) % bins;
+  return static_cast<uint32_t>(bin);
+}
 
 uint32_t match_yaw_bin(const Triangle& qt, const RankedTriangleMatch& rm, const float* query_centroids,
                        const MapView& map, uint32_t yaw_bins, uint32_t* qv) {

@@ -218,6 +218,27 @@ namespace {
 
 uint64_t now(Clock* c) { return c ? c->now_ns() : 0; }
 
+static_assert(AnswerChoice::kMaxRanked == kMaxReportedHypotheses, "every ranked hypothesis is reported");
+
+// A pose hypothesis as LocalizeResult reports it.
+HypothesisReport hypothesis_report(const PoseHypothesis& p, bool fully_verified) {
+  constexpr double kRadToDeg = 57.29577951308232;
+  HypothesisReport r;
+  r.x = static_cast<float>(p.map_T_scan.translation().x());
+  r.y = static_cast<float>(p.map_T_scan.translation().y());
+  r.yaw_deg = static_cast<float>(std::atan2(p.map_T_scan.linear()(1, 0), p.map_T_scan.linear()(0, 0)) * kRadToDeg);
+  r.clique_size = p.clique_size;
+  r.inliers = p.inliers;
+  r.support = static_cast<float>(p.support);
+  r.verified_score = p.verification.score;
+  r.verified_voxels = p.verification.scored;
+  r.verified_agree = p.verification.agree;
+  r.verified_disagree = p.verification.disagree;
+  r.verified_unknown = p.verification.unknown;
+  r.fully_verified = fully_verified;
+  return r;
+}
+
 }  // namespace
 
 // ---- The query pipeline, one stage per function; localize() below calls them in order. ----
@@ -313,87 +334,29 @@ void Localizer::Impl::vote_headings(const LocalizerConfig& cfg, const MapView& m
   out.headings_kept += headings.vote(triangles, centroids, matcher, index, map, cfg.triangle, params);
 }
 
-// 5b + 6. Per query triangle: ranked index matches, then the GSF filter, accumulating weighted,
-// deduplicated vertex correspondences. Nothing is stored per triangle match, so no global cap on
-// matches exists that could cut in storage order. Adds its time to out.times.match and .gsf.
-//
-// The filter's gate is absolute, and a scan whose instances are far and sparsely seen (an approach road)
-// can have its true matches all below it: with fewer than match.fill_pairs pairs, a second pass adds the
-// matches below the gate as tier-0 pairs, ranked after every pair that passed and taken only up to
-// fill_pairs in all (correspondence_set.h). A scan with enough pairs never runs it, so the filter
-// decides exactly as before wherever it has candidates to spare.
+// 5b + 6. The GSF filter over the scan's matches at the kept headings (gsf_filter.h), accumulating
+// weighted, deduplicated vertex correspondences. Adds its time to out.times.match and .gsf.
 void Localizer::Impl::match_and_filter(const LocalizerConfig& cfg, const MapView& map, Clock* clock,
                                        LocalizeResult& out) {
-  gsf.reset();
-  correspondences.clear();
   const QueryFields qf{q_inputs, q_alpha, q_chol, q_m, cfg.field.inducing_points};
-  uint64_t t_match = 0, t_gsf = 0;
-  uint32_t survivors = 0;
-  const uint32_t T = triangles.size();
-  const bool fill = cfg.match.use_gsf && cfg.match.fill_pairs > 0;
-  for (int pass = 0; pass < (fill ? 2 : 1); ++pass) {
-    if (pass == 1 && correspondences.candidates() >= cfg.match.fill_pairs) break;
-    for (uint32_t qt_id = 0; qt_id < T; ++qt_id) {
-      const Triangle& qt = triangles[qt_id];
-      const uint64_t t0 = now(clock);
-      const TriangleMatchStats ms =
-          matcher.match(qt, index, map.triangles, cfg.triangle, cfg.match.vertex_tie_tolerance);
-      const uint64_t t1 = now(clock);
-      t_match += t1 - t0;
-      if (pass == 0) {
-        out.match_candidates += ms.accepted;
-        out.match_dropped += ms.dropped();
-        out.mirrored_matches += ms.mirrored;
-        out.triangle_matches += ms.kept;
-        if (ms.orders > 1) ++out.tie_ordered_triangles;
-      }
-      for (uint32_t k = 0; k < matcher.size(); ++k) {
-        const RankedTriangleMatch& rm = matcher.match_at(k);
-        const Triangle& mt = map.triangles[rm.map];
-        uint32_t qv[3];
-        const uint32_t bin = match_yaw_bin(qt, rm, centroids, map, cfg.gsf.yaw_bins, qv);
-        if (!headings.allowed(bin)) {
-          if (pass == 0) ++out.heading_dropped;
-          continue;
-        }
-        float omega[3] = {1.0f, 1.0f, 1.0f};
-        if (cfg.match.use_gsf) {
-          // A match survives when all three omegas reach min_similarity, so the cheapest go first and
-          // the first failure stops: cached similarities (pass 0), then comparisons against a cached
-          // probe (pass 1), then those needing a new query probe (pass 2). The decision and the
-          // survivors' omegas are the vertex-order loop's; only fewer probes and comparisons are made.
-          // The fill pass needs all three of a failed match (its pair weights), and skips the others.
-          bool keep = true;
-          uint32_t done = 0;
-          for (int step = 0; step < 3 && (keep || pass == 1); ++step)
-            for (int v = 0; v < 3 && (keep || pass == 1); ++v) {
-              if (done & (1u << v)) continue;
-              if (step == 0) {
-                const float* c = gsf.cached_similarity(qv[v], mt.v[v], bin);
-                if (c == nullptr) continue;
-                omega[v] = *c;
-              } else {
-                if (step == 1 && !gsf.probe_ready(qf, qv[v], bin)) continue;
-                omega[v] = gsf.similarity(qf, qv[v], map, mt.v[v], bin);
-              }
-              done |= 1u << v;
-              keep = keep && omega[v] >= cfg.match.min_similarity;
-            }
-          if (keep == (pass == 1)) continue;  // pass 0 keeps those that passed, pass 1 the others
-        }
-        ++(pass == 0 ? survivors : out.below_gate_matches);
-        for (int v = 0; v < 3; ++v)
-          if (!correspondences.add(qv[v], mt.v[v], omega[v], pass == 0 ? 1u : 0u)) ++out.candidate_pairs_dropped;
-      }
-      t_gsf += now(clock) - t1;
-    }
-  }
-  out.times.match += t_match;
-  out.times.gsf += t_gsf;
-  out.gsf_survivors = survivors;
-  out.field_probes = gsf.probes();
-  out.field_comparisons = gsf.comparisons();
-  out.candidate_pairs = correspondences.candidates();
+  const MatchFilterParams params{cfg.match.vertex_tie_tolerance, cfg.match.use_gsf, cfg.match.min_similarity,
+                                 cfg.match.fill_pairs};
+  const MatchFilterStats st = gsf.filter_matches(triangles, centroids, qf, matcher, index, map, cfg.triangle, headings,
+                                                 params, clock, correspondences);
+  out.match_candidates = st.match_candidates;
+  out.match_dropped = st.match_dropped;
+  out.mirrored_matches = st.mirrored_matches;
+  out.triangle_matches = st.triangle_matches;
+  out.tie_ordered_triangles = st.tie_ordered_triangles;
+  out.heading_dropped = st.heading_dropped;
+  out.gsf_survivors = st.survivors;
+  out.below_gate_matches = st.below_gate_matches;
+  out.candidate_pairs = st.candidate_pairs;
+  out.candidate_pairs_dropped = st.candidate_pairs_dropped;
+  out.field_probes = st.field_probes;
+  out.field_comparisons = st.field_comparisons;
+  out.times.match += st.match_ns;
+  out.times.gsf += st.filter_ns;
   if (out.match_dropped > 0 || out.candidate_pairs_dropped > 0 || out.heading_dropped > 0)
     out.capacity_truncated = true;
 }
@@ -429,7 +392,15 @@ Status Localizer::Impl::generate_hypotheses(const LocalizerConfig& cfg, uint32_t
 // 9. Whole-scan verification against the map's semantic layer picks among the hypotheses, and the
 // answer's ambiguity follows from it (answer_selection.h).
 void Localizer::Impl::choose_answer(const LocalizerConfig& cfg, LocalizeResult& out) {
-  answer.choose(hypotheses, voxels, semantic, weights, cfg.hypotheses, cfg.verify, out);
+  const AnswerChoice choice = answer.choose(hypotheses, voxels, semantic, weights, cfg.hypotheses, cfg.verify);
+  out.map_T_scan = choice.answer.map_T_scan;
+  out.inliers = choice.answer.inliers;
+  out.clique_size = choice.answer.clique_size;
+  out.score = choice.answer.support;
+  out.chosen_hypothesis = choice.index;
+  out.verified = choice.verified;
+  for (uint32_t k = 0; k < choice.ranked; ++k)
+    out.hypothesis[k] = hypothesis_report(hypotheses[choice.rank[k]], choice.fully_verified[k]);
 }
 
 // 9b. The answer's height from every correspondence it explains (answer_height.h): verification chose

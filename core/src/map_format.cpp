@@ -4,7 +4,6 @@
 #include <cstring>
 
 #include "gsf/detail/crc32.h"
-#include "gsf/detail/map_quantization.h"
 #include "gsf/detail/triangle_index.h"
 #include "gsf/semantic_classes.h"
 

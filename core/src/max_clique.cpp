@@ -148,44 +148,71 @@ Status MaxCliqueSolver::solve(const ConsistencyGraph& g, uint64_t budget, FixedV
     if (stats) *stats = st;
     return Status::Ok;
   }
-  const uint32_t w = g.words();
-  // Greedy start: repeatedly take the candidate with the most neighbours among the candidates.
-  uint32_t best_size = 0;
-  {
-    uint64_t* cand = frames_[0].cand;
-    for (uint32_t i = 0; i < w; ++i) cand[i] = 0;
-    for (uint32_t v = 0; v < n; ++v) cand[v >> 6] |= uint64_t(1) << (v & 63);
-    if (allowed)
-      for (uint32_t i = 0; i < w; ++i) cand[i] &= allowed[i];
-    for (;;) {
-      int best_v = -1, best_deg = -1;
-      for (uint32_t v = 0; v < n; ++v) {
-        if (!((cand[v >> 6] >> (v & 63)) & 1u)) continue;
-        int deg = 0;
-        for (uint32_t x = 0; x < w; ++x) deg += __builtin_popcountll(cand[x] & g.row(v)[x]);
-        if (deg > best_deg) {
-          best_deg = deg;
-          best_v = static_cast<int>(v);
-        }
-      }
-      if (best_v < 0 || best_size >= kMaxCliqueDepth) break;
-      best_[best_size++] = static_cast<uint32_t>(best_v);
-      const uint64_t* nb = g.row(static_cast<uint32_t>(best_v));
-      for (uint32_t x = 0; x < w; ++x) cand[x] &= nb[x];
+  uint32_t best_size = greedy_clique(g, allowed);
+  st.greedy_size = best_size;
+  const bool exhausted = branch_and_bound(g, budget, allowed, &best_size, &st);
+  // Ascending output.
+  for (uint32_t i = 1; i < best_size; ++i)
+    for (uint32_t j = i; j > 0 && best_[j - 1] > best_[j]; --j) {
+      const uint32_t t = best_[j];
+      best_[j] = best_[j - 1];
+      best_[j - 1] = t;
     }
-    st.greedy_size = best_size;
+  for (uint32_t i = 0; i < best_size; ++i)
+    if (!clique.push_back(best_[i])) return Status::CapacityExceeded;
+  if (stats) *stats = st;
+  return exhausted ? Status::BudgetExhausted : Status::Ok;
+}
+
+// Every vertex of the graph, within `allowed` when given.
+void MaxCliqueSolver::fill_candidates(const ConsistencyGraph& g, const uint64_t* allowed, uint64_t* cand) const {
+  const uint32_t n = g.size(), w = g.words();
+  for (uint32_t i = 0; i < w; ++i) cand[i] = 0;
+  for (uint32_t v = 0; v < n; ++v) cand[v >> 6] |= uint64_t(1) << (v & 63);
+  if (allowed)
+    for (uint32_t i = 0; i < w; ++i) cand[i] &= allowed[i];
+}
+
+// Greedy start: repeatedly take the candidate with the most neighbours among the candidates (into
+// best_; frame 0's candidate words are the scratch). Returns its size.
+uint32_t MaxCliqueSolver::greedy_clique(const ConsistencyGraph& g, const uint64_t* allowed) {
+  const uint32_t n = g.size(), w = g.words();
+  uint32_t best_size = 0;
+  uint64_t* cand = frames_[0].cand;
+  fill_candidates(g, allowed, cand);
+  for (;;) {
+    int best_v = -1, best_deg = -1;
+    for (uint32_t v = 0; v < n; ++v) {
+      if (!((cand[v >> 6] >> (v & 63)) & 1u)) continue;
+      int deg = 0;
+      for (uint32_t x = 0; x < w; ++x) deg += __builtin_popcountll(cand[x] & g.row(v)[x]);
+      if (deg > best_deg) {
+        best_deg = deg;
+        best_v = static_cast<int>(v);
+      }
+    }
+    if (best_v < 0 || best_size >= kMaxCliqueDepth) break;
+    best_[best_size++] = static_cast<uint32_t>(best_v);
+    const uint64_t* nb = g.row(static_cast<uint32_t>(best_v));
+    for (uint32_t x = 0; x < w; ++x) cand[x] &= nb[x];
   }
-  // Branch and bound, iterative. Frame d holds the candidates after choosing current_[0..d).
+  return best_size;
+}
+
+// Branch and bound, iterative. Frame d holds the candidates after choosing current_[0..d); a frame's
+// vertices are tried in reverse colour order, and a branch whose colour bound cannot beat *best_size
+// ends. A larger clique replaces best_. True when the node budget ran out first.
+bool MaxCliqueSolver::branch_and_bound(const ConsistencyGraph& g, uint64_t budget, const uint64_t* allowed,
+                                       uint32_t* best_size_io, CliqueStats* st) {
+  const uint32_t w = g.words();
+  uint32_t best_size = *best_size_io;
   uint32_t depth = 0;
   Frame* f = &frames_[0];
-  for (uint32_t i = 0; i < w; ++i) f->cand[i] = 0;
-  for (uint32_t v = 0; v < n; ++v) f->cand[v >> 6] |= uint64_t(1) << (v & 63);
-  if (allowed)
-    for (uint32_t i = 0; i < w; ++i) f->cand[i] &= allowed[i];
+  fill_candidates(g, allowed, f->cand);
   const uint32_t max_depth = max_vertices_ < kMaxCliqueDepth ? max_vertices_ : kMaxCliqueDepth;
   f->count = colour_sort(g, f->cand, f->order, f->colour);
   f->pos = f->count;
-  st.nodes = 1;
+  st->nodes = 1;
   bool exhausted = false;
   while (true) {
     f = &frames_[depth];
@@ -211,26 +238,17 @@ Status MaxCliqueSolver::solve(const ConsistencyGraph& g, uint64_t budget, FixedV
       }
       continue;
     }
-    if (st.nodes >= budget) {
+    if (st->nodes >= budget) {
       exhausted = true;
       break;
     }
-    ++st.nodes;
+    ++st->nodes;
     next->count = colour_sort(g, next->cand, next->order, next->colour);
     next->pos = next->count;
     ++depth;
   }
-  // Ascending output.
-  for (uint32_t i = 1; i < best_size; ++i)
-    for (uint32_t j = i; j > 0 && best_[j - 1] > best_[j]; --j) {
-      const uint32_t t = best_[j];
-      best_[j] = best_[j - 1];
-      best_[j - 1] = t;
-    }
-  for (uint32_t i = 0; i < best_size; ++i)
-    if (!clique.push_back(best_[i])) return Status::CapacityExceeded;
-  if (stats) *stats = st;
-  return exhausted ? Status::BudgetExhausted : Status::Ok;
+  *best_size_io = best_size;
+  return exhausted;
 }
 
 }  // namespace gsf

@@ -63,6 +63,32 @@ uint32_t PoleExtraction::find_root(uint32_t s) {
   return s;
 }
 
+struct PoleExtraction::Hosts {
+  const VoxelLayer& layer;
+  const Voxel* vox;
+  ClassMask pole_hosts;
+  ClassMask hosts;  // pole and trunk hosts
+
+  uint8_t kind(uint32_t v) const {
+    return (pole_hosts & class_bit(vox[v].label)) ? uint8_t(kPoleKind) : uint8_t(kTrunkKind);
+  }
+  bool host(uint32_t v) const { return (hosts & class_bit(vox[v].label)) != 0; }
+  bool cell(uint32_t v, int32_t c[3]) const { return layer.cell_of(vox[v].centroid, c); }
+};
+
+struct PoleExtraction::SliceBox {
+  float lo[2], hi[2];      // of the voxel centroids
+  int32_t clo[2], chi[2];  // of the voxel cells
+};
+
+struct PoleExtraction::ChainShape {
+  uint32_t levels = 0, segments = 0, ring_sum = 0;  // distinct levels, segments and their rings' sum
+  float lo[3], hi[3];                               // centroid box
+  double sw = 0, sx = 0, sy = 0, sz = 0;            // voxel-weighted sums (the axis fit)
+  double spx = 0, spy = 0, spz = 0;                 // point-weighted sums (the centroid)
+  uint32_t points = 0, first = UINT32_MAX;
+};
+
 Status PoleExtraction::build(const VoxelLayer& layer, PoleStats* stats_out) {
   PoleStats stats;
   if (stats_out) *stats_out = stats;  // early returns report zeros
@@ -70,72 +96,60 @@ Status PoleExtraction::build(const VoxelLayer& layer, PoleStats* stats_out) {
   if (!bound_) return Status::NotInitialized;
   const uint32_t n = layer.size();
   if (n > max_voxels_) return Status::InvalidArgument;
-  const Voxel* vox = layer.voxels();
   const float vs = layer.config().voxel_size;
   const int32_t ring_cells = static_cast<int32_t>(std::ceil(config_.ring_width / vs));
   const int32_t link_cells = static_cast<int32_t>(std::ceil(config_.link_radius / vs));
   const int32_t gap_levels = 1 + static_cast<int32_t>(std::floor(config_.max_gap / vs + 1e-4f));
   if (ring_cells > kMaxReachCells || link_cells > kMaxReachCells || gap_levels > kMaxReachCells)
     return Status::InvalidArgument;
-  const ClassMask hosts = config_.pole_hosts | config_.trunk_hosts;
-  auto kind_of = [&](uint32_t v) -> uint8_t {
-    return (config_.pole_hosts & class_bit(vox[v].label)) ? uint8_t(kPoleKind) : uint8_t(kTrunkKind);
-  };
-  auto is_host = [&](uint32_t v) { return (hosts & class_bit(vox[v].label)) != 0; };
-  auto cell = [&](uint32_t v, int32_t c[3]) { return layer.cell_of(vox[v].centroid, c); };
+  const Hosts h{layer, layer.voxels(), config_.pole_hosts, config_.pole_hosts | config_.trunk_hosts};
 
   // 1. Slice segments.
+  const uint32_t segments = find_slice_segments(h, ring_cells, &stats);
+  // 2. Link stacked thin segments (union by smaller id, so roots are deterministic).
+  link_segments(h, link_cells, gap_levels);
+  // 3. Group the chains' voxels by root; the members of root r are queue_[r == 0 ? 0 : offsets_[r - 1],
+  // offsets_[r]). 4. Judge each chain; the best max_instances are kept.
+  group_chains(n, segments);
+  for (uint32_t r = 0; r < segments; ++r) {
+    if (segments_[r].parent != r) continue;  // not a root
+    const uint32_t begin = r == 0 ? 0 : offsets_[r - 1], end = offsets_[r];
+    if (begin == end) continue;
+    ++stats.chains;
+    judge_chain(h, r, queue_ + begin, end - begin, &stats);
+  }
+  order_by_discovery(n, segments);
+  stats.instances = count_;
+  if (stats_out) *stats_out = stats;
+  return stats.dropped_capacity ? Status::CapacityExceeded : Status::Ok;
+}
+
+// 1. Per level, the 8-connected components of host voxels of one kind; thin and isolated ones become
+// segments (voxel_seg_ = the segment id), the others mark their voxels kRejected. Returns the count.
+uint32_t PoleExtraction::find_slice_segments(const Hosts& h, int32_t ring_cells, PoleStats* stats) {
+  const uint32_t n = h.layer.size();
   for (uint32_t i = 0; i < n; ++i) voxel_seg_[i] = kNone;
   uint32_t segments = 0;
   for (uint32_t seed = 0; seed < n; ++seed) {
-    if (voxel_seg_[seed] != kNone || !is_host(seed)) continue;
+    if (voxel_seg_[seed] != kNone || !h.host(seed)) continue;
     int32_t sc[3];
-    if (!cell(seed, sc)) {
+    if (!h.cell(seed, sc)) {
       voxel_seg_[seed] = kRejected;
       continue;
     }
-    const uint8_t kind = kind_of(seed);
-    uint32_t head = 0, tail = 0;
-    queue_[tail++] = seed;
-    voxel_seg_[seed] = kCurrent;
-    float lo[2] = {vox[seed].centroid[0], vox[seed].centroid[1]}, hi[2] = {lo[0], lo[1]};
-    int32_t clo[2] = {sc[0], sc[1]}, chi[2] = {sc[0], sc[1]};
-    while (head < tail) {
-      const uint32_t v = queue_[head++];
-      int32_t c[3];
-      if (!cell(v, c)) continue;
-      for (int k = 0; k < 2; ++k) {
-        lo[k] = std::min(lo[k], vox[v].centroid[k]);
-        hi[k] = std::max(hi[k], vox[v].centroid[k]);
-        clo[k] = std::min(clo[k], c[k]);
-        chi[k] = std::max(chi[k], c[k]);
-      }
-      for (int32_t dx = -1; dx <= 1; ++dx)
-        for (int32_t dy = -1; dy <= 1; ++dy) {
-          const uint32_t u = layer.find_cell(c[0] + dx, c[1] + dy, c[2]);
-          if (u == UINT32_MAX || voxel_seg_[u] != kNone || !is_host(u) || kind_of(u) != kind) continue;
-          voxel_seg_[u] = kCurrent;
-          queue_[tail++] = u;  // each voxel enters once: tail <= n
-        }
-    }
-    ++stats.segments;
-    stats.host_voxels += tail;
-    const float ex = hi[0] - lo[0], ey = hi[1] - lo[1];
+    const uint8_t kind = h.kind(seed);
+    SliceBox box;
+    const uint32_t tail = grow_slice(h, seed, kind, sc, &box);
+    ++stats->segments;
+    stats->host_voxels += tail;
+    const float ex = box.hi[0] - box.lo[0], ey = box.hi[1] - box.lo[1];
     uint32_t mark = kRejected;
     if (std::sqrt(ex * ex + ey * ey) > config_.max_diameter[kind]) {
-      ++stats.segments_wide;
+      ++stats->segments_wide;
     } else {
-      // Isolation ring: host voxels of this level outside the segment within ring_width of its box.
-      uint32_t ring = 0;
-      if (config_.ring_width > 0.0f)
-        for (int32_t x = clo[0] - ring_cells; x <= chi[0] + ring_cells; ++x)
-          for (int32_t y = clo[1] - ring_cells; y <= chi[1] + ring_cells; ++y) {
-            const uint32_t u = layer.find_cell(x, y, sc[2]);
-            if (u == UINT32_MAX || voxel_seg_[u] == kCurrent || !is_host(u)) continue;
-            ring += box_distance(vox[u].centroid, lo, hi) <= config_.ring_width;
-          }
+      const uint32_t ring = ring_voxels(h, box, sc[2], ring_cells);
       if (ring > config_.max_ring_voxels) {
-        ++stats.segments_crowded;
+        ++stats->segments_crowded;
       } else {
         mark = segments;
         Segment& s = segments_[segments++];
@@ -148,18 +162,74 @@ Status PoleExtraction::build(const VoxelLayer& layer, PoleStats* stats_out) {
     }
     for (uint32_t q = 0; q < tail; ++q) voxel_seg_[queue_[q]] = mark;
   }
+  return segments;
+}
 
-  // 2. Link stacked thin segments (union by smaller id, so roots are deterministic).
+// Breadth-first over the 8-connected host voxels of `kind` on the seed's level: the members (marked
+// kCurrent) into queue_[0, returned count), their boxes into *box.
+uint32_t PoleExtraction::grow_slice(const Hosts& h, uint32_t seed, uint8_t kind, const int32_t sc[3], SliceBox* box) {
+  const Voxel* vox = h.vox;
+  uint32_t head = 0, tail = 0;
+  queue_[tail++] = seed;
+  voxel_seg_[seed] = kCurrent;
+  float* lo = box->lo;
+  float* hi = box->hi;
+  int32_t* clo = box->clo;
+  int32_t* chi = box->chi;
+  lo[0] = vox[seed].centroid[0];
+  lo[1] = vox[seed].centroid[1];
+  hi[0] = lo[0];
+  hi[1] = lo[1];
+  clo[0] = chi[0] = sc[0];
+  clo[1] = chi[1] = sc[1];
+  while (head < tail) {
+    const uint32_t v = queue_[head++];
+    int32_t c[3];
+    if (!h.cell(v, c)) continue;
+    for (int k = 0; k < 2; ++k) {
+      lo[k] = std::min(lo[k], vox[v].centroid[k]);
+      hi[k] = std::max(hi[k], vox[v].centroid[k]);
+      clo[k] = std::min(clo[k], c[k]);
+      chi[k] = std::max(chi[k], c[k]);
+    }
+    for (int32_t dx = -1; dx <= 1; ++dx)
+      for (int32_t dy = -1; dy <= 1; ++dy) {
+        const uint32_t u = h.layer.find_cell(c[0] + dx, c[1] + dy, c[2]);
+        if (u == UINT32_MAX || voxel_seg_[u] != kNone || !h.host(u) || h.kind(u) != kind) continue;
+        voxel_seg_[u] = kCurrent;
+        queue_[tail++] = u;  // each voxel enters once: tail <= n
+      }
+  }
+  return tail;
+}
+
+// Isolation ring: host voxels of this level outside the segment (kCurrent) within ring_width of its box.
+uint32_t PoleExtraction::ring_voxels(const Hosts& h, const SliceBox& box, int32_t level, int32_t ring_cells) const {
+  uint32_t ring = 0;
+  if (config_.ring_width > 0.0f)
+    for (int32_t x = box.clo[0] - ring_cells; x <= box.chi[0] + ring_cells; ++x)
+      for (int32_t y = box.clo[1] - ring_cells; y <= box.chi[1] + ring_cells; ++y) {
+        const uint32_t u = h.layer.find_cell(x, y, level);
+        if (u == UINT32_MAX || voxel_seg_[u] == kCurrent || !h.host(u)) continue;
+        ring += box_distance(h.vox[u].centroid, box.lo, box.hi) <= config_.ring_width;
+      }
+  return ring;
+}
+
+// 2. A segment voxel links to one of the same kind up to gap_levels higher and within link_radius.
+void PoleExtraction::link_segments(const Hosts& h, int32_t link_cells, int32_t gap_levels) {
+  const Voxel* vox = h.vox;
+  const uint32_t n = h.layer.size();
   const float link2 = config_.link_radius * config_.link_radius;
   for (uint32_t v = 0; v < n; ++v) {
     const uint32_t sv = voxel_seg_[v];
     if (!is_segment(sv)) continue;
     int32_t c[3];
-    if (!cell(v, c)) continue;
+    if (!h.cell(v, c)) continue;
     for (int32_t g = 1; g <= gap_levels; ++g)
       for (int32_t dx = -link_cells; dx <= link_cells; ++dx)
         for (int32_t dy = -link_cells; dy <= link_cells; ++dy) {
-          const uint32_t u = layer.find_cell(c[0] + dx, c[1] + dy, c[2] + g);
+          const uint32_t u = h.layer.find_cell(c[0] + dx, c[1] + dy, c[2] + g);
           if (u == UINT32_MAX || !is_segment(voxel_seg_[u])) continue;
           const uint32_t su = voxel_seg_[u];
           if (segments_[su].kind != segments_[sv].kind) continue;
@@ -171,151 +241,161 @@ Status PoleExtraction::build(const VoxelLayer& layer, PoleStats* stats_out) {
           else segments_[a].parent = b;
         }
   }
+}
 
-  // 3. Group the chains' voxels by root (stable counting sort: voxel order within a chain).
+// 3. The chains' voxels grouped by root into queue_ (stable counting sort: voxel order within a chain);
+// offsets_[r] ends root r's members.
+void PoleExtraction::group_chains(uint32_t n, uint32_t segments) {
   for (uint32_t s = 0; s <= segments; ++s) offsets_[s] = 0;
   for (uint32_t v = 0; v < n; ++v)
     if (is_segment(voxel_seg_[v])) ++offsets_[find_root(voxel_seg_[v]) + 1];
   for (uint32_t s = 0; s < segments; ++s) offsets_[s + 1] += offsets_[s];
   for (uint32_t v = 0; v < n; ++v)
     if (is_segment(voxel_seg_[v])) queue_[offsets_[find_root(voxel_seg_[v])]++] = v;
-  // Now the members of root r are queue_[r == 0 ? 0 : offsets_[r - 1], offsets_[r]).
+}
 
-  for (uint32_t r = 0; r < segments; ++r) {
-    if (segments_[r].parent != r) continue;  // not a root
-    const uint32_t begin = r == 0 ? 0 : offsets_[r - 1], end = offsets_[r];
-    if (begin == end) continue;
-    ++stats.chains;
-    uint32_t* m = queue_ + begin;
-    const uint32_t count = end - begin;
-    // Levels: sort by (level, voxel id), count distinct ones, sum segment rings once per segment.
-    std::sort(m, m + count, [&](uint32_t a, uint32_t b) {
-      const int32_t la = segments_[voxel_seg_[a]].level, lb = segments_[voxel_seg_[b]].level;
-      return la != lb ? la < lb : a < b;
-    });
-    uint32_t levels = 0, chain_segments = 0, ring_sum = 0;
-    int32_t last_level = 0;
-    double sw = 0, sx = 0, sy = 0, sz = 0, spx = 0, spy = 0, spz = 0;
-    float lo[3], hi[3];
-    uint32_t points = 0, first = UINT32_MAX;
-    for (uint32_t q = 0; q < count; ++q) {
-      const uint32_t v = m[q];
-      const Segment& s = segments_[voxel_seg_[v]];
-      if (q == 0 || s.level != last_level) ++levels;
-      last_level = s.level;
-      const float* p = vox[v].centroid;
-      for (int k = 0; k < 3; ++k) {
-        lo[k] = q == 0 ? p[k] : std::min(lo[k], p[k]);
-        hi[k] = q == 0 ? p[k] : std::max(hi[k], p[k]);
-      }
-      sw += 1.0;
-      sx += p[0];
-      sy += p[1];
-      sz += p[2];
-      spx += double(p[0]) * vox[v].count;
-      spy += double(p[1]) * vox[v].count;
-      spz += double(p[2]) * vox[v].count;
-      points += vox[v].count;
-      first = std::min(first, v);
-    }
-    // Segments of the chain: each segment's voxels share one level, so count segment ids once via
-    // the first voxel met of each (voxel ids ascend within a level).
-    for (uint32_t q = 0; q < count; ++q) {
-      const uint32_t s = voxel_seg_[m[q]];
-      bool seen = false;
-      for (uint32_t t = q; t-- > 0 && segments_[voxel_seg_[m[t]]].level == segments_[s].level;)
-        if (voxel_seg_[m[t]] == s) {
-          seen = true;
-          break;
-        }
-      if (!seen) {
-        ++chain_segments;
-        ring_sum += segments_[s].ring;
-      }
-    }
-    const uint8_t kind = segments_[r].kind;
-    const float height = hi[2] - lo[2] + vs;
-    if (levels < config_.min_levels || points < config_.min_points || height < config_.min_height[kind]) {
-      ++stats.rejected_short;
-      continue;
-    }
-    // Axis: least squares x = a + b z, y = c + d z about the voxel mean.
-    const double mx = sx / sw, my = sy / sw, mz = sz / sw;
-    double szz = 0, sxz = 0, syz = 0;
-    for (uint32_t q = 0; q < count; ++q) {
-      const float* p = vox[m[q]].centroid;
-      const double dz = p[2] - mz;
-      szz += dz * dz;
-      sxz += (p[0] - mx) * dz;
-      syz += (p[1] - my) * dz;
-    }
-    const double bx = szz > 0 ? sxz / szz : 0.0, by = szz > 0 ? syz / szz : 0.0;
-    const double tilt = std::atan(std::sqrt(bx * bx + by * by)) * (180.0 / 3.14159265358979323846);
-    if (!(tilt <= config_.max_tilt_deg)) {
-      ++stats.rejected_tilt;
-      continue;
-    }
-    double rlo[2] = {0, 0}, rhi[2] = {0, 0};
-    for (uint32_t q = 0; q < count; ++q) {
-      const float* p = vox[m[q]].centroid;
-      const double dz = p[2] - mz;
-      const double rx = p[0] - mx - bx * dz, ry = p[1] - my - by * dz;
-      rlo[0] = q == 0 ? rx : std::min(rlo[0], rx);
-      rhi[0] = q == 0 ? rx : std::max(rhi[0], rx);
-      rlo[1] = q == 0 ? ry : std::min(rlo[1], ry);
-      rhi[1] = q == 0 ? ry : std::max(rhi[1], ry);
-    }
-    const double thickness = std::sqrt((rhi[0] - rlo[0]) * (rhi[0] - rlo[0]) + (rhi[1] - rlo[1]) * (rhi[1] - rlo[1]));
-    if (thickness > config_.max_diameter[kind]) {
-      ++stats.rejected_thick;
-      continue;
-    }
-
-    Instance in{};
-    in.centroid[0] = static_cast<float>(spx / points);
-    in.centroid[1] = static_cast<float>(spy / points);
-    in.centroid[2] = static_cast<float>(spz / points);
-    for (int k = 0; k < 3; ++k) in.extent[k] = hi[k] - lo[k] + vs;
-    in.stability = config_.stability[kind];
-    in.voxel_count = count;
-    in.point_count = points;
-    in.first_voxel = first;
-    in.label = kind == kPoleKind ? uint8_t(kPole) : uint8_t(kTrunk);
-    PoleInfo info{};
-    info.height = height;
-    info.tilt_deg = static_cast<float>(tilt);
-    info.thickness = static_cast<float>(thickness);
-    info.ring = chain_segments ? float(ring_sum) / float(chain_segments) : 0.0f;
-    info.levels = levels;
-    info.kind = kind;
-    info.first_voxel = first;
-    info.score = static_cast<float>(height * std::cos(tilt * (3.14159265358979323846 / 180.0)) / (1.0 + info.ring));
-
-    // Keep the best max_instances by score; on overflow evict the worst.
-    auto worse = [&](uint32_t a_slot, const PoleInfo& bi, const Instance& bn) {  // slot a worse than (bi, bn)?
-      const PoleInfo& ai = info_[a_slot];
-      const Instance& an = instances_[a_slot];
-      if (ai.score != bi.score) return ai.score < bi.score;
-      if (an.point_count != bn.point_count) return an.point_count < bn.point_count;
-      return an.first_voxel > bn.first_voxel;
-    };
-    uint32_t slot = count_;
-    if (count_ == config_.max_instances) {
-      uint32_t w = 0;
-      for (uint32_t k = 1; k < count_; ++k)
-        if (worse(k, info_[w], instances_[w])) w = k;
-      ++stats.dropped_capacity;
-      if (worse(w, info, in) == false) continue;  // the new one is no better than the worst kept
-      slot = w;
-    } else {
-      ++count_;
-    }
-    instances_[slot] = in;
-    info_[slot] = info;
+// 4. One chain (its members, sorted here by level): accepted when tall enough, upright and thin about
+// its axis, then kept among the best max_instances by score.
+void PoleExtraction::judge_chain(const Hosts& h, uint32_t root, uint32_t* m, uint32_t count, PoleStats* stats) {
+  const Voxel* vox = h.vox;
+  const float vs = h.layer.config().voxel_size;
+  ChainShape shape;
+  sum_chain(h, m, count, &shape);
+  const uint8_t kind = segments_[root].kind;
+  const float height = shape.hi[2] - shape.lo[2] + vs;
+  if (shape.levels < config_.min_levels || shape.points < config_.min_points || height < config_.min_height[kind]) {
+    ++stats->rejected_short;
+    return;
   }
+  // Axis: least squares x = a + b z, y = c + d z about the voxel mean.
+  const double mx = shape.sx / shape.sw, my = shape.sy / shape.sw, mz = shape.sz / shape.sw;
+  double szz = 0, sxz = 0, syz = 0;
+  for (uint32_t q = 0; q < count; ++q) {
+    const float* p = vox[m[q]].centroid;
+    const double dz = p[2] - mz;
+    szz += dz * dz;
+    sxz += (p[0] - mx) * dz;
+    syz += (p[1] - my) * dz;
+  }
+  const double bx = szz > 0 ? sxz / szz : 0.0, by = szz > 0 ? syz / szz : 0.0;
+  const double tilt = std::atan(std::sqrt(bx * bx + by * by)) * (180.0 / 3.14159265358979323846);
+  if (!(tilt <= config_.max_tilt_deg)) {
+    ++stats->rejected_tilt;
+    return;
+  }
+  // Thickness: the box of the residuals about the axis.
+  double rlo[2] = {0, 0}, rhi[2] = {0, 0};
+  for (uint32_t q = 0; q < count; ++q) {
+    const float* p = vox[m[q]].centroid;
+    const double dz = p[2] - mz;
+    const double rx = p[0] - mx - bx * dz, ry = p[1] - my - by * dz;
+    rlo[0] = q == 0 ? rx : std::min(rlo[0], rx);
+    rhi[0] = q == 0 ? rx : std::max(rhi[0], rx);
+    rlo[1] = q == 0 ? ry : std::min(rlo[1], ry);
+    rhi[1] = q == 0 ? ry : std::max(rhi[1], ry);
+  }
+  const double thickness = std::sqrt((rhi[0] - rlo[0]) * (rhi[0] - rlo[0]) + (rhi[1] - rlo[1]) * (rhi[1] - rlo[1]));
+  if (thickness > config_.max_diameter[kind]) {
+    ++stats->rejected_thick;
+    return;
+  }
+  Instance in{};
+  in.centroid[0] = static_cast<float>(shape.spx / shape.points);
+  in.centroid[1] = static_cast<float>(shape.spy / shape.points);
+  in.centroid[2] = static_cast<float>(shape.spz / shape.points);
+  for (int k = 0; k < 3; ++k) in.extent[k] = shape.hi[k] - shape.lo[k] + vs;
+  in.stability = config_.stability[kind];
+  in.voxel_count = count;
+  in.point_count = shape.points;
+  in.first_voxel = shape.first;
+  in.label = kind == kPoleKind ? uint8_t(kPole) : uint8_t(kTrunk);
+  PoleInfo info{};
+  info.height = height;
+  info.tilt_deg = static_cast<float>(tilt);
+  info.thickness = static_cast<float>(thickness);
+  info.ring = shape.segments ? float(shape.ring_sum) / float(shape.segments) : 0.0f;
+  info.levels = shape.levels;
+  info.kind = kind;
+  info.first_voxel = shape.first;
+  info.score = static_cast<float>(height * std::cos(tilt * (3.14159265358979323846 / 180.0)) / (1.0 + info.ring));
+  keep_best(in, info, stats);
+}
 
-  // Discovery order (first voxel; unique, so both arrays get the same permutation), then the
-  // voxel -> instance map.
+// A chain's levels, box and sums: members sorted by (level, voxel id); distinct levels counted, each
+// segment's ring summed once.
+void PoleExtraction::sum_chain(const Hosts& h, uint32_t* m, uint32_t count, ChainShape* shape) const {
+  const Voxel* vox = h.vox;
+  std::sort(m, m + count, [&](uint32_t a, uint32_t b) {
+    const int32_t la = segments_[voxel_seg_[a]].level, lb = segments_[voxel_seg_[b]].level;
+    return la != lb ? la < lb : a < b;
+  });
+  ChainShape& c = *shape;
+  int32_t last_level = 0;
+  for (uint32_t q = 0; q < count; ++q) {
+    const uint32_t v = m[q];
+    const Segment& s = segments_[voxel_seg_[v]];
+    if (q == 0 || s.level != last_level) ++c.levels;
+    last_level = s.level;
+    const float* p = vox[v].centroid;
+    for (int k = 0; k < 3; ++k) {
+      c.lo[k] = q == 0 ? p[k] : std::min(c.lo[k], p[k]);
+      c.hi[k] = q == 0 ? p[k] : std::max(c.hi[k], p[k]);
+    }
+    c.sw += 1.0;
+    c.sx += p[0];
+    c.sy += p[1];
+    c.sz += p[2];
+    c.spx += double(p[0]) * vox[v].count;
+    c.spy += double(p[1]) * vox[v].count;
+    c.spz += double(p[2]) * vox[v].count;
+    c.points += vox[v].count;
+    c.first = std::min(c.first, v);
+  }
+  // Segments of the chain: each segment's voxels share one level, so count segment ids once via
+  // the first voxel met of each (voxel ids ascend within a level).
+  for (uint32_t q = 0; q < count; ++q) {
+    const uint32_t s = voxel_seg_[m[q]];
+    bool seen = false;
+    for (uint32_t t = q; t-- > 0 && segments_[voxel_seg_[m[t]]].level == segments_[s].level;)
+      if (voxel_seg_[m[t]] == s) {
+        seen = true;
+        break;
+      }
+    if (!seen) {
+      ++c.segments;
+      c.ring_sum += segments_[s].ring;
+    }
+  }
+}
+
+// Keep the best max_instances by score; on overflow evict the worst (ties: fewer points, then later
+// discovery), unless the new one is no better than it.
+void PoleExtraction::keep_best(const Instance& in, const PoleInfo& info, PoleStats* stats) {
+  auto worse = [&](uint32_t a_slot, const PoleInfo& bi, const Instance& bn) {  // slot a worse than (bi, bn)?
+    const PoleInfo& ai = info_[a_slot];
+    const Instance& an = instances_[a_slot];
+    if (ai.score != bi.score) return ai.score < bi.score;
+    if (an.point_count != bn.point_count) return an.point_count < bn.point_count;
+    return an.first_voxel > bn.first_voxel;
+  };
+  uint32_t slot = count_;
+  if (count_ == config_.max_instances) {
+    uint32_t w = 0;
+    for (uint32_t k = 1; k < count_; ++k)
+      if (worse(k, info_[w], instances_[w])) w = k;
+    ++stats->dropped_capacity;
+    if (worse(w, info, in) == false) return;  // the new one is no better than the worst kept
+    slot = w;
+  } else {
+    ++count_;
+  }
+  instances_[slot] = in;
+  info_[slot] = info;
+}
+
+// Discovery order (first voxel; unique, so both arrays get the same permutation), then the
+// voxel -> instance map.
+void PoleExtraction::order_by_discovery(uint32_t n, uint32_t segments) {
   std::sort(instances_, instances_ + count_,
             [](const Instance& a, const Instance& b) { return a.first_voxel < b.first_voxel; });
   std::sort(info_, info_ + count_, [](const PoleInfo& a, const PoleInfo& b) { return a.first_voxel < b.first_voxel; });
@@ -325,9 +405,6 @@ Status PoleExtraction::build(const VoxelLayer& layer, PoleStats* stats_out) {
     const uint32_t s = voxel_seg_[v];
     voxel_seg_[v] = is_segment(s) ? offsets_[find_root(s)] : UINT32_MAX;
   }
-  stats.instances = count_;
-  if (stats_out) *stats_out = stats;
-  return stats.dropped_capacity ? Status::CapacityExceeded : Status::Ok;
 }
 
 void PoleExtraction::order_by_score(uint32_t* order) const {

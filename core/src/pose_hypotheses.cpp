@@ -15,6 +15,11 @@ namespace {
 int64_t shift_coord(double v, float bin) { return static_cast<int64_t>(std::floor(v / bin)) + (1 << 20); }
 uint64_t shift_key(int64_t x, int64_t y) { return (uint64_t(x & 0x1FFFFF) << 21) | uint64_t(y & 0x1FFFFF); }
 
+constexpr double kPi = 3.14159265358979323846;
+
+Eigen::Vector3d point(const float* p, uint32_t i) { return Eigen::Vector3d(p[3 * i], p[3 * i + 1], p[3 * i + 2]); }
+double yaw_of(const Eigen::Isometry3d& T) { return std::atan2(T.linear()(1, 0), T.linear()(0, 0)); }
+
 }  // namespace
 
 size_t PoseHypotheses::required_bytes(uint32_t max_correspondences, uint32_t max_hypotheses, uint32_t max_votes) {
@@ -124,291 +129,371 @@ uint32_t PoseHypotheses::rank_shift_bins(uint32_t bins, const float* w, const Hy
   return kept;
 }
 
+struct PoseHypotheses::Run {
+  const float* a;  // n_votes x 3 query positions
+  const float* b;  // n_votes x 3 map positions
+  const float* w;  // n_votes weights
+  uint32_t n, n_votes;
+  const HypothesisConfig& c;
+  uint32_t K;       // hypotheses wanted
+  double far2;      // (2 tls_threshold)^2: what a core pose explains (refit, the first translation round)
+  double c2;        // tls_threshold^2
+  double same_rad;  // same_pose_deg
+  double max_tilt;  // max_tilt_deg
+  HypothesisStats st;
+
+  // Squared residual of correspondence i under pose T.
+  double residual2(const Eigen::Isometry3d& T, uint32_t i) const {
+    return (point(b, i) - T * point(a, i)).squaredNorm();
+  }
+};
+
 Status PoseHypotheses::generate(const float* a, const float* b, const float* w, uint32_t n, const HypothesisConfig& c,
                                 HypothesisStats* stats_out, uint32_t n_votes) {
-  HypothesisStats st;
   count_ = 0;
   if (max_n_ == 0) return Status::NotInitialized;
   if (n_votes < n) n_votes = n;
   if (n > max_n_ || n_votes > max_v_) return Status::CapacityExceeded;
   for (uint32_t i = 0; i < n; ++i) owner_[i] = 0;
   if (n < c.min_inliers) {
-    if (stats_out) *stats_out = st;
+    if (stats_out) *stats_out = HypothesisStats();
     return Status::NoSolution;
   }
-  const uint32_t K = c.max_hypotheses < max_h_ ? c.max_hypotheses : max_h_;
-  const double far2 = 4.0 * double(c.tls_threshold) * c.tls_threshold;
-  const double c2 = double(c.tls_threshold) * c.tls_threshold;
-  const double same_rad = double(c.same_pose_deg) * 3.14159265358979323846 / 180.0;
-  auto point = [](const float* p, uint32_t i) { return Eigen::Vector3d(p[3 * i], p[3 * i + 1], p[3 * i + 2]); };
-  auto residual2 = [&](const Eigen::Isometry3d& T, uint32_t i) {
-    return (point(b, i) - T * point(a, i)).squaredNorm();
-  };
-  auto copy_to_sub = [&](uint32_t slot, uint32_t i) {
-    for (int d = 0; d < 3; ++d) {
-      sub_a_[3 * slot + d] = a[3 * i + d];
-      sub_b_[3 * slot + d] = b[3 * i + d];
-    }
-    sub_w_[slot] = w[i] > 1e-6f ? w[i] : 1e-6f;
-  };
-  auto is_allowed = [&](uint32_t i) { return ((allowed_[i >> 6] >> (i & 63)) & 1u) != 0; };
-  auto disallow = [&](uint32_t i) { allowed_[i >> 6] &= ~(uint64_t(1) << (i & 63)); };
-  // Re-associate: every correspondence `pose` explains (within 2c) joins one TLS solve. A clique or a
-  // vote peak is a core; the pose of everything it explains is markedly more accurate, and
-  // verification compares poses at the 1 m scale of the semantic layer. False if too few agree.
-  auto refit = [&](const Eigen::Isometry3d& pose, TlsResult* out, uint32_t* used) {
-    uint32_t m = 0;
-    for (uint32_t i = 0; i < n; ++i)
-      if (residual2(pose, i) <= far2) copy_to_sub(m++, i);
-    *used = m;
-    return m >= c.min_inliers &&
-           solve_tls(sub_a_, sub_b_, sub_w_, m, c.tls_threshold, c.max_iterations, out, mask_, tls_w_) == Status::Ok &&
-           out->inliers >= c.min_inliers;
-  };
-  // Records a hypothesis unless it repeats an earlier one; mask_/sub_w_ describe its TLS solve (m rows).
-  const double max_tilt = double(c.max_tilt_deg) * 3.14159265358979323846 / 180.0;
-  auto record = [&](const TlsResult& tls_in, uint32_t core_size, uint32_t m) {
-    // Upright prior: a vehicle's sensor is within max_tilt of level.
-    TlsResult tls = tls_in;
-    const double cos_tilt = tls.b_T_a.linear()(2, 2);
-    if (c.max_tilt_deg > 0 && cos_tilt < std::cos(max_tilt)) {
-      // Re-solved upright (yaw and translation) on the solve's inliers, then its inliers recounted:
-      // a clique of few mid-height centroids fixes heading and place well but tilt poorly, and
-      // rejecting it lost the right place; an upside-down solve rarely survives the recount.
-      ++st.tilted;
-      if (fit_upright(sub_a_, sub_b_, sub_w_, mask_, m, &tls.b_T_a) != Status::Ok) return false;
-      const double c2 = double(c.tls_threshold) * c.tls_threshold;
-      tls.inliers = 0;
-      for (uint32_t i = 0; i < m; ++i) {
-        const Eigen::Vector3d pa(sub_a_[3 * i], sub_a_[3 * i + 1], sub_a_[3 * i + 2]);
-        const Eigen::Vector3d pb(sub_b_[3 * i], sub_b_[3 * i + 1], sub_b_[3 * i + 2]);
-        mask_[i] = (pb - tls.b_T_a * pa).squaredNorm() <= c2;
-        tls.inliers += mask_[i];
-      }
-      if (tls.inliers < c.min_inliers) return false;
-    }
-    for (uint32_t h = 0; h < count_; ++h) {
-      const Eigen::Isometry3d d = hyps_[h].map_T_scan.inverse() * tls.b_T_a;
-      if (d.translation().norm() < c.same_pose_m && Eigen::AngleAxisd(d.linear()).angle() < same_rad) {
-        ++st.merged;
-        return false;
-      }
-    }
-    PoseHypothesis& h = hyps_[count_++];
-    h = PoseHypothesis();
-    h.map_T_scan = tls.b_T_a;
-    h.clique_size = core_size;
-    h.inliers = tls.inliers;
-    for (uint32_t i = 0; i < m; ++i) h.support += mask_[i] ? sub_w_[i] : 0.0;
-    return true;
-  };
-
+  Run r{a,
+        b,
+        w,
+        n,
+        n_votes,
+        c,
+        c.max_hypotheses < max_h_ ? c.max_hypotheses : max_h_,
+        4.0 * double(c.tls_threshold) * c.tls_threshold,
+        double(c.tls_threshold) * c.tls_threshold,
+        double(c.same_pose_deg) * kPi / 180.0,
+        double(c.max_tilt_deg) * kPi / 180.0,
+        HypothesisStats()};
   // 1. Peeled maximum cliques (the first is the paper's answer).
   graph_.build(a, b, n, c.consistency_eps, c.consistency_z_weight);
+  peel_cliques(r);
+  // 1b. Heading-diverse cliques, when the peeled ones found too few headings.
+  find_heading_cliques(r);
+  // 2. Shift votes at the headings found.
+  vote_shifts(r);
+  r.st.vote_pairs = n_votes;
+  if (stats_out) *stats_out = r.st;
+  return count_ > 0 ? Status::Ok : Status::NoSolution;
+}
+
+void PoseHypotheses::copy_to_sub(const Run& r, uint32_t slot, uint32_t i) {
+  for (int d = 0; d < 3; ++d) {
+    sub_a_[3 * slot + d] = r.a[3 * i + d];
+    sub_b_[3 * slot + d] = r.b[3 * i + d];
+  }
+  sub_w_[slot] = r.w[i] > 1e-6f ? r.w[i] : 1e-6f;
+}
+
+void PoseHypotheses::allow_all(uint32_t n) {
   const uint32_t words = (n + 63) / 64;
-  auto allow_all = [&]() {
-    for (uint32_t i = 0; i < words; ++i) allowed_[i] = 0;
-    for (uint32_t i = 0; i < n; ++i) allowed_[i >> 6] |= uint64_t(1) << (i & 63);
-  };
-  allow_all();
-  const uint32_t peel = c.max_peeled < K ? c.max_peeled : K;
+  for (uint32_t i = 0; i < words; ++i) allowed_[i] = 0;
+  for (uint32_t i = 0; i < n; ++i) allowed_[i >> 6] |= uint64_t(1) << (i & 63);
+}
+
+// Re-associate: every correspondence `pose` explains (within 2c) joins one TLS solve. A clique or a
+// vote peak is a core; the pose of everything it explains is markedly more accurate, and
+// verification compares poses at the 1 m scale of the semantic layer. False if too few agree.
+bool PoseHypotheses::refit(const Run& r, const Eigen::Isometry3d& pose, TlsResult* out, uint32_t* used) {
+  const HypothesisConfig& c = r.c;
+  uint32_t m = 0;
+  for (uint32_t i = 0; i < r.n; ++i)
+    if (r.residual2(pose, i) <= r.far2) copy_to_sub(r, m++, i);
+  *used = m;
+  return m >= c.min_inliers &&
+         solve_tls(sub_a_, sub_b_, sub_w_, m, c.tls_threshold, c.max_iterations, out, mask_, tls_w_) == Status::Ok &&
+         out->inliers >= c.min_inliers;
+}
+
+// Records a hypothesis unless it repeats an earlier one; mask_/sub_w_ describe its TLS solve (m rows).
+bool PoseHypotheses::record(Run& r, const TlsResult& tls_in, uint32_t core_size, uint32_t m) {
+  TlsResult tls = tls_in;
+  if (!make_upright(r, &tls, m) || repeats_earlier(r, tls.b_T_a)) return false;
+  PoseHypothesis& h = hyps_[count_++];
+  h = PoseHypothesis();
+  h.map_T_scan = tls.b_T_a;
+  h.clique_size = core_size;
+  h.inliers = tls.inliers;
+  for (uint32_t i = 0; i < m; ++i) h.support += mask_[i] ? sub_w_[i] : 0.0;
+  return true;
+}
+
+// Upright prior: a vehicle's sensor is within max_tilt of level. A solve tilted more is re-solved
+// upright (yaw and translation) on its inliers, then its inliers recounted: a clique of few mid-height
+// centroids fixes heading and place well but tilt poorly, and rejecting it lost the right place; an
+// upside-down solve rarely survives the recount. False when it does not.
+bool PoseHypotheses::make_upright(Run& r, TlsResult* tls, uint32_t m) {
+  const HypothesisConfig& c = r.c;
+  const double cos_tilt = tls->b_T_a.linear()(2, 2);
+  if (!(c.max_tilt_deg > 0 && cos_tilt < std::cos(r.max_tilt))) return true;
+  ++r.st.tilted;
+  if (fit_upright(sub_a_, sub_b_, sub_w_, mask_, m, &tls->b_T_a) != Status::Ok) return false;
+  tls->inliers = 0;
+  for (uint32_t i = 0; i < m; ++i) {
+    const Eigen::Vector3d pa(sub_a_[3 * i], sub_a_[3 * i + 1], sub_a_[3 * i + 2]);
+    const Eigen::Vector3d pb(sub_b_[3 * i], sub_b_[3 * i + 1], sub_b_[3 * i + 2]);
+    mask_[i] = (pb - tls->b_T_a * pa).squaredNorm() <= r.c2;
+    tls->inliers += mask_[i];
+  }
+  return tls->inliers >= c.min_inliers;
+}
+
+// Whether `pose` is within same_pose_m and same_pose_deg of an earlier hypothesis (counted as merged).
+bool PoseHypotheses::repeats_earlier(Run& r, const Eigen::Isometry3d& pose) const {
+  for (uint32_t h = 0; h < count_; ++h) {
+    const Eigen::Isometry3d d = hyps_[h].map_T_scan.inverse() * pose;
+    if (d.translation().norm() < r.c.same_pose_m && Eigen::AngleAxisd(d.linear()).angle() < r.same_rad) {
+      ++r.st.merged;
+      return true;
+    }
+  }
+  return false;
+}
+
+// 1. Maximum cliques one after another, each with its TLS pose; what a pose explains leaves the graph
+// before the next search, so the next clique is a genuinely different answer.
+void PoseHypotheses::peel_cliques(Run& r) {
+  const HypothesisConfig& c = r.c;
+  allow_all(r.n);
+  const uint32_t peel = c.max_peeled < r.K ? c.max_peeled : r.K;
   // Each search removes at least one correspondence of its clique, so 2K searches bound the loop.
-  for (uint32_t attempt = 0; attempt < 2 * K && count_ < peel; ++attempt) {
+  for (uint32_t attempt = 0; attempt < 2 * r.K && count_ < peel; ++attempt) {
     CliqueStats cs;
-    const Status s = solver_.solve(graph_, st.searches == 0 ? c.first_budget : c.next_budget, clique_, &cs, allowed_);
-    if (st.searches == 0 && s == Status::BudgetExhausted) st.budget_exhausted = true;
-    ++st.searches;
-    st.nodes += cs.nodes;
+    const Status s = solver_.solve(graph_, r.st.searches == 0 ? c.first_budget : c.next_budget, clique_, &cs, allowed_);
+    if (r.st.searches == 0 && s == Status::BudgetExhausted) r.st.budget_exhausted = true;
+    ++r.st.searches;
+    r.st.nodes += cs.nodes;
     const uint32_t q = clique_.size();
     if (q < c.min_inliers) break;
-    for (uint32_t i = 0; i < q; ++i) copy_to_sub(i, clique_[i]);
-    TlsResult tls, wide;
+    TlsResult tls;
     uint32_t m = q;
-    const bool fitted =
-        solve_tls(sub_a_, sub_b_, sub_w_, q, c.tls_threshold, c.max_iterations, &tls, mask_, tls_w_) == Status::Ok &&
-        tls.inliers >= c.min_inliers;
-    if (fitted) {
-      uint32_t wm = 0;
-      if (refit(tls.b_T_a, &wide, &wm) && wm > q && wide.inliers >= tls.inliers) {
-        tls = wide;
-        m = wm;
-      } else {  // mask_ must describe the clique's own solve again
-        for (uint32_t i = 0; i < q; ++i) copy_to_sub(i, clique_[i]);
-        solve_tls(sub_a_, sub_b_, sub_w_, q, c.tls_threshold, c.max_iterations, &tls, mask_, tls_w_);
-      }
-      // Only what the final pose explains leaves the graph: a clique that mixed two lattice shifts must
-      // not take the other shift's correspondences with it (that is how true hypotheses were lost).
-      for (uint32_t i = 0; i < n; ++i)
-        if (residual2(tls.b_T_a, i) <= c2) disallow(i);
-    }
+    const bool fitted = fit_clique(r, &tls, &m);
     // The same clique must not come back: if none of its members left, all of them go.
     bool progressed = false;
     for (uint32_t i = 0; i < q && !progressed; ++i) progressed = !is_allowed(clique_[i]);
     if (!progressed)
       for (uint32_t i = 0; i < q; ++i) disallow(clique_[i]);
-    if (!fitted || !record(tls, q, m)) continue;
+    if (!fitted || !record(r, tls, q, m)) continue;
     for (uint32_t i = 0; i < q; ++i) owner_[clique_[i]] = count_;
   }
+}
 
-  // 1b. Heading-diverse cliques (HypothesisConfig::heading_cliques): the edges that make cliques at the
-  // headings found so far leave the graph, and the search runs again on every correspondence.
-  auto yaw_of = [](const Eigen::Isometry3d& T) { return std::atan2(T.linear()(1, 0), T.linear()(0, 0)); };
-  // Hypothesis hp's heading differs from every earlier hypothesis' by at least same_pose_deg.
-  auto new_heading = [&](uint32_t hp) {
-    for (uint32_t e = 0; e < hp; ++e)
-      if (Eigen::AngleAxisd(hyps_[e].map_T_scan.linear().transpose() * hyps_[hp].map_T_scan.linear()).angle() <
-          same_rad)
-        return false;
-    return true;
-  };
-  auto distinct_headings = [&]() {
-    uint32_t d = 0;
-    for (uint32_t hp = 0; hp < count_; ++hp) d += new_heading(hp);
-    return d;
-  };
-  if (c.heading_cliques > 0 && count_ > 0 && count_ < K && distinct_headings() < c.shift_headings) {
-    const double separation = double(c.heading_separation_deg) * 3.14159265358979323846 / 180.0;
-    const float min_pair = c.tls_threshold;  // shorter pairs cannot tell a heading to within the separation
-    uint32_t cleared = 0;                    // hypotheses whose heading's edges are gone
-    allow_all();
-    for (uint32_t extra = 0; extra < c.heading_cliques && count_ < K; ++extra) {
-      for (; cleared < count_; ++cleared)
-        graph_.remove_edges_at_heading(a, b, yaw_of(hyps_[cleared].map_T_scan), separation, min_pair);
-      if (distinct_headings() >= c.shift_headings) break;
-      CliqueStats cs;
-      solver_.solve(graph_, c.next_budget, clique_, &cs, allowed_);
-      ++st.searches;
-      st.nodes += cs.nodes;
-      const uint32_t q = clique_.size();
-      if (q < c.min_inliers) break;
-      for (uint32_t i = 0; i < q; ++i) copy_to_sub(i, clique_[i]);
-      TlsResult tls;
-      if (solve_tls(sub_a_, sub_b_, sub_w_, q, c.tls_threshold, c.max_iterations, &tls, mask_, tls_w_) != Status::Ok ||
-          tls.inliers < c.min_inliers || !record(tls, q, q)) {
-        // No hypothesis from it: its members leave, so the next search differs.
-        for (uint32_t i = 0; i < q; ++i) disallow(clique_[i]);
-        continue;
-      }
-      ++st.heading_cliques;
-      for (uint32_t i = 0; i < q; ++i) owner_[clique_[i]] = count_;
-    }
+// The clique's TLS pose, or the solve of everything it explains when that agrees at least as well
+// (refit; *m rows of the solve in mask_/sub_w_). Only what the final pose explains leaves the graph: a
+// clique that mixed two lattice shifts must not take the other shift's correspondences with it (that
+// is how true hypotheses were lost). False when the clique gives no pose.
+bool PoseHypotheses::fit_clique(Run& r, TlsResult* tls, uint32_t* m) {
+  const HypothesisConfig& c = r.c;
+  const uint32_t q = clique_.size();
+  for (uint32_t i = 0; i < q; ++i) copy_to_sub(r, i, clique_[i]);
+  const bool fitted =
+      solve_tls(sub_a_, sub_b_, sub_w_, q, c.tls_threshold, c.max_iterations, tls, mask_, tls_w_) == Status::Ok &&
+      tls->inliers >= c.min_inliers;
+  if (!fitted) return false;
+  TlsResult wide;
+  uint32_t wm = 0;
+  if (refit(r, tls->b_T_a, &wide, &wm) && wm > q && wide.inliers >= tls->inliers) {
+    *tls = wide;
+    *m = wm;
+  } else {  // mask_ must describe the clique's own solve again
+    for (uint32_t i = 0; i < q; ++i) copy_to_sub(r, i, clique_[i]);
+    solve_tls(sub_a_, sub_b_, sub_w_, q, c.tls_threshold, c.max_iterations, tls, mask_, tls_w_);
   }
+  for (uint32_t i = 0; i < r.n; ++i)
+    if (r.residual2(tls->b_T_a, i) <= r.c2) disallow(i);
+  return true;
+}
 
-  // 2. Shift votes. In a repetitive layout the true answer is one translation among many that the
-  // cliques' headings allow, and peeling may never form it. For each distinct heading found, every
-  // correspondence votes for the translation b - R a (bins of shift_bin metres); the best-supported
-  // bins (rank_shift_bins: by the votes within tls_threshold of a bin's mean, ties by bin key) become
-  // hypotheses until K are found.
+// Hypothesis hp's heading differs from every earlier hypothesis' by at least same_pose_deg.
+bool PoseHypotheses::new_heading(const Run& r, uint32_t hp) const {
+  for (uint32_t e = 0; e < hp; ++e)
+    if (Eigen::AngleAxisd(hyps_[e].map_T_scan.linear().transpose() * hyps_[hp].map_T_scan.linear()).angle() <
+        r.same_rad)
+      return false;
+  return true;
+}
+
+uint32_t PoseHypotheses::distinct_headings(const Run& r) const {
+  uint32_t d = 0;
+  for (uint32_t hp = 0; hp < count_; ++hp) d += new_heading(r, hp);
+  return d;
+}
+
+// 1b. Heading-diverse cliques (HypothesisConfig::heading_cliques): the edges that make cliques at the
+// headings found so far leave the graph, and the search runs again on every correspondence.
+void PoseHypotheses::find_heading_cliques(Run& r) {
+  const HypothesisConfig& c = r.c;
+  if (c.heading_cliques == 0 || count_ == 0 || count_ >= r.K || distinct_headings(r) >= c.shift_headings) return;
+  const double separation = double(c.heading_separation_deg) * kPi / 180.0;
+  const float min_pair = c.tls_threshold;  // shorter pairs cannot tell a heading to within the separation
+  uint32_t cleared = 0;                    // hypotheses whose heading's edges are gone
+  allow_all(r.n);
+  for (uint32_t extra = 0; extra < c.heading_cliques && count_ < r.K; ++extra) {
+    for (; cleared < count_; ++cleared)
+      graph_.remove_edges_at_heading(r.a, r.b, yaw_of(hyps_[cleared].map_T_scan), separation, min_pair);
+    if (distinct_headings(r) >= c.shift_headings) break;
+    CliqueStats cs;
+    solver_.solve(graph_, c.next_budget, clique_, &cs, allowed_);
+    ++r.st.searches;
+    r.st.nodes += cs.nodes;
+    const uint32_t q = clique_.size();
+    if (q < c.min_inliers) break;
+    for (uint32_t i = 0; i < q; ++i) copy_to_sub(r, i, clique_[i]);
+    TlsResult tls;
+    if (solve_tls(sub_a_, sub_b_, sub_w_, q, c.tls_threshold, c.max_iterations, &tls, mask_, tls_w_) != Status::Ok ||
+        tls.inliers < c.min_inliers || !record(r, tls, q, q)) {
+      // No hypothesis from it: its members leave, so the next search differs.
+      for (uint32_t i = 0; i < q; ++i) disallow(clique_[i]);
+      continue;
+    }
+    ++r.st.heading_cliques;
+    for (uint32_t i = 0; i < q; ++i) owner_[clique_[i]] = count_;
+  }
+}
+
+// 2. Shift votes. In a repetitive layout the true answer is one translation among many that the
+// cliques' headings allow, and peeling may never form it. For each distinct heading found, every
+// correspondence votes for the translation b - R a (bins of shift_bin metres); the best-supported
+// bins (rank_shift_bins: by the votes within tls_threshold of a bin's mean, ties by bin key) become
+// hypotheses until K are found.
+void PoseHypotheses::vote_shifts(Run& r) {
+  const HypothesisConfig& c = r.c;
   const uint32_t peeled = count_;
   uint32_t total_headings = 0;
-  for (uint32_t hp = 0; hp < peeled && total_headings < c.shift_headings; ++hp) total_headings += new_heading(hp);
+  for (uint32_t hp = 0; hp < peeled && total_headings < c.shift_headings; ++hp) total_headings += new_heading(r, hp);
   uint32_t headings = 0;
-  for (uint32_t hp = 0; hp < peeled && headings < c.shift_headings && count_ < K; ++hp) {
-    if (!new_heading(hp)) continue;
+  for (uint32_t hp = 0; hp < peeled && headings < c.shift_headings && count_ < r.K; ++hp) {
+    if (!new_heading(r, hp)) continue;
     // An even share of the remaining slots for each remaining heading: the true heading need not be
     // the first clique's.
-    const uint32_t quota = (K - count_ + (total_headings - headings) - 1) / (total_headings - headings);
-    const uint32_t stop = count_ + quota;
+    const uint32_t quota = (r.K - count_ + (total_headings - headings) - 1) / (total_headings - headings);
     ++headings;
     // Upright at the clique's heading: any clique of this heading may carry degrees of roll or pitch
     // (mid-height centroids constrain them poorly), and the bird's-eye verification cannot see tilt,
     // so a vote hypothesis must not inherit it.
     const Eigen::Matrix3d R =
         Eigen::AngleAxisd(yaw_of(hyps_[hp].map_T_scan), Eigen::Vector3d::UnitZ()).toRotationMatrix();
-    const uint32_t V = n_votes;
-    for (uint32_t i = 0; i < V; ++i) {
-      const Eigen::Vector3d t = point(b, i) - R * point(a, i);
-      vote_key_[i] = shift_key(shift_coord(t.x(), c.shift_bin), shift_coord(t.y(), c.shift_bin));
-      vote_order_[i] = i;
-      vote_t_[2 * i] = static_cast<float>(t.x());
-      vote_t_[2 * i + 1] = static_cast<float>(t.y());
-    }
-    std::sort(vote_order_, vote_order_ + V, [this](uint32_t x, uint32_t y) {
-      return vote_key_[x] < vote_key_[y] || (vote_key_[x] == vote_key_[y] && x < y);
-    });
-    // Runs of equal keys are the bins: compact them to (first entry, weight, count), in key order.
-    uint32_t bins = 0;
-    for (uint32_t k = 0; k < V;) {
-      uint32_t e = k;
-      float weight = 0.0f;
-      while (e < V && vote_key_[vote_order_[e]] == vote_key_[vote_order_[k]]) weight += w[vote_order_[e++]];
-      bin_first_[bins] = vote_order_[k];
-      bin_weight_[bins] = weight;
-      bin_count_[bins] = e - k;
-      bin_begin_[bins] = k;
-      bin_key_[bins] = vote_key_[vote_order_[k]];
-      ++bins;
-      k = e;
-    }
-    bin_begin_[bins] = V;
-    const uint32_t all_bins = bins;
-    bins = rank_shift_bins(bins, w, c);
-    // The votes a fit around translation t within radius r can use: those in the bins covering the
-    // square around t, sorted into pair order, so the fit's sums are those of a pass over all pairs.
-    uint32_t* gather = gather_;
-    auto gather_votes = [&](const Eigen::Vector3d& t, double r) {
-      const int64_t x0 = shift_coord(t.x() - r, c.shift_bin), x1 = shift_coord(t.x() + r, c.shift_bin);
-      const int64_t y0 = shift_coord(t.y() - r, c.shift_bin), y1 = shift_coord(t.y() + r, c.shift_bin);
-      uint32_t g = 0;
-      for (int64_t x = x0; x <= x1; ++x)
-        for (int64_t y = y0; y <= y1; ++y) {
-          if (x < 0 || y < 0 || x > 0x1FFFFF || y > 0x1FFFFF) continue;
-          const uint32_t j = find_bin(shift_key(x, y), all_bins);
-          if (j == UINT32_MAX) continue;
-          for (uint32_t e = bin_begin_[j]; e < bin_begin_[j + 1]; ++e) gather[g++] = vote_order_[e];
-        }
-      std::sort(gather, gather + g);
-      return g;
-    };
-    // Best bins first (selection by rank class, then weight; equal weights by key).
-    for (uint32_t taken = 0; taken < bins && count_ < stop; ++taken) {
-      uint32_t best = taken;
-      for (uint32_t k = taken + 1; k < bins; ++k)
-        if (bin_rank_[k] > bin_rank_[best] ||
-            (bin_rank_[k] == bin_rank_[best] &&
-             (bin_weight_[k] > bin_weight_[best] ||
-              (bin_weight_[k] == bin_weight_[best] && vote_key_[bin_first_[k]] < vote_key_[bin_first_[best]]))))
-          best = k;
-      std::swap(bin_first_[taken], bin_first_[best]);
-      std::swap(bin_weight_[taken], bin_weight_[best]);
-      std::swap(bin_count_[taken], bin_count_[best]);
-      std::swap(bin_rank_[taken], bin_rank_[best]);
-      // Translation-only fit under the heading R: a bin holds a few correspondences, too few (and
-      // too collinear) to re-estimate roll and pitch; the heading comes from a whole clique. Each round
-      // reads only the votes of the bins around its translation (gather_votes), not all pairs.
-      const uint32_t i0 = bin_first_[taken];
-      Eigen::Vector3d t = point(b, i0) - R * point(a, i0);
-      uint32_t m = 0;
-      for (int it = 0; it < 3; ++it) {
-        const double r2 = it == 0 ? far2 : c2;
-        const uint32_t g = gather_votes(t, std::sqrt(r2));
-        Eigen::Vector3d sum = Eigen::Vector3d::Zero();
-        double wsum = 0.0;
-        m = 0;
-        for (uint32_t e = 0; e < g; ++e) {
-          const uint32_t i = gather[e];
-          const Eigen::Vector3d ti = point(b, i) - R * point(a, i);
-          if ((ti - t).squaredNorm() > r2) continue;
-          copy_to_sub(m, i);
-          mask_[m++] = 1;
-          sum += double(sub_w_[m - 1]) * ti;
-          wsum += sub_w_[m - 1];
-        }
-        if (m < c.min_inliers || !(wsum > 0)) break;
-        t = sum / wsum;
-      }
-      if (m < c.min_inliers) continue;
-      TlsResult tls;
-      tls.b_T_a.linear() = R;
-      tls.b_T_a.translation() = t;
-      tls.inliers = m;
-      ++st.voted;
-      record(tls, 0, m);
-    }
+    vote_at_heading(r, R, count_ + quota);
   }
-  st.vote_pairs = n_votes;
-  if (stats_out) *stats_out = st;
-  return count_ > 0 ? Status::Ok : Status::NoSolution;
+}
+
+// Hypotheses at heading R from the best shift-vote bins, until `stop` hypotheses exist.
+void PoseHypotheses::vote_at_heading(Run& r, const Eigen::Matrix3d& R, uint32_t stop) {
+  const uint32_t all_bins = bin_votes(r, R);
+  const uint32_t bins = rank_shift_bins(all_bins, r.w, r.c);
+  for (uint32_t taken = 0; taken < bins && count_ < stop; ++taken) {
+    bring_best_bin_to(taken, bins);
+    Eigen::Vector3d t;
+    uint32_t m = 0;
+    if (!fit_translation(r, R, bin_first_[taken], all_bins, &t, &m)) continue;
+    TlsResult tls;
+    tls.b_T_a.linear() = R;
+    tls.b_T_a.translation() = t;
+    tls.inliers = m;
+    ++r.st.voted;
+    record(r, tls, 0, m);
+  }
+}
+
+// Every vote's translation and bin key, the votes sorted by key, and the runs of equal keys compacted
+// to bins (first entry, weight, count, begin, key), in key order. Returns the number of bins.
+uint32_t PoseHypotheses::bin_votes(const Run& r, const Eigen::Matrix3d& R) {
+  const uint32_t V = r.n_votes;
+  for (uint32_t i = 0; i < V; ++i) {
+    const Eigen::Vector3d t = point(r.b, i) - R * point(r.a, i);
+    vote_key_[i] = shift_key(shift_coord(t.x(), r.c.shift_bin), shift_coord(t.y(), r.c.shift_bin));
+    vote_order_[i] = i;
+    vote_t_[2 * i] = static_cast<float>(t.x());
+    vote_t_[2 * i + 1] = static_cast<float>(t.y());
+  }
+  std::sort(vote_order_, vote_order_ + V, [this](uint32_t x, uint32_t y) {
+    return vote_key_[x] < vote_key_[y] || (vote_key_[x] == vote_key_[y] && x < y);
+  });
+  uint32_t bins = 0;
+  for (uint32_t k = 0; k < V;) {
+    uint32_t e = k;
+    float weight = 0.0f;
+    while (e < V && vote_key_[vote_order_[e]] == vote_key_[vote_order_[k]]) weight += r.w[vote_order_[e++]];
+    bin_first_[bins] = vote_order_[k];
+    bin_weight_[bins] = weight;
+    bin_count_[bins] = e - k;
+    bin_begin_[bins] = k;
+    bin_key_[bins] = vote_key_[vote_order_[k]];
+    ++bins;
+    k = e;
+  }
+  bin_begin_[bins] = V;
+  return bins;
+}
+
+// Selection of the next best bin into place `taken` (by rank class, then weight; equal weights by key).
+void PoseHypotheses::bring_best_bin_to(uint32_t taken, uint32_t bins) {
+  uint32_t best = taken;
+  for (uint32_t k = taken + 1; k < bins; ++k)
+    if (bin_rank_[k] > bin_rank_[best] ||
+        (bin_rank_[k] == bin_rank_[best] &&
+         (bin_weight_[k] > bin_weight_[best] ||
+          (bin_weight_[k] == bin_weight_[best] && vote_key_[bin_first_[k]] < vote_key_[bin_first_[best]]))))
+      best = k;
+  std::swap(bin_first_[taken], bin_first_[best]);
+  std::swap(bin_weight_[taken], bin_weight_[best]);
+  std::swap(bin_count_[taken], bin_count_[best]);
+  std::swap(bin_rank_[taken], bin_rank_[best]);
+}
+
+// Translation-only fit under the heading R from vote i0: a bin holds a few correspondences, too few
+// (and too collinear) to re-estimate roll and pitch; the heading comes from a whole clique. Each round
+// reads only the votes of the bins around its translation (gather_votes), not all pairs; the last
+// round's votes are the m rows of sub_a_/sub_b_/sub_w_ (mask_ all 1). False with fewer than min_inliers.
+bool PoseHypotheses::fit_translation(const Run& r, const Eigen::Matrix3d& R, uint32_t i0, uint32_t all_bins,
+                                     Eigen::Vector3d* t_out, uint32_t* m_out) {
+  Eigen::Vector3d t = point(r.b, i0) - R * point(r.a, i0);
+  uint32_t m = 0;
+  for (int it = 0; it < 3; ++it) {
+    const double r2 = it == 0 ? r.far2 : r.c2;
+    const uint32_t g = gather_votes(r, t, std::sqrt(r2), all_bins);
+    Eigen::Vector3d sum = Eigen::Vector3d::Zero();
+    double wsum = 0.0;
+    m = 0;
+    for (uint32_t e = 0; e < g; ++e) {
+      const uint32_t i = gather_[e];
+      const Eigen::Vector3d ti = point(r.b, i) - R * point(r.a, i);
+      if ((ti - t).squaredNorm() > r2) continue;
+      copy_to_sub(r, m, i);
+      mask_[m++] = 1;
+      sum += double(sub_w_[m - 1]) * ti;
+      wsum += sub_w_[m - 1];
+    }
+    if (m < r.c.min_inliers || !(wsum > 0)) break;
+    t = sum / wsum;
+  }
+  *t_out = t;
+  *m_out = m;
+  return m >= r.c.min_inliers;
+}
+
+// The votes a fit around translation t within radius can use: those in the bins covering the square
+// around t, sorted into pair order (into gather_), so the fit's sums are those of a pass over all pairs.
+uint32_t PoseHypotheses::gather_votes(const Run& r, const Eigen::Vector3d& t, double radius, uint32_t all_bins) {
+  const float bin = r.c.shift_bin;
+  const int64_t x0 = shift_coord(t.x() - radius, bin), x1 = shift_coord(t.x() + radius, bin);
+  const int64_t y0 = shift_coord(t.y() - radius, bin), y1 = shift_coord(t.y() + radius, bin);
+  uint32_t g = 0;
+  for (int64_t x = x0; x <= x1; ++x)
+    for (int64_t y = y0; y <= y1; ++y) {
+      if (x < 0 || y < 0 || x > 0x1FFFFF || y > 0x1FFFFF) continue;
+      const uint32_t j = find_bin(shift_key(x, y), all_bins);
+      if (j == UINT32_MAX) continue;
+      for (uint32_t e = bin_begin_[j]; e < bin_begin_[j + 1]; ++e) gather_[g++] = vote_order_[e];
+    }
+  std::sort(gather_, gather_ + g);
+  return g;
 }
 
 }  // namespace gsf

@@ -26,6 +26,23 @@ void sift_down(RankedTriangleMatch* h, uint32_t n, uint32_t i) {
   }
 }
 
+// The query's sides and labels in vertex order o (kTriangleVertexOrders). False when the order is not
+// possible: its sides must be sorted up to the tie tolerance (order 0 always is).
+bool order_sides(const Triangle& q, uint8_t o, float tie_tolerance, float side[3], uint8_t label[3]) {
+  // Distances between canonical vertices: d(0,1) = side[0], d(1,2) = side[1], d(2,0) = side[2].
+  auto dist = [&q](uint8_t i, uint8_t j) {
+    const uint8_t lo = i < j ? i : j, hi = i < j ? j : i;
+    return lo == 0 ? (hi == 1 ? q.side[0] : q.side[2]) : q.side[1];
+  };
+  const uint8_t* p = kTriangleVertexOrders[o];
+  for (int k = 0; k < 3; ++k) {
+    side[k] = dist(p[k], p[(k + 1) % 3]);
+    label[k] = q.label[p[k]];
+  }
+  return o == 0 || (tie_tolerance > 0.0f && side[0] <= side[1] * (1.0f + tie_tolerance) &&
+                    side[1] <= side[2] * (1.0f + tie_tolerance));
+}
+
 }  // namespace
 
 size_t TriangleMatcher::required_bytes(uint32_t cap) { return counted_bytes<TriangleMatcher>(cap); }
@@ -64,83 +81,89 @@ TriangleMatchStats TriangleMatcher::match(const Triangle& q, const TriangleIndex
   TriangleMatchStats st;
   size_ = 0;
   if (limit_ == 0) return st;
-  // Distances between canonical vertices: d(0,1) = side[0], d(1,2) = side[1], d(2,0) = side[2].
-  auto dist = [&q](uint8_t i, uint8_t j) {
-    const uint8_t lo = i < j ? i : j, hi = i < j ? j : i;
-    return lo == 0 ? (hi == 1 ? q.side[0] : q.side[2]) : q.side[1];
-  };
   for (uint8_t o = 0; o < 6; ++o) {
-    const uint8_t* p = kTriangleVertexOrders[o];
     float side[3];
     uint8_t label[3];
-    for (int k = 0; k < 3; ++k) {
-      side[k] = dist(p[k], p[(k + 1) % 3]);
-      label[k] = q.label[p[k]];
-    }
-    // The order is possible if its sides are sorted up to the tie tolerance (order 0 always is).
-    if (o > 0 && !(tie_tolerance > 0.0f && side[0] <= side[1] * (1.0f + tie_tolerance) &&
-                   side[1] <= side[2] * (1.0f + tie_tolerance)))
-      continue;
+    if (!order_sides(q, o, tie_tolerance, side, label)) continue;
     ++st.orders;
-    // Orders 1-3 swap two vertices (odd permutations): the query's sense in them is reversed.
-    const bool flip = o >= 1 && o <= 3;
-    int32_t qk[3];
-    for (int i = 0; i < 3; ++i) qk[i] = static_cast<int32_t>(std::floor(side[i] / config.side_bin));
-    // The 27 neighbouring keys (q0 +- 1, q1 +- 1, q2 +- 1) of this label triple as 9 key ranges: q2 is the
-    // key's lowest field, so its three neighbours are contiguous, and so are their triangles (stored in
-    // key order). Quantised sides below 0 or above the key's field do not exist.
-    constexpr int32_t kMax = int32_t(kTriangleKeyMaxBin);
-    const uint32_t lo2 = static_cast<uint32_t>(qk[2] > 0 ? qk[2] - 1 : 0);
-    const uint32_t hi2 = static_cast<uint32_t>(qk[2] < kMax ? qk[2] + 1 : kMax);
-    // The 9 ranges come in increasing key order (same labels; (q0, q1) lexicographic), so each search
-    // continues from where the previous one ended.
-    uint32_t from = 0;
-    for (int d0 = -1; d0 <= 1; ++d0)
-      for (int d1 = -1; d1 <= 1; ++d1) {
-        const int32_t a0 = qk[0] + d0, a1 = qk[1] + d1;
-        if (a0 < 0 || a1 < 0 || a0 > kMax || a1 > kMax) continue;
-        uint32_t b, e;
-        if (!index.range_from(triangle_key(label, uint32_t(a0), uint32_t(a1), lo2),
-                              triangle_key(label, uint32_t(a0), uint32_t(a1), hi2), &from, &b, &e))
-          continue;
-        for (uint32_t mid = b; mid < e; ++mid) {
-          const Triangle& m = map[mid];  // sequential: a bucket is a contiguous run of triangles
-          if (m.label[0] != label[0] || m.label[1] != label[1] || m.label[2] != label[2]) continue;
-          float residual = 0.0f;
-          bool ok = true;
-          for (int s = 0; s < 3 && ok; ++s) {
-            const float r = std::fabs(side[s] - m.side[s]);
-            ok = r < config.relative_side_tolerance * side[s];
-            const float rel = side[s] > 0.0f ? r / side[s] : 0.0f;
-            residual = rel > residual ? rel : residual;
-          }
-          if (!ok) continue;
-          if (mirror_check_ && orientations_contradict(q.orientation, m.orientation, flip)) {
-            ++st.mirrored;
-            continue;
-          }
-          ++st.accepted;
-          RankedTriangleMatch c{};
-          c.map = mid;
-          c.residual = residual;
-          // Position-free: a hash of the map triangle's instance ids and the order, not of where the
-          // triangle is stored.
-          c.tie = static_cast<uint32_t>(
-              mix64(mix64((uint64_t(m.v[0]) << 32) | m.v[1]) ^ ((uint64_t(m.v[2]) << 3) | o)) >> 32);
-          c.order = o;
-          offer(c);
-        }
-      }
+    search_order(q, o, side, label, index, map, config, &st);
   }
-  // Best first (heap sort: repeatedly move the worst to the end).
+  sort_best_first();
+  st.kept = size_;
+  return st;
+}
+
+// The 27 neighbouring keys (q0 +- 1, q1 +- 1, q2 +- 1) of this label triple as 9 key ranges: q2 is the
+// key's lowest field, so its three neighbours are contiguous, and so are their triangles (stored in
+// key order). Quantised sides below 0 or above the key's field do not exist.
+void TriangleMatcher::search_order(const Triangle& q, uint8_t o, const float side[3], const uint8_t label[3],
+                                   const TriangleIndexView& index, const Triangle* map, const TriangleConfig& config,
+                                   TriangleMatchStats* st) {
+  int32_t qk[3];
+  for (int i = 0; i < 3; ++i) qk[i] = static_cast<int32_t>(std::floor(side[i] / config.side_bin));
+  constexpr int32_t kMax = int32_t(kTriangleKeyMaxBin);
+  const uint32_t lo2 = static_cast<uint32_t>(qk[2] > 0 ? qk[2] - 1 : 0);
+  const uint32_t hi2 = static_cast<uint32_t>(qk[2] < kMax ? qk[2] + 1 : kMax);
+  // The 9 ranges come in increasing key order (same labels; (q0, q1) lexicographic), so each search
+  // continues from where the previous one ended.
+  uint32_t from = 0;
+  for (int d0 = -1; d0 <= 1; ++d0)
+    for (int d1 = -1; d1 <= 1; ++d1) {
+      const int32_t a0 = qk[0] + d0, a1 = qk[1] + d1;
+      if (a0 < 0 || a1 < 0 || a0 > kMax || a1 > kMax) continue;
+      uint32_t b, e;
+      if (!index.range_from(triangle_key(label, uint32_t(a0), uint32_t(a1), lo2),
+                            triangle_key(label, uint32_t(a0), uint32_t(a1), hi2), &from, &b, &e))
+        continue;
+      offer_range(q, o, side, label, b, e, map, config, st);
+    }
+}
+
+// Map triangles [begin, end) (a contiguous run, read sequentially) with the query's labels and every
+// side within the relative tolerance, and not a mirror image (when checked), ranked by their largest
+// relative side residual.
+void TriangleMatcher::offer_range(const Triangle& q, uint8_t o, const float side[3], const uint8_t label[3],
+                                  uint32_t begin, uint32_t end, const Triangle* map, const TriangleConfig& config,
+                                  TriangleMatchStats* st) {
+  // Orders 1-3 swap two vertices (odd permutations): the query's sense in them is reversed.
+  const bool flip = o >= 1 && o <= 3;
+  for (uint32_t mid = begin; mid < end; ++mid) {
+    const Triangle& m = map[mid];
+    if (m.label[0] != label[0] || m.label[1] != label[1] || m.label[2] != label[2]) continue;
+    float residual = 0.0f;
+    bool ok = true;
+    for (int s = 0; s < 3 && ok; ++s) {
+      const float r = std::fabs(side[s] - m.side[s]);
+      ok = r < config.relative_side_tolerance * side[s];
+      const float rel = side[s] > 0.0f ? r / side[s] : 0.0f;
+      residual = rel > residual ? rel : residual;
+    }
+    if (!ok) continue;
+    if (mirror_check_ && orientations_contradict(q.orientation, m.orientation, flip)) {
+      ++st->mirrored;
+      continue;
+    }
+    ++st->accepted;
+    RankedTriangleMatch c{};
+    c.map = mid;
+    c.residual = residual;
+    // Position-free: a hash of the map triangle's instance ids and the order, not of where the
+    // triangle is stored.
+    c.tie =
+        static_cast<uint32_t>(mix64(mix64((uint64_t(m.v[0]) << 32) | m.v[1]) ^ ((uint64_t(m.v[2]) << 3) | o)) >> 32);
+    c.order = o;
+    offer(c);
+  }
+}
+
+// Best first (heap sort: repeatedly move the worst to the end).
+void TriangleMatcher::sort_best_first() {
   for (uint32_t n = size_; n > 1; --n) {
     const RankedTriangleMatch t = heap_[0];
     heap_[0] = heap_[n - 1];
     heap_[n - 1] = t;
     sift_down(heap_, n - 1, 0);
   }
-  st.kept = size_;
-  return st;
 }
 
 }  // namespace gsf

@@ -30,6 +30,64 @@ inline int32_t ordered_bits(float v) {
   return b ^ ((b >> 31) & 0x7FFFFFFF);
 }
 
+// One padding lane (exp of 0, never summed or stored): the exp loop then runs whole 4-wide vectors.
+constexpr int kLanes = (kNumClasses + 3) / 4 * 4;
+
+// Softmax of one point's logits l into prob (kLanes floats; `shifted` keeps its padding lane 0 between
+// calls). False when a logit is not finite.
+inline bool softmax_logits(const float* l, float* prob, float* shifted) {
+  // Max and finiteness without branches, on integers so that both loops vectorise (a float max
+  // does not without -ffast-math). -0 and +0 order differently here, which moves no l - max.
+  uint32_t non_finite = 0;
+  int32_t max_bits = ordered_bits(l[0]);
+  for (int k = 0; k < kNumClasses; ++k) {
+    uint32_t bits;
+    std::memcpy(&bits, &l[k], sizeof bits);
+    non_finite |= static_cast<uint32_t>((bits & 0x7F800000u) == 0x7F800000u);
+    const int32_t o = ordered_bits(l[k]);
+    max_bits = o > max_bits ? o : max_bits;
+  }
+  if (non_finite) return false;
+  const float mx = [&] {
+    const int32_t b = max_bits ^ ((max_bits >> 31) & 0x7FFFFFFF);
+    float f;
+    std::memcpy(&f, &b, sizeof f);
+    return f;
+  }();
+  for (int k = 0; k < kNumClasses; ++k) shifted[k] = l[k] - mx;
+  for (int k = 0; k < kLanes; ++k) prob[k] = detail::exp_nonpositive(shifted[k]);
+  float sum = 0.0f;
+  for (int k = 0; k < kNumClasses; ++k) sum += prob[k];
+  const float inv = 1.0f / sum;
+  for (int k = 0; k < kNumClasses; ++k) prob[k] *= inv;
+  return true;
+}
+
+// The voxel of `key`: found, or inserted (zeroed) while fewer than max_voxels exist, with the same
+// probe sequence as a BoundedHashMap of capacity max_voxels. UINT32_MAX when the layer is full.
+inline uint32_t find_or_insert(uint64_t key, uint32_t* slots, uint64_t* keys, Voxel* voxels, uint32_t active,
+                               uint32_t max_voxels, uint32_t* count) {
+  const uint32_t mask = active - 1;
+  for (uint32_t j = static_cast<uint32_t>(mix64(key)) & mask, n = 0; n < active; ++n, j = (j + 1) & mask) {
+    const uint32_t sl = slots[j];
+    if (sl == 0) {
+      if (*count >= max_voxels) return UINT32_MAX;
+      slots[j] = *count + 1;
+      keys[*count] = key;
+      const uint32_t id = (*count)++;
+      Voxel& v = voxels[id];
+      v.centroid[0] = v.centroid[1] = v.centroid[2] = 0.0f;
+      v.count = 0;
+      for (int k = 0; k < kNumClasses; ++k) v.prob[k] = 0.0f;
+      v.label = 0;
+      v.pad[0] = v.pad[1] = v.pad[2] = 0;
+      return id;
+    }
+    if (keys[sl - 1] == key) return sl - 1;
+  }
+  return UINT32_MAX;
+}
+
 }  // namespace
 
 size_t VoxelLayer::required_bytes(const VoxelConfig& config) { return counted_bytes<VoxelLayer>(config); }
@@ -82,116 +140,88 @@ Status VoxelLayer::build(const ScanView& scan, VoxelStats* stats_out) {
   column_lo_[0] = column_lo_[1] = 0;
   column_hi_[0] = column_hi_[1] = -1;
   if (!bound_) return Status::NotInitialized;
-  // A scan of n points makes at most n voxels: the index only needs the slots for min(n, max_voxels).
-  if (active_slots_ > 0) std::memset(slots_, 0, sizeof(uint32_t) * active_slots_);
-  {
-    const uint32_t want =
-        BoundedHashMap<uint32_t>::slots_for(scan.count < config_.max_voxels ? scan.count : config_.max_voxels);
-    active_slots_ = want < slot_count_ ? want : slot_count_;
-  }
-  columns_.clear_for(0);
+  reset_index(scan.count);
   if (scan.count == 0) return Status::InvalidInput;
   if (scan.points == nullptr || scan.labels == nullptr || scan.stride < 3) return Status::InvalidArgument;
   const bool use_logits = scan.logits != nullptr;
   if (use_logits && scan.logit_dim != static_cast<uint32_t>(kNumClasses)) return Status::InvalidArgument;
+  count_ = accumulate_points(scan, use_logits, &stats);
+  average_voxels();
+  stats.unindexed_voxels = build_columns();
+  stats.voxels = count_;
+  if (stats_out) *stats_out = stats;
+  if (count_ == 0) return Status::InvalidInput;
+  return stats.dropped_points || stats.unindexed_voxels ? Status::CapacityExceeded : Status::Ok;
+}
 
+// An empty index. A scan of n points makes at most n voxels: the index only needs the slots for
+// min(n, max_voxels).
+void VoxelLayer::reset_index(uint32_t points) {
+  if (active_slots_ > 0) std::memset(slots_, 0, sizeof(uint32_t) * active_slots_);
+  const uint32_t want = BoundedHashMap<uint32_t>::slots_for(points < config_.max_voxels ? points : config_.max_voxels);
+  active_slots_ = want < slot_count_ ? want : slot_count_;
+  columns_.clear_for(0);
+}
+
+// The library class of a point, or -1 when it is dropped (and counted): not finite, out of range, or
+// an unknown or ignored label.
+int VoxelLayer::point_class(const float* p, uint32_t label, float min_r2, float max_r2, VoxelStats* stats) const {
+  if (!std::isfinite(p[0]) || !std::isfinite(p[1]) || !std::isfinite(p[2])) {
+    ++stats->non_finite;
+    return -1;
+  }
+  const float r2 = p[0] * p[0] + p[1] * p[1] + p[2] * p[2];
+  if (!(r2 >= min_r2 && r2 <= max_r2)) {
+    ++stats->out_of_range;
+    return -1;
+  }
+  const int c = classes_ ? classes_->library_class(label) : class_from_kitti(label);
+  if (c == kUnknownClass) {
+    ++stats->unknown_label;
+    return -1;
+  }
+  if (c == kIgnoredClass) {
+    ++stats->ignored;
+    return -1;
+  }
+  return c;
+}
+
+// Every kept point into its voxel: sums of position and class probabilities (the softmax of its logits,
+// or 1 for its label) and the point count. Returns the number of voxels.
+uint32_t VoxelLayer::accumulate_points(const ScanView& scan, bool use_logits, VoxelStats* stats) {
   const float min_r2 = config_.min_range * config_.min_range;
   const float max_r2 = config_.max_range * config_.max_range;
   const float inv_size = 1.0f / config_.voxel_size;
   Voxel* const voxels = voxels_;
   uint32_t* const slots = slots_;
   uint64_t* const keys = keys_;
-  const uint32_t active = active_slots_, mask = active_slots_ - 1, max_voxels = config_.max_voxels;
+  const uint32_t active = active_slots_, max_voxels = config_.max_voxels;
   uint32_t count = 0;
   // Consecutive points of a scan line often share a voxel: the last key found skips the hash lookup.
   uint64_t last_key = UINT64_MAX;
   uint32_t last_voxel = 0;
-  // One padding lane (exp of 0, never summed or stored): the exp loop then runs whole 4-wide vectors.
-  constexpr int kLanes = (kNumClasses + 3) / 4 * 4;
   float prob[kLanes], shifted[kLanes] = {};
-  stats.points_in = scan.count;
+  stats->points_in = scan.count;
   for (uint32_t i = 0; i < scan.count; ++i) {
     const float* p = scan.points + static_cast<size_t>(i) * scan.stride;
-    if (!std::isfinite(p[0]) || !std::isfinite(p[1]) || !std::isfinite(p[2])) {
-      ++stats.non_finite;
+    const int c = point_class(p, scan.labels[i], min_r2, max_r2, stats);
+    if (c < 0) continue;
+    if (use_logits && !softmax_logits(scan.logits + static_cast<size_t>(i) * kNumClasses, prob, shifted)) {
+      ++stats->non_finite;
       continue;
-    }
-    const float r2 = p[0] * p[0] + p[1] * p[1] + p[2] * p[2];
-    if (!(r2 >= min_r2 && r2 <= max_r2)) {
-      ++stats.out_of_range;
-      continue;
-    }
-    const int c = classes_ ? classes_->library_class(scan.labels[i]) : class_from_kitti(scan.labels[i]);
-    if (c == kUnknownClass) {
-      ++stats.unknown_label;
-      continue;
-    }
-    if (c == kIgnoredClass) {
-      ++stats.ignored;
-      continue;
-    }
-    if (use_logits) {
-      const float* l = scan.logits + static_cast<size_t>(i) * kNumClasses;
-      // Max and finiteness without branches, on integers so that both loops vectorise (a float max
-      // does not without -ffast-math). -0 and +0 order differently here, which moves no l - max.
-      uint32_t non_finite = 0;
-      int32_t max_bits = ordered_bits(l[0]);
-      for (int k = 0; k < kNumClasses; ++k) {
-        uint32_t bits;
-        std::memcpy(&bits, &l[k], sizeof bits);
-        non_finite |= static_cast<uint32_t>((bits & 0x7F800000u) == 0x7F800000u);
-        const int32_t o = ordered_bits(l[k]);
-        max_bits = o > max_bits ? o : max_bits;
-      }
-      if (non_finite) {
-        ++stats.non_finite;
-        continue;
-      }
-      const float mx = [&] {
-        const int32_t b = max_bits ^ ((max_bits >> 31) & 0x7FFFFFFF);
-        float f;
-        std::memcpy(&f, &b, sizeof f);
-        return f;
-      }();
-      for (int k = 0; k < kNumClasses; ++k) shifted[k] = l[k] - mx;
-      for (int k = 0; k < kLanes; ++k) prob[k] = detail::exp_nonpositive(shifted[k]);
-      float sum = 0.0f;
-      for (int k = 0; k < kNumClasses; ++k) sum += prob[k];
-      const float inv = 1.0f / sum;
-      for (int k = 0; k < kNumClasses; ++k) prob[k] *= inv;
     }
     int32_t cx, cy, cz;
     if (!cell_coord(p[0], inv_size, &cx) || !cell_coord(p[1], inv_size, &cy) || !cell_coord(p[2], inv_size, &cz)) {
-      ++stats.out_of_range;
+      ++stats->out_of_range;
       continue;
     }
     const uint64_t key = pack3(cx, cy, cz);
     uint32_t id = last_voxel;
     if (key != last_key) {
-      // Find or insert (the same probe sequence as a BoundedHashMap of capacity max_voxels).
-      id = UINT32_MAX;
-      for (uint32_t j = static_cast<uint32_t>(mix64(key)) & mask, n = 0; n < active; ++n, j = (j + 1) & mask) {
-        const uint32_t sl = slots[j];
-        if (sl == 0) {
-          if (count >= max_voxels) break;
-          slots[j] = count + 1;
-          keys[count] = key;
-          id = count++;
-          Voxel& v = voxels[id];
-          v.centroid[0] = v.centroid[1] = v.centroid[2] = 0.0f;
-          v.count = 0;
-          for (int k = 0; k < kNumClasses; ++k) v.prob[k] = 0.0f;
-          v.label = 0;
-          v.pad[0] = v.pad[1] = v.pad[2] = 0;
-          break;
-        }
-        if (keys[sl - 1] == key) {
-          id = sl - 1;
-          break;
-        }
-      }
+      id = find_or_insert(key, slots, keys, voxels, active, max_voxels, &count);
       if (id == UINT32_MAX) {
-        ++stats.dropped_points;
+        ++stats->dropped_points;
         continue;
       }
       last_key = key;
@@ -208,9 +238,13 @@ Status VoxelLayer::build(const ScanView& scan, VoxelStats* stats_out) {
       v.prob[c] += 1.0f;
     }
   }
-  count_ = count;
-  for (uint32_t i = 0; i < count; ++i) {
-    Voxel& v = voxels[i];
+  return count;
+}
+
+// Sums to means, and each voxel's label: its most probable class (the first of equals).
+void VoxelLayer::average_voxels() {
+  for (uint32_t i = 0; i < count_; ++i) {
+    Voxel& v = voxels_[i];
     const float inv = 1.0f / static_cast<float>(v.count);
     v.centroid[0] *= inv;
     v.centroid[1] *= inv;
@@ -225,11 +259,6 @@ Status VoxelLayer::build(const ScanView& scan, VoxelStats* stats_out) {
       }
     v.label = static_cast<uint8_t>(best);
   }
-  stats.unindexed_voxels = build_columns();
-  stats.voxels = count_;
-  if (stats_out) *stats_out = stats;
-  if (count_ == 0) return Status::InvalidInput;
-  return stats.dropped_points || stats.unindexed_voxels ? Status::CapacityExceeded : Status::Ok;
 }
 
 uint32_t VoxelLayer::build_columns() {

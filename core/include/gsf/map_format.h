@@ -102,6 +102,11 @@ struct SectionEntry {
   uint32_t reserved;
 };
 
+// Quantisation levels of the stored grids: a mean is a uint8 of GridMean, a variance a uint16 of
+// GridVar (map_quantization.h quantises and dequantises them).
+constexpr uint32_t kGridMeanLevels = 255;
+constexpr uint32_t kGridVarLevels = 65535;
+
 // An instance and the scales of its quantised grids: mean = mean_min + q * mean_step (q: uint8 of
 // GridMean), variance = var_min + q * var_step (q: uint16 of GridVar); map_quantization.h.
 struct MapInstance {

@@ -19,7 +19,18 @@
 
 namespace gsf {
 
-struct LocalizeResult;
+// What choose() decided; the localizer copies it into LocalizeResult.
+struct AnswerChoice {
+  static constexpr uint32_t kMaxRanked = 16;  // hypotheses ranked for the report (LocalizeResult::hypothesis)
+  uint32_t index = 0;                         // the answer among the hypotheses (0: the maximum clique's)
+  PoseHypothesis answer;                      // its pose, clique size, inliers and support
+  bool verified = false;                      // chosen by whole-scan verification
+  // The best hypotheses by verified score, best first (without verification the first ones, in the
+  // order found), and whether each was scored on verify.max_points (else on the coarse sample only).
+  uint32_t ranked = 0;
+  uint32_t rank[kMaxRanked] = {};
+  bool fully_verified[kMaxRanked] = {};
+};
 
 // Verification weights for one scan: `base` (stability weights), each class scaled by (its share of
 // every stride-th voxel, max_points sampled)^-exponent, then all rescaled to keep the total weight, so
@@ -33,10 +44,11 @@ class AnswerSelector {
   static size_t required_bytes(uint32_t refine_top, uint32_t max_voxels);
   Status bind(Arena& arena, uint32_t refine_top, uint32_t max_voxels);
 
-  // Verifies `hyps` (when verification is on and the map has a semantic layer), chooses the answer and
-  // fills out's pose, inliers and hypothesis reports. `weights`: the stability weights.
-  void choose(PoseHypotheses& hyps, const VoxelLayer& voxels, const SemanticGridView& semantic, const float* weights,
-              const HypothesisConfig& hypothesis_config, const VerifyConfig& verify_config, LocalizeResult& out);
+  // Verifies `hyps` (when verification is on and the map has a semantic layer) and chooses the answer.
+  // `weights`: the stability weights.
+  AnswerChoice choose(PoseHypotheses& hyps, const VoxelLayer& voxels, const SemanticGridView& semantic,
+                      const float* weights, const HypothesisConfig& hypothesis_config,
+                      const VerifyConfig& verify_config);
   uint32_t chosen() const { return chosen_; }
   void forget() { chosen_ = UINT32_MAX; }
   // The verification weights of the last choose() (the stability weights given here before any).
@@ -53,6 +65,15 @@ class AnswerSelector {
   uint32_t compact_point_count() const { return compact_points_; }
 
  private:
+  struct PoseScorer;  // verify_pose and its pattern search, over the compact copy when there is one
+  // The verification's steps, in order (each ranks, then caps).
+  bool prepare_scoring(const VoxelLayer& voxels, const float* weights, const VerifyConfig& vc, bool verify);
+  uint32_t verify_hypotheses(PoseHypotheses& hyps, const PoseScorer& scorer, const VerifyConfig& vc,
+                             uint8_t* full_scored);
+  uint32_t pick_answer_and_rivals(const PoseHypotheses& hyps, const uint8_t* full_scored, const HypothesisConfig& hc,
+                                  uint32_t refined_count);
+  static void rank_for_report(const PoseHypotheses& hyps, bool verify, const uint8_t* full_scored,
+                              AnswerChoice* choice);
   Eigen::Isometry3d* refined_pose_ = nullptr;  // refine_top: poses the pattern search chose
   uint32_t* refined_id_ = nullptr;             // refine_top: their hypotheses
   VerifyPoint* points_ = nullptr;              // max_voxels: the query voxels' bird's-eye copy (fill_verify_points)

@@ -15,8 +15,15 @@
 
 #include "gsf/detail/arena.h"
 #include "gsf/detail/bounded_hash_map.h"
+#include "gsf/detail/correspondence_set.h"
+#include "gsf/detail/fixed_vector.h"
 #include "gsf/detail/gaussian_field.h"
+#include "gsf/detail/heading_votes.h"
+#include "gsf/detail/triangle.h"
+#include "gsf/detail/triangle_index.h"
+#include "gsf/detail/triangle_matcher.h"
 #include "gsf/map_format.h"
+#include "gsf/platform.h"
 #include "gsf/semantic_classes.h"
 #include "gsf/status.h"
 
@@ -42,9 +49,30 @@ struct QueryFields {
   uint32_t stride_m = 0;          // M
 };
 
-// Yaw bin of the 2-D Procrustes rotation taking the query vertices qa, qb, qc onto the map vertices
-// (xyz each); the vehicle is near level, the full 3-D pose comes later from the clique.
-uint32_t triangle_yaw_bin(const float* q[3], const float* m[3], uint32_t yaw_bins);
+// How one scan's matches are found and gated (the localizer fills it from MatchConfig).
+struct MatchFilterParams {
+  float vertex_tie_tolerance = 0.06f;  // relative; query sides closer than this are tried in both orders
+  bool use_gsf = true;                 // false: every match at a kept heading passes, with omega 1
+  float min_similarity = 0.3f;         // a match passes when all three omegas reach this
+  uint32_t fill_pairs = 64;            // fewer pairs than this: matches below the gate fill the set (tier 0)
+};
+
+// What one pass over a scan's matches saw (the localizer copies it into LocalizeResult).
+struct MatchFilterStats {
+  uint32_t match_candidates = 0;         // map triangles accepted by labels and sides, before the per-triangle cap
+  uint32_t match_dropped = 0;            // ... dropped by the matcher's per-triangle limit
+  uint32_t mirrored_matches = 0;         // candidates refused as mirror images
+  uint32_t triangle_matches = 0;         // matches kept by the limit
+  uint32_t tie_ordered_triangles = 0;    // query triangles also tried in a tied vertex order
+  uint32_t heading_dropped = 0;          // kept matches whose heading the votes did not keep
+  uint32_t survivors = 0;                // matches that passed the gate
+  uint32_t below_gate_matches = 0;       // matches below the gate that filled a short pair set
+  uint32_t candidate_pairs = 0;          // distinct (query, map) instance pairs accumulated
+  uint32_t candidate_pairs_dropped = 0;  // pairs refused because the candidate set was full
+  uint32_t field_probes = 0, field_comparisons = 0;  // GsfFilter::probes() and comparisons() after the pass
+  uint64_t match_ns = 0;                             // time in index matching (the Clock's; 0 without one)
+  uint64_t filter_ns = 0;                            // time in the heading check, the gate and the accumulation
+};
 
 class GsfFilter {
  public:
@@ -72,7 +100,27 @@ class GsfFilter {
   uint32_t probes() const { return probe_used_ + probe_overflow_; }
   uint32_t comparisons() const { return comparisons_; }
 
+  // The filter over one scan's matches (the localizer's steps 5b and 6): per query triangle its ranked
+  // index matches (`matcher`, its limit set by the caller), those at a heading `headings` kept, then the
+  // gate; each passing match adds its three vertex pairs to `pairs` (cleared first) with their omegas.
+  // Nothing is stored per match, so no cap on matches can cut in storage order. Forgets the caches first.
+  //
+  // The gate is absolute, and a scan whose instances are far and sparsely seen (an approach road) can
+  // have its true matches all below it: with fewer than fill_pairs pairs, a second pass adds the matches
+  // below the gate as tier-0 pairs, ranked after every pair that passed and taken only up to fill_pairs
+  // in all (correspondence_set.h). A scan with enough pairs never runs it, so the filter decides exactly
+  // as before wherever it has candidates to spare.
+  MatchFilterStats filter_matches(const FixedVector<Triangle>& triangles, const float* query_centroids,
+                                  const QueryFields& fields, TriangleMatcher& matcher, const TriangleIndexView& index,
+                                  const MapView& map, const TriangleConfig& triangle_config,
+                                  const HeadingVotes& headings, const MatchFilterParams& params, Clock* clock,
+                                  CorrespondenceSet& pairs);
+
  private:
+  // Whether all three omegas of a match (query vertices qv, map triangle mt, yaw bin) reach
+  // min_similarity; omega[v] gets each one evaluated. `all`: evaluate all three even after a failure.
+  bool passes_gate(const QueryFields& fields, const uint32_t qv[3], const Triangle& mt, const MapView& map,
+                   uint32_t bin, float min_similarity, bool all, float omega[3]);
   static uint64_t similarity_key(uint32_t qi, uint32_t mi, uint32_t yaw_bin) {
     return (uint64_t(qi) << 44) | (uint64_t(yaw_bin) << 32) | mi;
   }

@@ -18,6 +18,10 @@
 
 namespace gsf {
 
+// Yaw bin of the 2-D Procrustes rotation taking the query vertices qa, qb, qc onto the map vertices
+// (xyz each); the vehicle is near level, the full 3-D pose comes later from the clique.
+uint32_t triangle_yaw_bin(const float* q[3], const float* m[3], uint32_t yaw_bins);
+
 // Yaw bin of ranked match `rm` of query triangle `qt` (the heading that maps it onto the map
 // triangle); the query vertices in the map triangle's vertex order go to qv.
 uint32_t match_yaw_bin(const Triangle& qt, const RankedTriangleMatch& rm, const float* query_centroids,

@@ -89,6 +89,13 @@ class InstanceClustering {
   const uint32_t* voxel_instance() const { return voxel_instance_; }
 
  private:
+  struct Reach;  // how far one label's voxels connect (instance_clustering.cpp)
+  // The steps of build(): per seed a component, described, judged and kept; then discovery order.
+  uint32_t grow_component(const VoxelLayer& layer, uint32_t seed, uint32_t comp);
+  void add_neighbours(const VoxelLayer& layer, uint32_t v, uint32_t comp, const Reach& r, uint32_t* tail);
+  Instance describe_component(const VoxelLayer& layer, uint32_t seed, uint32_t size) const;
+  void keep_largest(const Instance& in, uint32_t comp, ClusterStats* stats);
+  void order_by_discovery(uint32_t n);
   ClusterConfig config_{};
   const ClassTable* classes_ = nullptr;
   Instance* instances_ = nullptr;

@@ -9,7 +9,8 @@
 // Error bound (closed form; tests/test_map_format.cpp asserts it): |x' - x| <= step / 2 + 2^-20 (|min| +
 // |max|) (the second term covers the float rounding of the subtraction and of min + q * step). For the
 // demo map's grids, mean ranges are about 1 (step 0.004, error <= 0.002) and variance ranges below the
-// signal variance 1 (step 1.5e-5).
+// signal variance 1 (step 1.5e-5). The levels (kGridMeanLevels, kGridVarLevels) are the format's
+// (map_format.h); this header includes the format, never the other way round.
 #pragma once
 #include <cmath>
 #include <cstdint>
@@ -17,9 +18,6 @@
 #include "gsf/map_format.h"
 
 namespace gsf {
-
-constexpr uint32_t kGridMeanLevels = 255;
-constexpr uint32_t kGridVarLevels = 65535;
 
 // Affine scale of n values: *min and *step (0 when all values are equal or n is 0).
 inline void quantization_scale(const float* x, uint64_t n, uint32_t levels, float* min, float* step) {
@@ -48,24 +46,10 @@ inline float quantization_error_bound(float min, float step, uint32_t levels) {
 
 // Quantises one instance's grid (mean g x d floats, var g floats): sets in->mean_min/step and
 // var_min/step, writes q_mean (g x d) and q_var (g). The map builder's side of the round trip.
-inline void quantize_instance_grid(const float* mean, const float* var, uint64_t g, uint64_t d, MapInstance* in,
-                                   uint8_t* q_mean, uint16_t* q_var) {
-  quantization_scale(mean, g * d, kGridMeanLevels, &in->mean_min, &in->mean_step);
-  quantization_scale(var, g, kGridVarLevels, &in->var_min, &in->var_step);
-  for (uint64_t k = 0; k < g * d; ++k)
-    q_mean[k] = static_cast<uint8_t>(quantize_level(mean[k], in->mean_min, in->mean_step, kGridMeanLevels));
-  for (uint64_t k = 0; k < g; ++k)
-    q_var[k] = static_cast<uint16_t>(quantize_level(var[k], in->var_min, in->var_step, kGridVarLevels));
-}
+void quantize_instance_grid(const float* mean, const float* var, uint64_t g, uint64_t d, MapInstance* in,
+                            uint8_t* q_mean, uint16_t* q_var);
 
 // Instance i's grid as floats: mean G x D, var G (G = view.grid_points(), D = num_classes).
-inline void dequantize_instance_grid(const MapView& view, uint32_t i, float* mean, float* var) {
-  const MapInstance& in = view.instances[i];
-  const uint64_t g = view.grid_points(), gd = g * view.params.num_classes;
-  const uint8_t* qm = view.grid_mean + i * gd;
-  const uint16_t* qv = view.grid_var + i * g;
-  for (uint64_t k = 0; k < gd; ++k) mean[k] = dequantize_level(qm[k], in.mean_min, in.mean_step);
-  for (uint64_t k = 0; k < g; ++k) var[k] = dequantize_level(qv[k], in.var_min, in.var_step);
-}
+void dequantize_instance_grid(const MapView& view, uint32_t i, float* mean, float* var);
 
 }  // namespace gsf

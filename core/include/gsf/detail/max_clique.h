@@ -75,6 +75,12 @@ class MaxCliqueSolver {
     uint32_t pos;      // next entry to branch on, counting down
   };
   uint32_t colour_sort(const ConsistencyGraph& g, const uint64_t* cand, uint32_t* order, uint32_t* colour);
+  // The steps of solve(): a greedy clique as the first bound, then branch and bound (true when the
+  // budget ran out); the best clique is in best_[0, size).
+  void fill_candidates(const ConsistencyGraph& g, const uint64_t* allowed, uint64_t* cand) const;
+  uint32_t greedy_clique(const ConsistencyGraph& g, const uint64_t* allowed);
+  bool branch_and_bound(const ConsistencyGraph& g, uint64_t budget, const uint64_t* allowed, uint32_t* best_size,
+                        CliqueStats* st);
   uint32_t max_vertices_ = 0;
   uint32_t words_max_ = 0;
   Frame* frames_ = nullptr;

@@ -133,6 +133,20 @@ class PoleExtraction {
     uint8_t pad;
   };
   uint32_t find_root(uint32_t s);
+  struct Hosts;       // the layer's host voxels as the steps read them (pole_extraction.cpp)
+  struct SliceBox;    // a slice segment's centroid box and cell box
+  struct ChainShape;  // what a chain's voxels add up to
+  // The steps of build(), in order.
+  uint32_t find_slice_segments(const Hosts& h, int32_t ring_cells, PoleStats* stats);
+  void link_segments(const Hosts& h, int32_t link_cells, int32_t gap_levels);
+  void group_chains(uint32_t n, uint32_t segments);
+  void judge_chain(const Hosts& h, uint32_t root, uint32_t* members, uint32_t count, PoleStats* stats);
+  void order_by_discovery(uint32_t n, uint32_t segments);
+  // Their parts.
+  uint32_t grow_slice(const Hosts& h, uint32_t seed, uint8_t kind, const int32_t seed_cell[3], SliceBox* box);
+  uint32_t ring_voxels(const Hosts& h, const SliceBox& box, int32_t level, int32_t ring_cells) const;
+  void sum_chain(const Hosts& h, uint32_t* members, uint32_t count, ChainShape* shape) const;
+  void keep_best(const Instance& in, const PoleInfo& info, PoleStats* stats);
 
   PoleConfig config_{};
   Instance* instances_ = nullptr;

@@ -21,6 +21,7 @@
 #include "gsf/detail/arena.h"
 #include "gsf/detail/fixed_vector.h"
 #include "gsf/detail/max_clique.h"
+#include "gsf/detail/pose_solver.h"
 #include "gsf/detail/semantic_grid.h"
 #include "gsf/status.h"
 
@@ -117,6 +118,29 @@ class PoseHypotheses {
   bool in_clique(uint32_t h, uint32_t i) const { return i < max_n_ && owner_[i] == h + 1; }
 
  private:
+  struct Run;  // one generate() call: its inputs, config, thresholds and stats (pose_hypotheses.cpp)
+  // The steps of generate(), in order.
+  void peel_cliques(Run& r);
+  void find_heading_cliques(Run& r);
+  void vote_shifts(Run& r);
+  // Their parts.
+  bool fit_clique(Run& r, TlsResult* tls, uint32_t* m);
+  bool refit(const Run& r, const Eigen::Isometry3d& pose, TlsResult* out, uint32_t* used);
+  bool record(Run& r, const TlsResult& tls, uint32_t core_size, uint32_t m);
+  bool make_upright(Run& r, TlsResult* tls, uint32_t m);
+  bool repeats_earlier(Run& r, const Eigen::Isometry3d& pose) const;
+  bool new_heading(const Run& r, uint32_t hp) const;
+  uint32_t distinct_headings(const Run& r) const;
+  void vote_at_heading(Run& r, const Eigen::Matrix3d& R, uint32_t stop);
+  uint32_t bin_votes(const Run& r, const Eigen::Matrix3d& R);
+  void bring_best_bin_to(uint32_t taken, uint32_t bins);
+  bool fit_translation(const Run& r, const Eigen::Matrix3d& R, uint32_t i0, uint32_t all_bins, Eigen::Vector3d* t,
+                       uint32_t* m);
+  uint32_t gather_votes(const Run& r, const Eigen::Vector3d& t, double radius, uint32_t all_bins);
+  void copy_to_sub(const Run& r, uint32_t slot, uint32_t i);
+  void allow_all(uint32_t n);
+  bool is_allowed(uint32_t i) const { return ((allowed_[i >> 6] >> (i & 63)) & 1u) != 0; }
+  void disallow(uint32_t i) { allowed_[i >> 6] &= ~(uint64_t(1) << (i & 63)); }
   // Shift votes: from `bins` bins in key order (bin_key_, bin_first_, bin_weight_, bin_count_, bin_begin_) keeps,
   // in key order, those with min_inliers supporting votes (bin_rank_ 2) and the others with min_inliers
   // votes of their own (1), bin_weight_ then holding the support; returns how many.

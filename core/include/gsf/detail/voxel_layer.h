@@ -100,7 +100,12 @@ class VoxelLayer {
   struct ColumnCell {
     uint32_t begin, count;
   };
+  // The steps of build(), in order.
+  void reset_index(uint32_t points);
+  uint32_t accumulate_points(const ScanView& scan, bool use_logits, VoxelStats* stats);
+  void average_voxels();
   uint32_t build_columns();  // returns the number of voxels left unindexed
+  int point_class(const float* p, uint32_t label, float min_r2, float max_r2, VoxelStats* stats) const;
 
   VoxelConfig config_{};
   const ClassTable* classes_ = nullptr;
