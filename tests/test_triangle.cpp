@@ -1,5 +1,6 @@
 // Triangle descriptors alone (core/include/gsf/detail/triangle.h): the canonical vertex order and the
-// permutation-invariant key, the builder (dedup, side range, rigid invariance, capacity).
+// permutation-invariant key, the builder (dedup, side range, rigid invariance, capacity), the turning
+// sense (kept by a turn, reversed by a mirror image) and the vertex-set key.
 #include <catch2/catch.hpp>
 
 #include <algorithm>
@@ -10,6 +11,7 @@
 
 #include "arena_buffer.h"
 #include "gsf/detail/triangle.h"
+#include "gsf/semantic_classes.h"
 #include "random_points.h"
 
 using namespace gsf;
@@ -92,4 +94,59 @@ TEST_CASE("TriangleBuilder: dedup, side range, rigid invariance, capacity") {
   CHECK(std::equal(small.begin(), small.end(), a.begin(), [](const Triangle& x, const Triangle& y) {
     return x.v[0] == y.v[0] && x.v[1] == y.v[1] && x.v[2] == y.v[2];
   }));  // deterministic prefix
+}
+
+TEST_CASE("Triangle senses: a turn keeps them, a mirror image reverses them, a near-collinear one has none") {
+  // p0 -> p1 -> p2 counter-clockwise seen from above, apex 3 m off the longest side.
+  const float p[9] = {0, 0, 0, 6, 0, 0.5f, 2, 3, 1};
+  const uint8_t labels[6] = {kPole, kPole, kPole, kPole, kPole, kPole};
+  for (int deg = 0; deg < 360; deg += 30) {
+    const float c = std::cos(float(deg) * 0.0174533f), s = std::sin(float(deg) * 0.0174533f);
+    float q[9], m[9];
+    for (int v = 0; v < 3; ++v) {
+      q[3 * v] = c * p[3 * v] - s * p[3 * v + 1] + 17.0f;
+      q[3 * v + 1] = s * p[3 * v] + c * p[3 * v + 1] - 4.0f;
+      m[3 * v] = q[3 * v];
+      m[3 * v + 1] = -q[3 * v + 1];  // mirror image (y -> -y)
+      q[3 * v + 2] = m[3 * v + 2] = p[3 * v + 2];
+    }
+    INFO("yaw " << deg);
+    CHECK(triangle_orientation(q, q + 3, q + 6, 6.0f) == kOrientationCounterClockwise);
+    CHECK(triangle_orientation(m, m + 3, m + 6, 6.0f) == kOrientationClockwise);
+    CHECK(triangle_orientation(q, q + 6, q + 3, 6.0f) == kOrientationClockwise);  // the other vertex order
+    // make_triangle records the sense of its canonical order, whatever order the vertices came in; the
+    // mirror image's is the opposite one.
+    const Triangle t = make_triangle(0, 1, 2, q, q + 3, q + 6, labels);
+    const Triangle t2 = make_triangle(1, 0, 2, q + 3, q, q + 6, labels);  // an odd permutation of the input
+    const float* by_id[3] = {q, q + 3, q + 6};
+    CHECK(t.orientation == triangle_orientation(by_id[t.v[0]], by_id[t.v[1]], by_id[t.v[2]], t.side[2]));
+    const Triangle tm = make_triangle(3, 4, 5, m, m + 3, m + 6, labels);
+    CHECK(t.orientation == t2.orientation);
+    CHECK((t.orientation == kOrientationCounterClockwise || t.orientation == kOrientationClockwise));
+    CHECK(tm.orientation != t.orientation);
+    CHECK(orientations_contradict(t.orientation, tm.orientation, false));
+    CHECK_FALSE(orientations_contradict(t.orientation, tm.orientation, true));
+    CHECK_FALSE(orientations_contradict(t.orientation, t2.orientation, false));
+  }
+  // Apex 0.9 m from a 10 m side (below kOrientationMinHeight): flat; unknown or flat never contradicts.
+  const float flat[9] = {0, 0, 0, 10, 0, 0, 4, 0.9f, 0};
+  CHECK(triangle_orientation(flat, flat + 3, flat + 6, 10.0f) == kOrientationFlat);
+  for (uint8_t o : {kOrientationCounterClockwise, kOrientationClockwise})
+    for (bool flip : {false, true}) {
+      CHECK_FALSE(orientations_contradict(kOrientationFlat, o, flip));
+      CHECK_FALSE(orientations_contradict(o, kOrientationUnknown, flip));
+    }
+}
+
+TEST_CASE("The vertex-set key is the same for every order of three ids and differs between sets") {
+  const uint32_t ids[3] = {7, 2097151, 12345};  // 2^21 - 1 is the largest id
+  const uint64_t key = triangle_vertex_set_key(ids[0], ids[1], ids[2]);
+  const int perms[6][3] = {{0, 1, 2}, {0, 2, 1}, {1, 0, 2}, {1, 2, 0}, {2, 0, 1}, {2, 1, 0}};
+  for (const auto& p : perms) CHECK(triangle_vertex_set_key(ids[p[0]], ids[p[1]], ids[p[2]]) == key);
+  CHECK(key == ((uint64_t(7) << 42) | (uint64_t(12345) << 21) | 2097151u));
+  std::set<uint64_t> keys;
+  for (uint32_t a = 0; a < 12; ++a)
+    for (uint32_t b = a + 1; b < 12; ++b)
+      for (uint32_t c = b + 1; c < 12; ++c) keys.insert(triangle_vertex_set_key(c, a, b));
+  CHECK(keys.size() == 220);  // 12 choose 3: no two sets share a key
 }
