@@ -13,7 +13,6 @@
 #include "gsf/config.h"
 #include "gsf/detail/answer_selection.h"
 #include "gsf/detail/pose_hypotheses.h"
-#include "gsf/localizer.h"
 #include "lattice_layer.h"
 #include "test_cloud.h"
 
@@ -47,6 +46,23 @@ TEST_CASE("Rarity weights scale each class by its share^-e and keep the scan's t
 }
 
 namespace {
+
+// What choose() decided, with each ranked hypothesis read back from the hypotheses (as the localizer
+// reports them).
+struct RankedReport {
+  float x = 0;
+  uint32_t clique_size = 0, inliers = 0;
+  float verified_score = 0;
+  bool fully_verified = false;
+};
+struct Chosen {
+  uint32_t chosen_hypothesis = 0;
+  bool verified = false;
+  Eigen::Isometry3d map_T_scan = Eigen::Isometry3d::Identity();
+  uint32_t clique_size = 0, inliers = 0;
+  double score = 0;
+  RankedReport hypothesis[AnswerChoice::kMaxRanked];
+};
 
 // A bird's-eye pose: translation (x, y, 0) and heading yaw_deg.
 Eigen::Isometry3d pose_at(double x, double y, double yaw_deg = 0.0) {
@@ -103,12 +119,23 @@ struct Selection {
       hyps[h].verification = PoseVerification{};
     }
   }
-  LocalizeResult choose(const SemanticGridView& grid) {
-    LocalizeResult out;
-    selector.choose(hyps, fixture.voxels, grid, fixture.weights, hc, vc, out);
+  Chosen choose(const SemanticGridView& grid) {
+    const AnswerChoice c = selector.choose(hyps, fixture.voxels, grid, fixture.weights, hc, vc);
+    Chosen out;
+    out.chosen_hypothesis = c.index;
+    out.verified = c.verified;
+    out.map_T_scan = c.answer.map_T_scan;
+    out.clique_size = c.answer.clique_size;
+    out.inliers = c.answer.inliers;
+    out.score = c.answer.support;
+    for (uint32_t k = 0; k < c.ranked; ++k) {
+      const PoseHypothesis& h = hyps[c.rank[k]];
+      out.hypothesis[k] = {static_cast<float>(h.map_T_scan.translation().x()), h.clique_size, h.inliers,
+                           h.verification.score, c.fully_verified[k]};
+    }
     return out;
   }
-  LocalizeResult choose() { return choose(fixture.layer.view); }
+  Chosen choose() { return choose(fixture.layer.view); }
 };
 
 }  // namespace
@@ -124,7 +151,7 @@ TEST_CASE("choose(): the true lattice shift is the answer wherever it stands amo
     poses.insert(poses.begin() + at, pose_at(24.0, 0.0));
     s.set(poses);
     INFO("truth at position " << at);
-    const LocalizeResult out = s.choose();
+    const Chosen out = s.choose();
     CHECK(s.selector.chosen() == at);
     CHECK(out.chosen_hypothesis == at);
     CHECK(out.verified);
@@ -160,7 +187,7 @@ TEST_CASE("choose(): a near-twin of the answer is the same answer; the other pla
   // Truth, a twin 0.6 m and 2 deg off (within same_pose_m 2 m and same_pose_deg 5 deg), four other shifts.
   s.set({pose_at(16.0, 0.0), pose_at(24.6, 0.2, 2.0), pose_at(40.0, 0.0), pose_at(24.0, 0.0), pose_at(8.0, 0.0),
          pose_at(32.0, 0.0)});
-  const LocalizeResult out = s.choose();
+  const Chosen out = s.choose();
   const Eigen::Isometry3d answer = s.hyps[s.selector.chosen()].map_T_scan;
   CHECK(planar_distance(answer, pose_at(24.0, 0.0)) < 1.0);
   CHECK(s.selector.rival_count() == 4);
@@ -195,7 +222,7 @@ TEST_CASE("choose(): without verification or without a semantic layer the first 
   for (int way = 0; way < 2; ++way) {
     s.set(poses);
     s.vc.enabled = way != 0;  // way 0: verification off; way 1: on, but no layer to verify against
-    const LocalizeResult out = way == 0 ? s.choose() : s.choose(SemanticGridView{});
+    const Chosen out = way == 0 ? s.choose() : s.choose(SemanticGridView{});
     INFO((way == 0 ? "verification off" : "no semantic layer"));
     CHECK(s.selector.chosen() == 0);
     CHECK_FALSE(out.verified);
@@ -225,7 +252,7 @@ TEST_CASE("choose(): full_top and refine_top cap what is fully scored and patter
   // Only the best 2 by the coarse score are fully scored; the answer is among them.
   s.vc.full_top = 2;
   s.set(poses);
-  LocalizeResult out = s.choose();
+  Chosen out = s.choose();
   uint32_t full = 0;
   for (uint32_t k = 0; k < 5; ++k) full += out.hypothesis[k].fully_verified;
   CHECK(full == 2);
@@ -254,6 +281,10 @@ TEST_CASE("choose(): full_top and refine_top cap what is fully scored and patter
   CHECK(planar_distance(s.selector.answer_pose(), pose_at(24.0, 0.0)) <= planar_distance(poses[2], pose_at(24.0, 0.0)));
   // The same input twice: the same choice and scores, bit for bit.
   s.set(poses);
-  const LocalizeResult again = s.choose();
-  CHECK(std::memcmp(out.hypothesis, again.hypothesis, sizeof(out.hypothesis)) == 0);
+  const Chosen again = s.choose();
+  for (uint32_t k = 0; k < AnswerChoice::kMaxRanked; ++k) {
+    CHECK(out.hypothesis[k].x == again.hypothesis[k].x);
+    CHECK(out.hypothesis[k].verified_score == again.hypothesis[k].verified_score);
+    CHECK(out.hypothesis[k].fully_verified == again.hypothesis[k].fully_verified);
+  }
 }
