@@ -1,14 +1,19 @@
-// The answer stage's closed-form parts: rarity weights (keep the total, scale by share^-e) and the
-// answer's consensus height; the stage as a whole runs in test_localizer (golden, lattice verification
-// tests).
+// Answer selection alone (core/include/gsf/detail/answer_selection.h): rarity weights in closed form
+// (keep the total, scale by share^-e), and AnswerSelector::choose on hand-made hypotheses over the
+// lattice layer (tests/support/lattice_layer.h): the true lattice shift is chosen wherever it stands in
+// the list, its near-twin is no rival, the others are, the reports are ranked by verified score, and
+// without verification (or without a semantic layer) the first hypothesis is the answer.
 #include <catch2/catch.hpp>
 
 #include <cmath>
+#include <cstring>
+#include <vector>
 
 #include "arena_buffer.h"
 #include "gsf/config.h"
-#include "gsf/detail/answer_height.h"
 #include "gsf/detail/answer_selection.h"
+#include "gsf/detail/pose_hypotheses.h"
+#include "lattice_layer.h"
 #include "test_cloud.h"
 
 using namespace gsf;
@@ -40,53 +45,246 @@ TEST_CASE("Rarity weights scale each class by its share^-e and keep the scan's t
   for (int k = 0; k < kNumClasses; ++k) CHECK(out[k] == base[k]);
 }
 
-TEST_CASE("The answer's height is the weighted median vertical offset of the correspondences it explains") {
-  // A pose at the right place and heading but 5 m too high, as a shift vote of three cut-off trunks
-  // gives it. Seven correspondences agree in x and y: offsets 1.0 (weight 1), 1.1 (2), 1.2 (1), 1.3 (1),
-  // and three cut-off trunks at 3.0, 3.2, 3.4 (weight 1 each); the running weight in offset order (1, 3,
-  // 4, ...) reaches half the total (8 / 2) at 1.2, the weighted median. Two more lie 2 m off in x and carry offsets of
-  // -20: beyond the radius, ignored.
-  const double yaw = 0.7;
-  Eigen::Isometry3d truth = Eigen::Isometry3d::Identity();
-  truth.linear() = Eigen::AngleAxisd(yaw, Eigen::Vector3d::UnitZ()).toRotationMatrix();
-  truth.translation() = Eigen::Vector3d(40.0, -12.0, 1.3);
-  const float offsets[9] = {3.4f, 1.0f, 3.0f, 1.2f, 1.1f, 3.2f, 1.3f, -20.0f, -20.0f};
-  const float weights[9] = {1, 1, 1, 1, 2, 1, 1, 5, 5};
-  float a[27], b[27];
-  for (int i = 0; i < 9; ++i) {
-    const Eigen::Vector3d q(3.0 * i - 10.0, 0.5 * i * i - 7.0, 0.25 * i);
-    const Eigen::Vector3d m = truth.linear() * q + Eigen::Vector3d(40.0, -12.0, 0.0);
-    for (int k = 0; k < 3; ++k) a[3 * i + k] = float(q[k]);
-    b[3 * i] = float(m.x() + (i >= 7 ? 2.0 : 0.0));
-    b[3 * i + 1] = float(m.y());
-    b[3 * i + 2] = float(m.z() + offsets[i]);
+namespace {
+
+// What choose() decided, with each ranked hypothesis read back from the hypotheses (as the localizer
+// reports them).
+struct RankedReport {
+  float x = 0;
+  uint32_t clique_size = 0, inliers = 0;
+  float verified_score = 0;
+  bool fully_verified = false;
+};
+struct Chosen {
+  uint32_t chosen_hypothesis = 0;
+  bool verified = false;
+  Eigen::Isometry3d map_T_scan = Eigen::Isometry3d::Identity();
+  uint32_t clique_size = 0, inliers = 0;
+  double score = 0;
+  RankedReport hypothesis[AnswerChoice::kMaxRanked];
+};
+
+// A bird's-eye pose: translation (x, y, 0) and heading yaw_deg.
+Eigen::Isometry3d pose_at(double x, double y, double yaw_deg = 0.0) {
+  Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
+  T.linear() = Eigen::AngleAxisd(yaw_deg * M_PI / 180.0, Eigen::Vector3d::UnitZ()).toRotationMatrix();
+  T.translation() = Eigen::Vector3d(x, y, 0.0);
+  return T;
+}
+
+double planar_distance(const Eigen::Isometry3d& a, const Eigen::Isometry3d& b) {
+  return (a.translation().head<2>() - b.translation().head<2>()).norm();
+}
+
+// The scan of the lattice layer seen from x = 24 (its bush beside the column at x = 24 in the scan) and
+// PoseHypotheses holding exactly the given poses, hypothesis h with clique size 10 + h, inliers 20 + h and
+// support 30 + h (generated from a clique and shift votes, then overwritten: choose() reads only these).
+struct Selection {
+  gsf_test::LatticeVerification fixture;
+  ArenaBuffer buf;
+  PoseHypotheses hyps;
+  AnswerSelector selector;
+  HypothesisConfig hc;
+  VerifyConfig vc;
+  Selection() : buf(PoseHypotheses::required_bytes(64, 8) + AnswerSelector::required_bytes(4, 100000) + 64) {
+    REQUIRE(hyps.bind(buf.arena, 64, 8) == Status::Ok);
+    REQUIRE(selector.bind(buf.arena, 4, fixture.config.max_voxels) == Status::Ok);
+    fixture.build(gsf_test::lattice_scan(24.0f, true));
   }
-  Eigen::Isometry3d T = truth;
-  T.translation().z() = 6.3;
-  HeightSample scratch[9];
-  CHECK(consensus_height(a, b, weights, 9, 1.5f, 3, scratch, &T) == 7);
-  CHECK(T.translation().z() == Approx(1.2).margin(1e-5));
-  CHECK(T.translation().x() == 40.0);  // x, y and the rotation are verification's: untouched
-  CHECK(T.translation().y() == -12.0);
-  CHECK(T.linear().isApprox(truth.linear()));
-  // With the trunks weighted 3 each (total 13, half 6.5: 1, 2, 3, 4, then 7 at 3.0) the median moves up.
-  float heavy[9];
-  for (int i = 0; i < 9; ++i) heavy[i] = (offsets[i] >= 3.0f && i < 7) ? 3.0f : 1.0f;
-  T.translation().z() = 6.3;
-  CHECK(consensus_height(a, b, heavy, 9, 1.5f, 3, scratch, &T) == 7);
-  CHECK(T.translation().z() == Approx(3.0).margin(1e-5));
-  // Fewer agreeing correspondences than min_count: the pose keeps its own height.
-  T.translation().z() = 6.3;
-  CHECK(consensus_height(a, b, weights, 9, 1.5f, 8, scratch, &T) == 0);
-  CHECK(T.translation().z() == 6.3);
-  // A pose 30 m away explains none of them.
-  T.translation().x() += 30.0;
-  CHECK(consensus_height(a, b, weights, 9, 1.5f, 3, scratch, &T) == 0);
-  CHECK(T.translation().z() == 6.3);
-  // The switch is 0 or 1.
-  LocalizerConfig cfg;
-  cfg.hypotheses.height_consensus = 2;
-  CHECK(validate(cfg) == Status::InvalidArgument);
-  cfg.hypotheses.height_consensus = 0;
-  CHECK(validate(cfg) == Status::Ok);
+  void set(const std::vector<Eigen::Isometry3d>& poses) {
+    std::vector<float> a, b;
+    auto add = [&](float qx, float qy, float tx) {
+      a.insert(a.end(), {qx, qy, 1.0f});
+      b.insert(b.end(), {qx + tx, qy + 50.0f, 1.0f});
+    };
+    const float clique_pts[8][2] = {{3, 1}, {-7, 4}, {12, -5}, {-2, -14}, {18, 9}, {-15, -3}, {6, 11}, {-11, 7}};
+    for (const auto& p : clique_pts) add(p[0], p[1], 100.0f);
+    float x = 30.0f;
+    for (int k = 1; k <= 6; ++k)
+      for (int j = 0; j < 3; ++j, x += 1.7f) add(x, -20.0f + 3.0f * j, 100.0f + 8.0f * k + 1.0f);
+    const uint32_t n = static_cast<uint32_t>(a.size() / 3);
+    std::vector<float> w(n, 1.0f);
+    HypothesisConfig g;
+    g.max_peeled = 1;
+    g.heading_cliques = 0;
+    g.max_hypotheses = static_cast<uint32_t>(poses.size());
+    HypothesisStats st;
+    REQUIRE(hyps.generate(a.data(), b.data(), w.data(), n, g, &st) == Status::Ok);
+    REQUIRE(hyps.size() == poses.size());
+    for (uint32_t h = 0; h < hyps.size(); ++h) {
+      hyps[h].map_T_scan = poses[h];
+      hyps[h].clique_size = 10 + h;
+      hyps[h].inliers = 20 + h;
+      hyps[h].support = 30.0 + h;
+      hyps[h].verification = PoseVerification{};
+    }
+  }
+  Chosen choose(const SemanticGridView& grid) {
+    const AnswerChoice c = selector.choose(hyps, fixture.voxels, grid, fixture.weights, hc, vc);
+    Chosen out;
+    out.chosen_hypothesis = c.index;
+    out.verified = c.verified;
+    out.map_T_scan = c.answer.map_T_scan;
+    out.clique_size = c.answer.clique_size;
+    out.inliers = c.answer.inliers;
+    out.score = c.answer.support;
+    for (uint32_t k = 0; k < c.ranked; ++k) {
+      const PoseHypothesis& h = hyps[c.rank[k]];
+      out.hypothesis[k] = {static_cast<float>(h.map_T_scan.translation().x()), h.clique_size, h.inliers,
+                           h.verification.score, c.fully_verified[k]};
+    }
+    return out;
+  }
+  Chosen choose() { return choose(fixture.layer.view); }
+};
+
+}  // namespace
+
+TEST_CASE("choose(): the true lattice shift is the answer wherever it stands among the hypotheses") {
+  // The truth is x = 24; the other lattice shifts (x = 8, 16, 32, 40) agree on road and columns and miss
+  // only the bush (test_semantic_grid.cpp).
+  Selection s;
+  const double shifts[4] = {8.0, 16.0, 32.0, 40.0};
+  for (uint32_t at = 0; at < 5; ++at) {
+    std::vector<Eigen::Isometry3d> poses;
+    for (int k = 0; k < 4; ++k) poses.push_back(pose_at(shifts[k], 0.0));
+    poses.insert(poses.begin() + at, pose_at(24.0, 0.0));
+    s.set(poses);
+    INFO("truth at position " << at);
+    const Chosen out = s.choose();
+    CHECK(s.selector.chosen() == at);
+    CHECK(out.chosen_hypothesis == at);
+    CHECK(out.verified);
+    // The answer's fields are its hypothesis's.
+    CHECK(std::memcmp(out.map_T_scan.data(), s.hyps[at].map_T_scan.data(), sizeof(double) * 16) == 0);
+    CHECK(out.clique_size == 10 + at);
+    CHECK(out.inliers == 20 + at);
+    CHECK(out.score == 30.0 + at);
+    // Reports: every hypothesis (5 <= kMaxReportedHypotheses), ranked by verified score, the answer first,
+    // each fully scored (5 <= full_top).
+    for (uint32_t k = 0; k < 5; ++k) {
+      CHECK(out.hypothesis[k].fully_verified);
+      if (k > 0) CHECK(out.hypothesis[k - 1].verified_score >= out.hypothesis[k].verified_score);
+    }
+    CHECK(out.hypothesis[0].x == 24.0f);
+    CHECK(out.hypothesis[0].inliers == 20 + at);
+    CHECK(out.hypothesis[0].verified_score == s.hyps[at].verification.score);
+    CHECK(out.hypothesis[1].verified_score < out.hypothesis[0].verified_score);
+    // The answer's score is the full score at the pose verification settled on (answer_pose), bit for bit.
+    const PoseVerification again = verify_pose(s.fixture.voxels, s.fixture.layer.view, s.selector.answer_pose(),
+                                               s.vc.max_points, s.selector.verify_weights(), s.vc.disagree_weight);
+    CHECK(again.score == s.hyps[at].verification.score);
+    CHECK(planar_distance(s.selector.answer_pose(), pose_at(24.0, 0.0)) < 0.5);
+  }
+  // The verification weights are the rarity weights of the scan's voxels.
+  float expect[kNumClasses];
+  rarity_weights(s.fixture.voxels, s.fixture.weights, s.vc.rarity_exponent, s.vc.max_points, expect);
+  CHECK(std::memcmp(expect, s.selector.verify_weights(), sizeof(expect)) == 0);
+}
+
+TEST_CASE("choose(): a near-twin of the answer is the same answer; the other places are its rivals, best first") {
+  Selection s;
+  // Truth, a twin 0.6 m and 2 deg off (within same_pose_m 2 m and same_pose_deg 5 deg), four other shifts.
+  s.set({pose_at(16.0, 0.0), pose_at(24.6, 0.2, 2.0), pose_at(40.0, 0.0), pose_at(24.0, 0.0), pose_at(8.0, 0.0),
+         pose_at(32.0, 0.0)});
+  const Chosen out = s.choose();
+  const Eigen::Isometry3d answer = s.hyps[s.selector.chosen()].map_T_scan;
+  CHECK(planar_distance(answer, pose_at(24.0, 0.0)) < 1.0);
+  CHECK(s.selector.rival_count() == 4);
+  float previous = INFINITY;
+  for (uint32_t r = 0; r < s.selector.rival_count(); ++r) {
+    const Eigen::Isometry3d& rival = s.selector.rival_poses()[r];
+    INFO("rival " << r << " at x " << rival.translation().x());
+    CHECK(planar_distance(rival, answer) > s.hc.same_pose_m);
+    // Best first: each rival scores no better than the one before it.
+    const float score = verify_pose(s.fixture.voxels, s.fixture.layer.view, rival, s.vc.max_points,
+                                    s.selector.verify_weights(), s.vc.disagree_weight)
+                            .score;
+    CHECK(score <= previous);
+    previous = score;
+  }
+  CHECK(out.hypothesis[0].verified_score >= out.hypothesis[1].verified_score);
+  // Everything within a 100 m "same pose": one answer and no rival.
+  s.hc.same_pose_m = 100.0f;
+  s.choose();
+  CHECK(s.selector.rival_count() == 0);
+  // At another heading a hypothesis at the same place is a rival (same_pose_deg).
+  s.hc = HypothesisConfig();
+  s.set({pose_at(24.0, 0.0), pose_at(24.0, 0.0, 90.0)});
+  s.choose();
+  CHECK(s.selector.chosen() == 0);
+  CHECK(s.selector.rival_count() == 1);
+}
+
+TEST_CASE("choose(): without verification or without a semantic layer the first hypothesis is the answer") {
+  Selection s;
+  const std::vector<Eigen::Isometry3d> poses = {pose_at(8.0, 0.0), pose_at(16.0, 0.0), pose_at(24.0, 0.0)};
+  for (int way = 0; way < 2; ++way) {
+    s.set(poses);
+    s.vc.enabled = way != 0;  // way 0: verification off; way 1: on, but no layer to verify against
+    const Chosen out = way == 0 ? s.choose() : s.choose(SemanticGridView{});
+    INFO((way == 0 ? "verification off" : "no semantic layer"));
+    CHECK(s.selector.chosen() == 0);
+    CHECK_FALSE(out.verified);
+    CHECK(out.map_T_scan.isApprox(poses[0], 0.0));
+    CHECK(s.selector.answer_pose().isApprox(poses[0], 0.0));
+    CHECK(s.selector.rival_count() == 0);
+    CHECK(s.selector.compact_point_count() == 0);
+    // Reports in the order found, nothing fully verified.
+    for (uint32_t k = 0; k < 3; ++k) {
+      CHECK(out.hypothesis[k].x == float(poses[k].translation().x()));
+      CHECK(out.hypothesis[k].clique_size == 10 + k);
+      CHECK_FALSE(out.hypothesis[k].fully_verified);
+    }
+  }
+  // With verification the same list gives the truth (x = 24), third in the list.
+  s.vc = VerifyConfig();
+  s.set(poses);
+  CHECK(s.choose().verified);
+  CHECK(s.selector.chosen() == 2);
+  CHECK(s.selector.compact_point_count() == s.fixture.voxels.size());
+}
+
+TEST_CASE("choose(): full_top and refine_top cap what is fully scored and pattern-refined") {
+  Selection s;
+  const std::vector<Eigen::Isometry3d> poses = {pose_at(8.0, 0.0), pose_at(16.0, 0.0), pose_at(24.6, 0.2, 2.5),
+                                                pose_at(32.0, 0.0), pose_at(40.0, 0.0)};
+  // Only the best 2 by the coarse score are fully scored; the answer is among them.
+  s.vc.full_top = 2;
+  s.set(poses);
+  Chosen out = s.choose();
+  uint32_t full = 0;
+  for (uint32_t k = 0; k < 5; ++k) full += out.hypothesis[k].fully_verified;
+  CHECK(full == 2);
+  CHECK(out.hypothesis[0].fully_verified);
+  CHECK(s.selector.chosen() == 2);
+  // No refinement rounds: the answer is scored where it stands (answer_pose is its own pose).
+  s.vc = VerifyConfig();
+  s.vc.refine_rounds = 0;
+  s.set(poses);
+  out = s.choose();
+  CHECK(s.selector.chosen() == 2);
+  CHECK(s.selector.answer_pose().isApprox(poses[2], 0.0));
+  const PoseVerification at = verify_pose(s.fixture.voxels, s.fixture.layer.view, poses[2], s.vc.max_points,
+                                          s.selector.verify_weights(), s.vc.disagree_weight);
+  CHECK(out.hypothesis[0].verified_score == at.score);
+  // With refinement the answer 2.5 deg off is scored at the pose the pattern search found, a better one.
+  s.vc = VerifyConfig();
+  s.set(poses);
+  out = s.choose();
+  CHECK(s.selector.chosen() == 2);
+  CHECK(out.hypothesis[0].verified_score > at.score);
+  CHECK_FALSE(s.selector.answer_pose().isApprox(poses[2], 1e-6));  // the search moved it
+  const PoseVerification moved = verify_pose(s.fixture.voxels, s.fixture.layer.view, s.selector.answer_pose(),
+                                             s.vc.max_points, s.selector.verify_weights(), s.vc.disagree_weight);
+  CHECK(moved.score == out.hypothesis[0].verified_score);
+  CHECK(planar_distance(s.selector.answer_pose(), pose_at(24.0, 0.0)) <= planar_distance(poses[2], pose_at(24.0, 0.0)));
+  // The same input twice: the same choice and scores, bit for bit.
+  s.set(poses);
+  const Chosen again = s.choose();
+  for (uint32_t k = 0; k < AnswerChoice::kMaxRanked; ++k) {
+    CHECK(out.hypothesis[k].x == again.hypothesis[k].x);
+    CHECK(out.hypothesis[k].verified_score == again.hypothesis[k].verified_score);
+    CHECK(out.hypothesis[k].fully_verified == again.hypothesis[k].fully_verified);
+  }
 }

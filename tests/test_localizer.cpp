@@ -1,5 +1,6 @@
 // End to end on the simulator's tiny world: success rates against ground truth, GSF vs instance-only in
-// the repetitive zone, invariance to a rigid transform of the scan, determinism, hostile input.
+// the repetitive zone, invariance to a rigid transform of the scan, determinism, hostile input, and the
+// same results on x86-64 and ARM64 ([cross-isa]).
 #include <catch2/catch.hpp>
 
 #include <algorithm>
@@ -9,8 +10,13 @@
 #include <cstdlib>
 #include <cstring>
 #include <limits>
+#include <string>
+#include <utility>
+#include <vector>
 
 #include "gsf/localizer.h"
+#include "skip.h"
+#include "source_stamp.h"
 #include "tiny_world.h"
 
 using namespace gsf;
@@ -260,53 +266,322 @@ TEST_CASE("Init rejects a small buffer, a mismatched map and a bad config") {
   CHECK(loc.localize(w.queries[0].view(), &r) == Status::NoSolution);
 }
 
-// Cross-platform agreement: tests/data/tiny_golden.txt holds the x86-64 release results for the tiny
-// world (written with GSF_WRITE_GOLDEN=1). The same test runs on ARM64 under qemu in CI. Floating point
-// may differ in the last bits between ISAs (FMA contraction, libm), so we require the same success
-// verdicts on nearly all queries and close poses, not identical bits (bit-identity is per build).
-TEST_CASE("Results agree with the x86-64 reference within tolerance (run on every ISA)") {
-  const auto& w = tiny_world();
-  Workspace ws(w.config);
-  Localizer loc;
-  REQUIRE(loc.init(w.config, w.map, ws.data(), ws.bytes()) == Status::Ok);
-  const std::string path = std::string(GSF_SOURCE_DIR) + "/tests/data/tiny_golden.txt";
-  std::vector<std::array<double, 5>> mine;  // success, x, y, z, yaw
+namespace {
+
+// One query's result, against the truth when it is known.
+struct QueryOutcome {
+  int status = 0;
+  bool right = false;  // within 5 m / 10 deg of the simulator's truth
+  bool confident = false;
+  float confidence = 0.0f;
+  double pose[12] = {};  // map_frame_T_scan: rotation (row-major), then translation
+  uint32_t inliers = 0, chosen = 0, hypotheses = 0;
+  double t_err = 0, r_err_deg = 0;
+};
+
+QueryOutcome outcome_of(const LocalizeResult& r, const Eigen::Isometry3d& truth) {
+  QueryOutcome o;
+  const Eigen::Isometry3d& T = r.map_frame_T_scan;
+  o.status = static_cast<int>(r.status);
+  o.right = r.status == Status::Ok && gsf_test::pose_ok(T, truth);
+  o.confident = r.status == Status::Ok && r.confident;
+  o.confidence = r.confidence;
+  for (int i = 0; i < 3; ++i) {
+    for (int j = 0; j < 3; ++j) o.pose[3 * i + j] = T.linear()(i, j);
+    o.pose[9 + i] = T.translation()(i);
+  }
+  o.inliers = r.inliers;
+  o.chosen = r.chosen_hypothesis;
+  o.hypotheses = r.hypotheses;
+  const Eigen::Isometry3d d = T.inverse() * truth;
+  o.t_err = d.translation().norm();
+  o.r_err_deg = Eigen::AngleAxisd(d.rotation()).angle() * 180.0 / M_PI;
+  return o;
+}
+
+// The tiny world's queries at its config, localized once per process (the truth test and the
+// cross-ISA check read them).
+const std::vector<QueryOutcome>& tiny_outcomes() {
+  static const std::vector<QueryOutcome> outcomes = [] {
+    const auto& w = tiny_world();
+    Workspace ws(w.config);
+    Localizer loc;
+    REQUIRE(loc.init(w.config, w.map, ws.data(), ws.bytes()) == Status::Ok);
+    std::vector<QueryOutcome> all;
+    for (const auto& q : w.queries) {
+      LocalizeResult r;
+      loc.localize(q.view(), &r);
+      all.push_back(outcome_of(r, q.truth));
+    }
+    return all;
+  }();
+  return outcomes;
+}
+
+}  // namespace
+
+// The simulator's truth is the oracle (not a file of earlier results): today all 31 queries are within
+// 5 m / 10 deg, 0.27 m off at the median, and 30 are answered (confident); the bounds leave room for
+// two misses and a few declines, never for a confident wrong answer.
+TEST_CASE("The tiny world against the simulator's truth: nearly every query right, every confident answer right") {
+  const std::vector<QueryOutcome>& all = tiny_outcomes();
+  const int n = static_cast<int>(all.size());
+  REQUIRE(n == 31);
+  int right = 0, confident = 0, confident_wrong = 0;
+  std::vector<double> t_err;
+  for (int k = 0; k < n; ++k) {
+    const QueryOutcome& o = all[k];
+    INFO("query " << k << ": status " << o.status << ", " << o.t_err << " m, " << o.r_err_deg << " deg, confidence "
+                  << o.confidence);
+    right += o.right;
+    confident += o.confident;
+    if (o.confident) CHECK(o.right);  // the decision rule never vouches for a wrong pose
+    confident_wrong += o.confident && !o.right;
+    if (o.right) t_err.push_back(o.t_err);
+  }
+  std::sort(t_err.begin(), t_err.end());
+  const double median = t_err.empty() ? 1e9 : t_err[t_err.size() / 2];
+  INFO(right << " of " << n << " right, " << confident << " confident, median error " << median << " m");
+  CHECK(right >= n - 2);
+  CHECK(confident >= n - 4);
+  CHECK(confident_wrong == 0);
+  CHECK(median < 0.4);
+}
+
+namespace {
+
+// The cross-ISA check's files, both in the writing build's tree and stamped with the sources
+// (gsf_test::source_stamp()): the inputs (the tiny world's map blob and query scans with logits and
+// truth, binary, ~32 MB) and the results (text, one line per query, every float as a C99 hex float:
+// an exact round trip).
+const char* isa_name() {
+#if defined(__x86_64__)
+  return "x86-64";
+#elif defined(__aarch64__)
+  return "arm64";
+#else
+  return "other";
+#endif
+}
+
+std::string inputs_path(const std::string& results_path) {
+  return results_path.substr(0, results_path.rfind('.')) + "_inputs.bin";
+}
+
+struct Inputs {
+  std::string stamp;
+  std::vector<uint64_t> blob;  // the map, 8-byte aligned for load_map
+  size_t bytes = 0;
+  std::vector<gsf_test::QueryScan> queries;
+};
+
+template <typename T>
+bool put(FILE* f, const T* p, size_t n) {
+  return std::fwrite(p, sizeof(T), n, f) == n;
+}
+template <typename T>
+bool get(FILE* f, T* p, size_t n) {
+  return std::fread(p, sizeof(T), n, f) == n;
+}
+
+[[maybe_unused]] bool write_inputs(const std::string& path, const gsf_test::TinyWorld& w) {
+  FILE* f = std::fopen(path.c_str(), "wb");
+  if (!f) return false;
+  const std::string stamp = gsf_test::source_stamp();
+  const uint64_t sizes[3] = {stamp.size(), w.bytes, w.queries.size()};
+  bool ok = put(f, "GSFISA1", 8) && put(f, sizes, 3) && put(f, stamp.data(), stamp.size()) &&
+            put(f, reinterpret_cast<const char*>(w.blob.data()), w.bytes);
   for (const auto& q : w.queries) {
+    const uint64_t n = q.labels.size();
+    ok = ok && put(f, &n, 1) && put(f, q.xyzi.data(), 4 * n) && put(f, q.labels.data(), n) &&
+         put(f, q.logits.data(), n * kNumClasses) && put(f, q.truth.data(), 16);
+  }
+  return std::fclose(f) == 0 && ok;
+}
+
+bool read_inputs(const std::string& path, Inputs* in) {
+  FILE* f = std::fopen(path.c_str(), "rb");
+  if (!f) return false;
+  char magic[8];
+  uint64_t sizes[3];
+  bool ok = get(f, magic, 8) && std::memcmp(magic, "GSFISA1", 8) == 0 && get(f, sizes, 3) && sizes[0] < 1000 &&
+            sizes[1] < (uint64_t(1) << 32) && sizes[2] < 100000;
+  if (ok) {
+    in->stamp.resize(sizes[0]);
+    in->bytes = sizes[1];
+    in->blob.assign(sizes[1] / 8 + 1, 0);
+    ok = get(f, &in->stamp[0], sizes[0]) && get(f, reinterpret_cast<char*>(in->blob.data()), sizes[1]);
+    in->queries.resize(sizes[2]);
+  }
+  for (size_t k = 0; ok && k < in->queries.size(); ++k) {
+    gsf_test::QueryScan& q = in->queries[k];
+    uint64_t n = 0;
+    ok = get(f, &n, 1) && n < (uint64_t(1) << 24);
+    if (!ok) break;
+    q.xyzi.resize(4 * n);
+    q.labels.resize(n);
+    q.logits.resize(n * kNumClasses);
+    ok = get(f, q.xyzi.data(), 4 * n) && get(f, q.labels.data(), n) && get(f, q.logits.data(), n * kNumClasses) &&
+         get(f, q.truth.data(), 16);
+  }
+  std::fclose(f);
+  return ok;
+}
+
+// Localizes the inputs with the tiny world's config (tiny_world.h).
+std::vector<QueryOutcome> localize_inputs(const Inputs& in) {
+  LocalizerConfig cfg;
+  cfg.max_scan_points = 262144;
+  MapView map;
+  REQUIRE(load_map(in.blob.data(), in.bytes, &map) == Status::Ok);
+  Workspace ws(cfg);
+  Localizer loc;
+  REQUIRE(loc.init(cfg, map, ws.data(), ws.bytes()) == Status::Ok);
+  std::vector<QueryOutcome> all;
+  for (const auto& q : in.queries) {
     LocalizeResult r;
     loc.localize(q.view(), &r);
-    // In the map's frame, the truth's (the fixture's map has origin 0, so this is also the map-local pose).
-    const bool ok = r.status == Status::Ok && gsf_test::pose_ok(r.map_frame_T_scan, q.truth);
-    const auto t = r.map_frame_T_scan.translation();
-    mine.push_back({ok ? 1.0 : 0.0, t.x(), t.y(), t.z(),
-                    std::atan2(r.map_frame_T_scan.linear()(1, 0), r.map_frame_T_scan.linear()(0, 0))});
+    all.push_back(outcome_of(r, q.truth));
   }
-  if (std::getenv("GSF_WRITE_GOLDEN")) {
-    FILE* f = std::fopen(path.c_str(), "w");
-    REQUIRE(f != nullptr);
-    for (const auto& m : mine) std::fprintf(f, "%.0f %.6f %.6f %.6f %.6f\n", m[0], m[1], m[2], m[3], m[4]);
-    std::fclose(f);
+  return all;
+}
+
+bool write_results(const std::string& path, const std::vector<QueryOutcome>& all) {
+  FILE* f = std::fopen(path.c_str(), "w");
+  if (!f) return false;
+  std::fprintf(f, "# gsf-loc tiny-world results; source %s; isa %s; queries %zu\n", gsf_test::source_stamp(),
+               isa_name(), all.size());
+  for (const QueryOutcome& o : all) {
+    std::fprintf(f, "%d %d %d %a %u %u %u", o.status, o.right ? 1 : 0, o.confident ? 1 : 0, double(o.confidence),
+                 o.inliers, o.chosen, o.hypotheses);
+    for (double v : o.pose) std::fprintf(f, " %a", v);
+    std::fprintf(f, "\n");
   }
+  return std::fclose(f) == 0;
+}
+
+// Reads a results file; *stamp gets the header's source stamp. False if absent or malformed.
+bool read_results(const std::string& path, std::string* stamp, std::vector<QueryOutcome>* all) {
   FILE* f = std::fopen(path.c_str(), "r");
-  REQUIRE(f != nullptr);
-  std::vector<std::array<double, 5>> golden;
-  std::array<double, 5> g;
-  while (std::fscanf(f, "%lf %lf %lf %lf %lf", &g[0], &g[1], &g[2], &g[3], &g[4]) == 5) golden.push_back(g);
-  std::fclose(f);
-  REQUIRE(golden.size() == mine.size());
-  int same_verdict = 0, both_ok = 0, close = 0;
-  for (size_t i = 0; i < mine.size(); ++i) {
-    same_verdict += mine[i][0] == golden[i][0];
-    if (mine[i][0] > 0 && golden[i][0] > 0) {
-      ++both_ok;
-      const double dt = std::hypot(mine[i][1] - golden[i][1], mine[i][2] - golden[i][2]);
-      double dyaw = std::fabs(mine[i][4] - golden[i][4]);
-      dyaw = std::min(dyaw, 2 * M_PI - dyaw);
-      close += dt < 0.3 && dyaw < 1.0 * M_PI / 180.0;
-    }
+  if (!f) return false;
+  char line[1024];
+  bool ok = std::fgets(line, sizeof(line), f) != nullptr;
+  if (ok) {
+    const std::string h(line);
+    const size_t a = h.find("source "), b = h.find(';', a);
+    ok = a != std::string::npos && b != std::string::npos;
+    if (ok) *stamp = h.substr(a + 7, b - a - 7);
   }
-  INFO(same_verdict << " of " << mine.size() << " same verdict; " << close << " of " << both_ok << " poses close");
-  CHECK(same_verdict * 10 >= static_cast<int>(mine.size()) * 9);
-  CHECK(close * 10 >= both_ok * 9);
+  all->clear();
+  while (ok && std::fgets(line, sizeof(line), f)) {
+    QueryOutcome o;
+    int right = 0, confident = 0, used = 0;
+    double confidence = 0;
+    ok = std::sscanf(line, "%d %d %d %la %u %u %u%n", &o.status, &right, &confident, &confidence, &o.inliers, &o.chosen,
+                     &o.hypotheses, &used) == 7;
+    for (double& v : o.pose) {
+      int more = 0;
+      ok = ok && std::sscanf(line + used, " %la%n", &v, &more) == 1;
+      used += more;
+    }
+    o.right = right != 0;
+    o.confident = confident != 0;
+    o.confidence = static_cast<float>(confidence);
+    all->push_back(o);
+  }
+  std::fclose(f);
+  return ok;
+}
+
+bool same_bits(const QueryOutcome& a, const QueryOutcome& b) {
+  return a.status == b.status && a.right == b.right && a.confident == b.confident &&
+         std::memcmp(&a.confidence, &b.confidence, sizeof(float)) == 0 &&
+         std::memcmp(a.pose, b.pose, sizeof(a.pose)) == 0 && a.inliers == b.inliers && a.chosen == b.chosen &&
+         a.hypotheses == b.hypotheses;
+}
+
+// The largest difference of the rotation entries (first) and of the translation (second).
+[[maybe_unused]] std::pair<double, double> pose_difference(const QueryOutcome& a, const QueryOutcome& b) {
+  double r = 0, t = 0;
+  for (int k = 0; k < 9; ++k) r = std::max(r, std::fabs(a.pose[k] - b.pose[k]));
+  for (int k = 9; k < 12; ++k) t = std::max(t, std::fabs(a.pose[k] - b.pose[k]));
+  return {r, t};
+}
+
+}  // namespace
+
+// x86-64 against ARM64 on the same inputs, from the same sources. A host build writes the tiny world
+// (map blob, query scans with their logits, truth) and its results on it to its own tree (GSF_ISA_RESULTS
+// and the _inputs.bin beside it), after checking that the written inputs localize to the same results
+// bit for bit. The aarch64 build (under qemu) reads the host release build's files (GSF_ISA_REFERENCE;
+// scripts/test.sh runs the release preset first), localizes the same scans against the same map and
+// compares. Bit for bit: status, verdict, decision, confidence, inliers, chosen hypothesis and
+// hypothesis count. Within 1e-6 m and 1e-7 (rotation matrix entries): the pose, whose double-precision
+// last bits follow libm (sin, cos, atan2 round differently on the two ISAs' glibc; measured 2026-12-03:
+// every pose differs in its last bits, by at most 1.2e-8 m and 1.1e-9; FMA contraction is off on both,
+// -std=c++17).
+// The shared inputs are what makes this tight: the simulator's own scans already differ between the
+// ISAs (libm again), so the ARM64 build's own world is checked against the truth instead (test above).
+// Skipped (ctest: Skipped) when the release files are absent (the aarch64 preset run alone) or from
+// other sources.
+TEST_CASE("x86-64 and ARM64 give the same results, bit for bit, on the same tiny-world inputs", "[cross-isa]") {
+#ifndef GSF_ISA_REFERENCE
+  const std::vector<QueryOutcome>& mine = tiny_outcomes();
+  REQUIRE(write_inputs(inputs_path(GSF_ISA_RESULTS), tiny_world()));
+  REQUIRE(write_results(GSF_ISA_RESULTS, mine));
+  Inputs in;
+  REQUIRE(read_inputs(inputs_path(GSF_ISA_RESULTS), &in));
+  CHECK(in.stamp == gsf_test::source_stamp());
+  std::string stamp;
+  std::vector<QueryOutcome> back;
+  REQUIRE(read_results(GSF_ISA_RESULTS, &stamp, &back));
+  CHECK(stamp == gsf_test::source_stamp());
+  const std::vector<QueryOutcome> again = localize_inputs(in);
+  REQUIRE(back.size() == mine.size());
+  REQUIRE(again.size() == mine.size());
+  for (size_t k = 0; k < mine.size(); ++k) {
+    INFO("query " << k);
+    CHECK(same_bits(back[k], mine[k]));   // the results file round-trips exactly
+    CHECK(same_bits(again[k], mine[k]));  // and so do the inputs and the config
+  }
+#else
+  Inputs in;
+  std::string stamp;
+  std::vector<QueryOutcome> ref;
+  const std::string reference = GSF_ISA_REFERENCE;
+  GSF_SKIP_UNLESS(read_results(reference, &stamp, &ref) && read_inputs(inputs_path(reference), &in),
+                  "no release reference at " + reference + " (run the release preset's tests first)");
+  GSF_SKIP_UNLESS(stamp == gsf_test::source_stamp() && in.stamp == stamp,
+                  "the release reference at " + reference + " is from other sources (" + stamp + "; these are " +
+                      gsf_test::source_stamp() + ")");
+  const std::vector<QueryOutcome> mine = localize_inputs(in);
+  CHECK(write_results(GSF_ISA_RESULTS, mine));  // for a look at what differs
+  REQUIRE(ref.size() == mine.size());
+  uint32_t same = 0;
+  double max_r = 0, max_t = 0;
+  for (size_t k = 0; k < mine.size(); ++k) {
+    const QueryOutcome &a = mine[k], &b = ref[k];
+    INFO("query " << k << ": ARM64 status " << a.status << " confidence " << a.confidence << " at (" << a.pose[9]
+                  << ", " << a.pose[10] << "); x86-64 status " << b.status << " confidence " << b.confidence << " at ("
+                  << b.pose[9] << ", " << b.pose[10] << ")");
+    CHECK(a.status == b.status);
+    CHECK(a.right == b.right);
+    CHECK(a.confident == b.confident);
+    CHECK(std::memcmp(&a.confidence, &b.confidence, sizeof(float)) == 0);
+    CHECK(a.inliers == b.inliers);
+    CHECK(a.chosen == b.chosen);
+    CHECK(a.hypotheses == b.hypotheses);
+    const std::pair<double, double> d = pose_difference(a, b);
+    CHECK(d.first < 1e-7);
+    CHECK(d.second < 1e-6);
+    max_r = std::max(max_r, d.first);
+    max_t = std::max(max_t, d.second);
+    same += same_bits(a, b);
+  }
+  WARN(same << " of " << mine.size() << " results bit-identical on " << isa_name()
+            << " and the release reference; largest pose differences " << max_t << " m, " << max_r
+            << " (rotation entries)");
+#endif
 }
 
 TEST_CASE("The per-stage budget is the layout itself: its parts sum to required_bytes, with and without refinement") {

@@ -23,6 +23,7 @@
 #include "gsf/detail/voxel_layer.h"
 #include "gsf/port/nuscenes.h"
 #include "gsf/port/scan_buffer.h"
+#include "skip.h"
 #include "test_cloud.h"
 
 using namespace gsf;
@@ -467,12 +468,9 @@ const char* kKittiFrames[] = {"00/velodyne/000052.bin", "00/velodyne/000088.bin"
 
 }  // namespace
 
-TEST_CASE("Real SemanticKITTI: extraction from relabelled hosts against the true poles and trunks") {
+TEST_CASE("Real SemanticKITTI: extraction from relabelled hosts against the true poles and trunks", "[real-data]") {
   const std::string root = std::string(GSF_DATA_DIR) + "/semantickitti-samples/sequences/";
-  if (!std::filesystem::exists(root)) {
-    WARN("real data not found under " << root << "; skipped");
-    return;
-  }
+  GSF_SKIP_UNLESS(std::filesystem::exists(root), "no real data at " + root);
   for (bool signs_and_fences : {false, true}) {
     KittiScore total;
     for (const char* f : kKittiFrames) {
@@ -603,12 +601,9 @@ bool run_scene(const std::string& root, const char* scene, SceneResult* out) {
 
 }  // namespace
 
-TEST_CASE("Real nuScenes-lidarseg: poles and trunks from static.manmade and static.vegetation") {
+TEST_CASE("Real nuScenes-lidarseg: poles and trunks from static.manmade and static.vegetation", "[real-data]") {
   const std::string root = std::string(GSF_DATA_DIR) + "/nuscenes-lidarseg-samples";
-  if (!std::filesystem::exists(root + "/sequences/0004")) {
-    WARN("real data not found under " << root << "; skipped");
-    return;
-  }
+  GSF_SKIP_UNLESS(std::filesystem::exists(root + "/sequences/0004"), "no real data at " + root);
   std::map<std::string, SceneResult> scenes;
   for (const char* scene : {"0001", "0002", "0004"}) {
     SceneResult r;

@@ -12,6 +12,7 @@
 #include "gsf/port/logit_synthesis.h"
 #include "gsf/port/nuscenes.h"
 #include "gsf/port/semantic_kitti.h"
+#include "skip.h"
 
 using namespace gsf;
 using namespace gsf::port;
@@ -132,12 +133,9 @@ bool revisit_pair(const std::string& file, uint32_t* fa, uint32_t* fb, std::stri
 }
 }  // namespace
 
-TEST_CASE("Real SemanticKITTI samples: counts, labels and revisit poses") {
+TEST_CASE("Real SemanticKITTI samples: counts, labels and revisit poses", "[real-data]") {
   const std::string root = std::string(GSF_DATA_DIR) + "/semantickitti-samples";
-  if (!fs::exists(root)) {
-    WARN("no real data at " << root << "; skipped");
-    return;
-  }
+  GSF_SKIP_UNLESS(fs::exists(root), "no real data at " + root);
   OwnedScanBuffer buf(200000, false);
   int scans = 0;
   for (const char* seq : {"00", "07", "08"}) {
@@ -170,12 +168,9 @@ TEST_CASE("Real SemanticKITTI samples: counts, labels and revisit poses") {
   CHECK((ours.matrix() - t_ab.matrix()).cwiseAbs().maxCoeff() < 1e-3);
 }
 
-TEST_CASE("Real nuScenes-lidarseg samples: mapped labels, ego points dropped, revisit poses") {
+TEST_CASE("Real nuScenes-lidarseg samples: mapped labels, ego points dropped, revisit poses", "[real-data]") {
   const std::string root = std::string(GSF_DATA_DIR) + "/nuscenes-lidarseg-samples";
-  if (!fs::exists(root)) {
-    WARN("no real data at " << root << "; skipped");
-    return;
-  }
+  GSF_SKIP_UNLESS(fs::exists(root), "no real data at " + root);
   NuScenesLidarsegSource src;
   REQUIRE(src.open(root, "0002") == Status::Ok);
   REQUIRE(src.size() == 40);

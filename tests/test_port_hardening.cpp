@@ -22,6 +22,7 @@
 #include "gsf/port/logit_synthesis.h"
 #include "gsf/port/nuscenes.h"
 #include "gsf/port/semantic_kitti.h"
+#include "skip.h"
 
 using namespace gsf;
 using namespace gsf::port;
@@ -438,12 +439,9 @@ TEST_CASE("nuScenes: mapping, ego drop, capacity after the drop, and every rejec
   for (int c = 0; c <= 31; ++c) CHECK(class_from_kitti(nuscenes_to_kitti(uint8_t(c))) != kUnknownClass);
 }
 
-TEST_CASE("Real SemanticKITTI: every revisit and negative pair's T_gt, every label a known class") {
+TEST_CASE("Real SemanticKITTI: every revisit and negative pair's T_gt, every label a known class", "[real-data]") {
   const std::string root = std::string(GSF_DATA_DIR) + "/semantickitti-samples";
-  if (!fs::exists(root)) {
-    WARN("no real data at " << root << "; skipped");
-    return;
-  }
+  GSF_SKIP_UNLESS(fs::exists(root), "no real data at " + root);
   const std::vector<Pair> pairs = read_pairs(root + "/revisit_pairs.txt");
   REQUIRE(pairs.size() >= 3);
   int revisits = 0;
@@ -474,12 +472,10 @@ TEST_CASE("Real SemanticKITTI: every revisit and negative pair's T_gt, every lab
   CHECK(points == 1232087u);  // sum of the ten sample scans
 }
 
-TEST_CASE("Real nuScenes: every pair's T_gt, ego points gone (count = raw - class 31, nothing within 1 m)") {
+TEST_CASE("Real nuScenes: every pair's T_gt, ego points gone (count = raw - class 31, nothing within 1 m)",
+          "[real-data]") {
   const std::string root = std::string(GSF_DATA_DIR) + "/nuscenes-lidarseg-samples";
-  if (!fs::exists(root)) {
-    WARN("no real data at " << root << "; skipped");
-    return;
-  }
+  GSF_SKIP_UNLESS(fs::exists(root), "no real data at " + root);
   const std::vector<Pair> pairs = read_pairs(root + "/revisit_pairs.txt");
   REQUIRE(!pairs.empty());
   for (const Pair& pr : pairs) {

@@ -13,6 +13,7 @@
 #include "gsf/port/logit_synthesis.h"
 #include "gsf/port/nuscenes.h"
 #include "gsf/port/semantic_kitti.h"
+#include "skip.h"
 
 using namespace gsf;
 using namespace gsf::port;
@@ -62,25 +63,24 @@ TEST_CASE("SemanticKittiSource::read allocates nothing, on success and on every 
   CHECK(s[2] == Status::IoError);
   CHECK(s[3] == Status::CapacityExceeded);
   CHECK(s[4] == Status::NotFound);
-  const std::string real = std::string(GSF_DATA_DIR) + "/semantickitti-samples";
-  if (fs::exists(real)) {
-    SemanticKittiSource r;
-    REQUIRE(r.open(real, "08") == Status::Ok);
-    OwnedScanBuffer big(130000, false);
-    AllocationScope scope;
-    const Status st = r.read(0, big.buffer());
-    const uint64_t allocations = scope.allocations();
-    CHECK(st == Status::Ok);
-    CHECK(allocations == 0);
-  }
 }
 
-TEST_CASE("NuScenesLidarsegSource::read allocates nothing") {
+TEST_CASE("SemanticKittiSource::read of a real scan allocates nothing", "[real-data]") {
+  const std::string real = std::string(GSF_DATA_DIR) + "/semantickitti-samples";
+  GSF_SKIP_UNLESS(fs::exists(real), "no real data at " + real);
+  SemanticKittiSource r;
+  REQUIRE(r.open(real, "08") == Status::Ok);
+  OwnedScanBuffer big(130000, false);
+  AllocationScope scope;
+  const Status st = r.read(0, big.buffer());
+  const uint64_t allocations = scope.allocations();
+  CHECK(st == Status::Ok);
+  CHECK(allocations == 0);
+}
+
+TEST_CASE("NuScenesLidarsegSource::read allocates nothing", "[real-data]") {
   const std::string root = std::string(GSF_DATA_DIR) + "/nuscenes-lidarseg-samples";
-  if (!fs::exists(root)) {
-    WARN("no real data at " << root << "; skipped");
-    return;
-  }
+  GSF_SKIP_UNLESS(fs::exists(root), "no real data at " + root);
   NuScenesLidarsegSource src;
   REQUIRE(src.open(root, "0004") == Status::Ok);
   OwnedScanBuffer buf(40000, false), tiny(100, false);

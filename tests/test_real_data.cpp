@@ -13,6 +13,7 @@
 #include "gsf/port/nuscenes.h"
 #include "gsf/port/semantic_kitti.h"
 #include "mapping/map_builder.h"
+#include "skip.h"
 
 using namespace gsf;
 
@@ -75,11 +76,9 @@ Outcome localize_revisit(const char* seq, std::initializer_list<uint32_t> map_fr
 
 }  // namespace
 
-TEST_CASE("Real SemanticKITTI revisits localize one-shot against a map of other frames") {
-  if (!std::filesystem::exists(std::string(GSF_DATA_DIR) + "/semantickitti-samples")) {
-    WARN("no real data under " << GSF_DATA_DIR << "; skipped");
-    return;
-  }
+TEST_CASE("Real SemanticKITTI revisits localize one-shot against a map of other frames", "[real-data]") {
+  const std::string root = std::string(GSF_DATA_DIR) + "/semantickitti-samples";
+  GSF_SKIP_UNLESS(std::filesystem::exists(root), "no real data at " + root);
   for (bool gsf : {false, true}) {
     const Outcome a = localize_revisit("00", {52, 88, 850}, 4501, gsf);
     INFO("seq 00, gsf " << gsf << ": " << a.t_err << " m, " << a.r_err_deg << " deg, " << a.inliers << " inliers");
@@ -186,12 +185,10 @@ NuScenesRun localize_nuscenes(const std::string& root, const char* map_seq, cons
 
 }  // namespace
 
-TEST_CASE("Real nuScenes-lidarseg: the opposite-direction revisit localizes, the distractor map is declined") {
+TEST_CASE("Real nuScenes-lidarseg: the opposite-direction revisit localizes, the distractor map is declined",
+          "[real-data]") {
   const std::string root = std::string(GSF_DATA_DIR) + "/nuscenes-lidarseg-samples";
-  if (!std::filesystem::exists(root)) {
-    WARN("no nuScenes data under " << GSF_DATA_DIR << "; skipped");
-    return;
-  }
+  GSF_SKIP_UNLESS(std::filesystem::exists(root), "no real data at " + root);
   const NuScenesRun fwd = localize_nuscenes(root, "0004", "0002");
   INFO("map 0004, queries 0002: " << fwd.correct_8_to_20 << " of frames 8-20 and " << fwd.correct_pose
                                   << " correct poses of " << fwd.overlap << " overlapping; answered "

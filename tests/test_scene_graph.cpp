@@ -13,6 +13,7 @@
 #include "arena_buffer.h"
 #include "gsf/detail/instance_clustering.h"
 #include "gsf/detail/voxel_layer.h"
+#include "skip.h"
 #include "test_cloud.h"
 
 using namespace gsf;
@@ -222,13 +223,10 @@ TEST_CASE("Translating the scan translates the instances; gather_within matches 
   }
 }
 
-TEST_CASE("Real SemanticKITTI scan: instances in a plausible range") {
+TEST_CASE("Real SemanticKITTI scan: instances in a plausible range", "[real-data]") {
   const std::string root = std::string(GSF_DATA_DIR) + "/semantickitti-samples/sequences/00/";
   std::ifstream fb(root + "velodyne/000052.bin", std::ios::binary), fl(root + "labels/000052.label", std::ios::binary);
-  if (!fb || !fl) {
-    WARN("real data not found under " << GSF_DATA_DIR << "; skipped");
-    return;
-  }
+  GSF_SKIP_UNLESS(fb && fl, "no real data at " + root + "velodyne/000052.bin");
   std::vector<float> pts((std::istreambuf_iterator<char>(fb)), {});
   (void)pts;
   fb.clear();

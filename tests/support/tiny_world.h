@@ -76,7 +76,8 @@ inline TinyWorld* build_sim_world(const gsf::sim::SimConfig& sc, const gsf::Clas
     const gsf::sim::Drive md = gsf::sim::mapping_drive(world, sc);
     const gsf::sim::Drive qd = gsf::sim::query_drive(world, sc);
     // The simulator's world frame is already local: an explicit zero origin keeps the fixture's map
-    // (and so tests/data/tiny_golden.txt) what it was before maps had an origin. The default origin
+    // local, so the map's frame and the map-local frame coincide (test_localizer compares poses in
+    // either with the simulator's truth). The default origin
     // (first pose, rounded) is tested in test_map_builder.cpp and by the CLI's shifted-world test.
     gsf::mapping::MapBuildConfig build_config;
     build_config.stages = t->config;

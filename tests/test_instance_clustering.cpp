@@ -16,6 +16,7 @@
 #include "arena_buffer.h"
 #include "gsf/detail/instance_clustering.h"
 #include "gsf/detail/voxel_layer.h"
+#include "skip.h"
 
 using namespace gsf;
 using gsf_test::ArenaBuffer;
@@ -477,7 +478,7 @@ TEST_CASE("Map scale: sizes from the config cluster a 300 m x 300 m layer with 4
   CHECK(exact == 400);
 }
 
-TEST_CASE("Real SemanticKITTI scans: car instances against the ground-truth instance ids") {
+TEST_CASE("Real SemanticKITTI scans: car instances against the ground-truth instance ids", "[real-data]") {
   const char* frames[] = {"00/velodyne/000052.bin", "00/velodyne/000850.bin", "08/velodyne/000720.bin"};
   // Distinct 0.4 m cells of the labelled points within [2.5, 80] m, counted independently (Python,
   // double precision floor(x / 0.4)).
@@ -490,10 +491,7 @@ TEST_CASE("Real SemanticKITTI scans: car instances against the ground-truth inst
     lab.replace(lab.find("velodyne"), 8, "labels");
     lab.replace(lab.size() - 3, 3, "label");
     std::ifstream fb(bin, std::ios::binary | std::ios::ate), fl(lab, std::ios::binary | std::ios::ate);
-    if (!fb || !fl) {
-      WARN("real data not found: " << bin << "; skipped");
-      return;
-    }
+    GSF_SKIP_UNLESS(fb && fl, "no real data at " + bin);
     const size_t nb = static_cast<size_t>(fb.tellg()), nl = static_cast<size_t>(fl.tellg());
     REQUIRE(nb % 16 == 0);
     REQUIRE(nl == nb / 4);

@@ -1,4 +1,5 @@
-// Gaussian semantic fields and the 2-Wasserstein similarity: closed forms, invariances, Algorithm 1.
+// Gaussian semantic fields (gaussian_field.h), Algorithm 1 sparsification (sparsify.h) and the
+// 2-Wasserstein similarity (wasserstein.h): closed forms, invariances, class proportions.
 #include <catch2/catch.hpp>
 
 #include <cmath>

@@ -1,0 +1,253 @@
+// Pose hypotheses alone (core/include/gsf/detail/pose_hypotheses.h) on hand-made correspondences:
+// peeled cliques (one per lattice shift), heading-diverse cliques, the edges removed at a heading, and
+// the shift votes (bins ranked by support, votes over the pairs ranked out of the graph).
+#include <catch2/catch.hpp>
+
+#include <cmath>
+#include <vector>
+
+#include "arena_buffer.h"
+#include "gsf/config.h"
+#include "gsf/detail/max_clique.h"
+#include "gsf/detail/pose_hypotheses.h"
+
+using namespace gsf;
+using gsf_test::ArenaBuffer;
+
+namespace {
+
+// A 1-D lattice of columns every 8 m along x; correspondences of 6 query columns to map columns shifted
+// by `shift` periods.
+void lattice_correspondences(int shift, float noise, std::vector<float>* a, std::vector<float>* b) {
+  for (int k = 0; k < 6; ++k) {
+    const float x = 8.0f * k, y = (k % 2) ? 4.0f : -4.0f;
+    a->insert(a->end(), {x + noise * (k % 3), y, 0.0f});
+    b->insert(b->end(), {x + 8.0f * shift + 100.0f, y + 50.0f, 0.0f});
+  }
+}
+
+}  // namespace
+
+TEST_CASE("Peeling yields one hypothesis per lattice shift, the largest clique first") {
+  std::vector<float> a, b;
+  lattice_correspondences(0, 0.02f, &a, &b);  // the true shift: 6 correspondences
+  std::vector<float> a2, b2;
+  lattice_correspondences(2, 0.0f, &a2, &b2);  // a competing shift: its first 4 only
+  a.insert(a.end(), a2.begin(), a2.begin() + 12);
+  b.insert(b.end(), b2.begin(), b2.begin() + 12);
+  const uint32_t n = static_cast<uint32_t>(a.size() / 3);
+  std::vector<float> w(n, 1.0f);
+  HypothesisConfig hc;
+  ArenaBuffer buf(PoseHypotheses::required_bytes(64, 8));
+  PoseHypotheses hyp;
+  REQUIRE(hyp.bind(buf.arena, 64, 8) == Status::Ok);
+  HypothesisStats st;
+  REQUIRE(hyp.generate(a.data(), b.data(), w.data(), n, hc, &st) == Status::Ok);
+  REQUIRE(hyp.size() >= 2);
+  CHECK(hyp[0].clique_size == 6);
+  CHECK(hyp[0].map_T_scan.translation().isApprox(Eigen::Vector3d(100, 50, 0), 0.05));
+  CHECK(hyp[1].clique_size == 4);
+  CHECK(hyp[1].map_T_scan.translation().isApprox(Eigen::Vector3d(116, 50, 0), 0.05));
+  for (uint32_t i = 0; i < 6; ++i) CHECK(hyp.in_clique(0, i));
+  CHECK(st.searches >= 2);
+  CHECK_FALSE(st.budget_exhausted);
+  // Too few correspondences: no hypothesis, a clear status.
+  CHECK(hyp.generate(a.data(), b.data(), w.data(), 2, hc, &st) == Status::NoSolution);
+  CHECK(hyp.size() == 0);
+}
+
+TEST_CASE("Heading-diverse cliques give the true heading a hypothesis when the largest cliques share a wrong one") {
+  // 8 correspondences agree on a wrong pose W (a lattice's 180 deg turn), 6 on the truth T (yaw 12 deg).
+  // With one peeled clique, every hypothesis (the clique and its shift votes) has W's heading; the
+  // heading-diverse search removes the edges at that heading and finds T's clique.
+  const double yaw_t = 12.0 * M_PI / 180.0, yaw_w = yaw_t + M_PI;
+  Eigen::Isometry3d T = Eigen::Isometry3d::Identity(), W = Eigen::Isometry3d::Identity();
+  T.linear() = Eigen::AngleAxisd(yaw_t, Eigen::Vector3d::UnitZ()).toRotationMatrix();
+  T.translation() = Eigen::Vector3d(100, 50, 0);
+  W.linear() = Eigen::AngleAxisd(yaw_w, Eigen::Vector3d::UnitZ()).toRotationMatrix();
+  W.translation() = Eigen::Vector3d(140, 70, 0);
+  const float true_pts[6][3] = {{3, 1, 0.5f}, {-7, 4, 1}, {12, -5, 0.2f}, {-2, -14, 1.5f}, {18, 9, 0.7f}, {-15, -3, 1}};
+  const float wrong_pts[8][3] = {{5, 17, 1},    {-19, 11, 0.5f}, {22, -13, 1.2f}, {-9, -21, 0.3f},
+                                 {9, -2, 0.9f}, {-4, 8, 1.1f},   {14, 3, 0.4f},   {-24, -9, 0.8f}};
+  std::vector<float> a, b;
+  auto add = [&](const float* p, const Eigen::Isometry3d& pose) {
+    const Eigen::Vector3d q(p[0], p[1], p[2]), m = pose * q;
+    for (int d = 0; d < 3; ++d) {
+      a.push_back(float(q[d]));
+      b.push_back(float(m[d]));
+    }
+  };
+  for (const auto& p : wrong_pts) add(p, W);
+  for (const auto& p : true_pts) add(p, T);
+  const uint32_t n = static_cast<uint32_t>(a.size() / 3);
+  std::vector<float> w(n, 1.0f);
+  HypothesisConfig hc;
+  hc.max_peeled = 1;
+  hc.shift_headings = 2;
+  ArenaBuffer buf(PoseHypotheses::required_bytes(64, 16));
+  PoseHypotheses hyp;
+  REQUIRE(hyp.bind(buf.arena, 64, 16) == Status::Ok);
+  auto has_pose = [&](const Eigen::Isometry3d& pose) {
+    for (uint32_t h = 0; h < hyp.size(); ++h) {
+      const Eigen::Isometry3d d = pose.inverse() * hyp[h].map_T_scan;
+      if (d.translation().norm() < 0.1 && Eigen::AngleAxisd(d.linear()).angle() < 0.01) return true;
+    }
+    return false;
+  };
+  auto has_heading = [&](double yaw) {
+    for (uint32_t h = 0; h < hyp.size(); ++h) {
+      const Eigen::Matrix3d R = hyp[h].map_T_scan.linear();
+      if (std::fabs(std::remainder(std::atan2(R(1, 0), R(0, 0)) - yaw, 2 * M_PI)) < 5.0 * M_PI / 180.0) return true;
+    }
+    return false;
+  };
+  HypothesisStats st;
+  hc.heading_cliques = 0;
+  REQUIRE(hyp.generate(a.data(), b.data(), w.data(), n, hc, &st) == Status::Ok);
+  CHECK(hyp[0].clique_size == 8);
+  CHECK(has_pose(W));
+  CHECK_FALSE(has_heading(yaw_t));  // the truth's heading is never tried
+  hc.heading_cliques = 3;
+  REQUIRE(hyp.generate(a.data(), b.data(), w.data(), n, hc, &st) == Status::Ok);
+  CHECK(hyp[0].clique_size == 8);  // the paper's answer stays first
+  CHECK(has_pose(W));
+  CHECK(has_pose(T));
+  CHECK(st.heading_cliques == 1);
+}
+
+TEST_CASE("Removing the edges at a heading removes exactly the pairs that turn by it") {
+  // Three correspondences turned by 90 deg (pairwise consistent), one pair of which is too short to
+  // tell a heading, and one correspondence consistent with all but turned by 0 deg relative to the first.
+  const float a[4 * 3] = {0, 0, 0, 10, 0, 0, 10, 0.5f, 0, 0, 10, 0};
+  const float b[4 * 3] = {0, 0, 0, 0, 10, 0, -0.5f, 10, 0, 0, 10, 0};
+  ArenaBuffer buf(ConsistencyGraph::required_bytes(8));
+  ConsistencyGraph g;
+  REQUIRE(g.bind(buf.arena, 8) == Status::Ok);
+  REQUIRE(g.build(a, b, 4, 0.1f) == Status::Ok);
+  REQUIRE(g.adjacent(0, 1));
+  REQUIRE(g.adjacent(0, 2));
+  REQUIRE(g.adjacent(1, 2));
+  REQUIRE(g.adjacent(0, 3));
+  const uint32_t removed = g.remove_edges_at_heading(a, b, M_PI / 2, 5.0 * M_PI / 180.0, 1.0f);
+  CHECK(removed == 2);  // (0,1) and (0,2); (1,2) is 0.5 m long
+  CHECK_FALSE(g.adjacent(0, 1));
+  CHECK_FALSE(g.adjacent(1, 0));
+  CHECK_FALSE(g.adjacent(0, 2));
+  CHECK(g.adjacent(1, 2));
+  CHECK(g.adjacent(0, 3));  // (0,3) turns by 0 deg
+}
+
+namespace {
+
+// Correspondences for the shift-vote tests: one heading (the first clique's: 8 correspondences at
+// translation (100, 50)), then six lattice shifts 8 m apart with 3 votes each in one bin; `x` is where
+// the next query point goes.
+struct ShiftVoteScene {
+  std::vector<float> a, b;
+  float x = 30.0f;
+  void add(float qx, float qy, float qz, float tx, float ty) {
+    a.insert(a.end(), {qx, qy, qz});
+    b.insert(b.end(), {qx + tx, qy + ty, qz});
+  }
+  ShiftVoteScene() {
+    const float clique_pts[8][2] = {{3, 1}, {-7, 4}, {12, -5}, {-2, -14}, {18, 9}, {-15, -3}, {6, 11}, {-11, 7}};
+    for (const auto& p : clique_pts) add(p[0], p[1], 0.5f, 100.0f, 50.0f);
+    for (int k = 1; k <= 6; ++k)  // bins well inside
+      for (int j = 0; j < 3; ++j, x += 1.7f) add(x, -20.0f + 3.0f * j, 1.0f, 100.0f + 8.0f * k + 1.0f, 50.5f);
+  }
+  uint32_t size() const { return static_cast<uint32_t>(a.size() / 3); }
+  // One peeled clique, no heading-diverse search: the hypotheses are the clique and its shift votes.
+  static HypothesisConfig one_heading(uint32_t max_hypotheses) {
+    HypothesisConfig hc;
+    hc.max_peeled = 1;
+    hc.heading_cliques = 0;
+    hc.max_hypotheses = max_hypotheses;
+    return hc;
+  }
+};
+
+}  // namespace
+
+TEST_CASE("Shift votes rank bins by their support: a translation split across a bin edge still becomes a hypothesis") {
+  // The clique and the lattice shifts (ShiftVoteScene), and the truth with 4 votes that straddle the
+  // bin edge at x = 160 (2 + 2).
+  ShiftVoteScene sc;
+  for (int j = 0; j < 4; ++j, sc.x += 1.9f)
+    sc.add(sc.x, 25.0f + 2.0f * j, 1.0f, 160.0f + (j % 2 ? 0.05f : -0.05f), 51.0f);
+  const std::vector<float>&a = sc.a, &b = sc.b;
+  const uint32_t n = sc.size();
+  std::vector<float> w(n, 1.0f);
+  HypothesisConfig hc = ShiftVoteScene::one_heading(4);  // the clique and 3 shift votes
+  ArenaBuffer buf(PoseHypotheses::required_bytes(64, 8));
+  PoseHypotheses hyp;
+  REQUIRE(hyp.bind(buf.arena, 64, 8) == Status::Ok);
+  auto has_translation = [&](double tx, double ty) {
+    for (uint32_t h = 0; h < hyp.size(); ++h)
+      if ((hyp[h].map_T_scan.translation().head<2>() - Eigen::Vector2d(tx, ty)).norm() < 0.2) return true;
+    return false;
+  };
+  HypothesisStats st;
+  hc.shift_vote_support = 0;  // each bin on its own: the truth's bins hold 2 votes each, below min_inliers
+  REQUIRE(hyp.generate(a.data(), b.data(), w.data(), n, hc, &st) == Status::Ok);
+  CHECK(hyp.size() == 4);
+  CHECK(has_translation(100, 50));
+  CHECK_FALSE(has_translation(160, 51));
+  hc.shift_vote_support = 1;
+  REQUIRE(hyp.generate(a.data(), b.data(), w.data(), n, hc, &st) == Status::Ok);
+  CHECK(hyp.size() == 4);
+  CHECK(has_translation(100, 50));
+  CHECK(has_translation(160, 51));
+  // A bad radius is a configuration error, not a slow query.
+  LocalizerConfig cfg;
+  cfg.hypotheses.shift_vote_support = 2;
+  CHECK(validate(cfg) == Status::InvalidArgument);
+  cfg.hypotheses.shift_vote_support = 1;
+  cfg.hypotheses.tls_threshold = 2.5f;  // a support radius beyond the 3 x 3 bins searched
+  CHECK(validate(cfg) == Status::InvalidArgument);
+}
+
+TEST_CASE("Shift votes over the pairs ranked out of the graph find the true shift the graph holds one pair of") {
+  // The graph's pairs: a clique of 8 at translation (100, 50), six lattice shifts with 3 pairs each, and
+  // one pair of the truth (160, 51). Ranked after them, outside the graph: 5 more pairs of the truth and
+  // 2 more of one lattice shift. In a lattice the graph's cap keeps a few true pairs of many.
+  ShiftVoteScene sc;
+  const float x = sc.x;
+  sc.add(x, 25.0f, 1.0f, 160.0f, 51.0f);
+  const uint32_t n = sc.size();
+  const float truth_dx[5] = {0.1f, -0.1f, 0.05f, -0.05f, 0.0f};
+  for (int j = 0; j < 5; ++j) sc.add(x + 2.0f + 1.9f * j, 27.0f + 2.0f * j, 1.0f, 160.0f + truth_dx[j], 51.0f);
+  for (int j = 0; j < 2; ++j) sc.add(x - 12.0f + 2.3f * j, -30.0f, 1.0f, 100.0f + 8.0f + 1.0f, 50.5f);
+  const std::vector<float>&a = sc.a, &b = sc.b;
+  const uint32_t total = sc.size();
+  std::vector<float> w(total, 1.0f);
+  HypothesisConfig hc = ShiftVoteScene::one_heading(3);  // the clique and the two best shift bins
+  ArenaBuffer buf(PoseHypotheses::required_bytes(64, 8, 128));
+  PoseHypotheses hyp;
+  REQUIRE(hyp.bind(buf.arena, 64, 8, 128) == Status::Ok);
+  auto find_translation = [&](double tx, double ty) {
+    for (uint32_t h = 0; h < hyp.size(); ++h)
+      if ((hyp[h].map_T_scan.translation().head<2>() - Eigen::Vector2d(tx, ty)).norm() < 0.2) return int(h);
+    return -1;
+  };
+  HypothesisStats st;
+  // The graph's pairs alone: the truth has one vote, below min_inliers.
+  REQUIRE(hyp.generate(a.data(), b.data(), w.data(), n, hc, &st) == Status::Ok);
+  CHECK(st.vote_pairs == n);
+  CHECK(find_translation(100, 50) == 0);
+  CHECK(find_translation(160, 51) < 0);
+  // All of them: the truth's 6 pairs make the best shift bin, fitted on its own votes only (translation
+  // the mean of the six, exactly), and the cliques are unchanged.
+  REQUIRE(hyp.generate(a.data(), b.data(), w.data(), n, hc, &st, total) == Status::Ok);
+  CHECK(st.vote_pairs == total);
+  CHECK(find_translation(100, 50) == 0);
+  const int h = find_translation(160, 51);
+  REQUIRE(h == 1);
+  CHECK(hyp[uint32_t(h)].inliers == 6);
+  CHECK(std::fabs(hyp[uint32_t(h)].map_T_scan.translation().x() - 160.0) < 1e-4);
+  CHECK(hyp[uint32_t(h)].clique_size == 0);
+  // More votes than bound, or a graph larger than the votes' capacity: refused, nothing kept.
+  CHECK(hyp.generate(a.data(), b.data(), w.data(), n, hc, &st, 129) == Status::CapacityExceeded);
+  ArenaBuffer small(PoseHypotheses::required_bytes(64, 8, 128));
+  PoseHypotheses bad;
+  CHECK(bad.bind(small.arena, 64, 8, 32) == Status::InvalidArgument);
+}
