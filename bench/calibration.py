@@ -13,7 +13,12 @@ One summary line per DIR and mode (greppable), then its table unless --brief:
 With several DIRs a pooled line "all" follows. --svg OUT.svg draws the reliability diagram, one curve
 per DIR and mode. Python standard library only; bench/suite_summary.py uses the same functions.
 
-Usage: bench/calibration.py DIR [DIR ...] [--mode gsf|all|a,b] [--min-confidence P] [--svg OUT.svg] [--brief]"""
+--by-zone adds, per DIR and mode, one summary line per place of the query in a simulated world: "zone"
+(in the repetitive zone), "near" (within reach of it) and "open" (elsewhere), from each query's in_zone /
+near_zone: where a single scan's declines and wrong answers are.
+
+Usage: bench/calibration.py DIR [DIR ...] [--mode gsf|all|a,b] [--min-confidence P] [--svg OUT.svg] [--brief]
+                            [--by-zone]"""
 import argparse
 import glob
 import json
@@ -46,6 +51,11 @@ def load_queries(path):
                 thresholds.add(v["summary"]["min_confidence"])
             by_mode.setdefault(mode, []).extend(v.get("queries", []))
     return by_mode, thresholds
+
+
+def place_of(q):
+    """zone (in the repetitive zone), near (within reach of it) or open; simulated worlds only."""
+    return "zone" if q.get("in_zone") else ("near" if q.get("near_zone") else "open")
 
 
 def has_pose(q):
@@ -310,6 +320,7 @@ def main():
                     help="recompute answered as status Ok and confidence >= P (default: as recorded)")
     ap.add_argument("--svg", default="", help="write the reliability diagram here")
     ap.add_argument("--brief", action="store_true", help="summary lines only, no tables")
+    ap.add_argument("--by-zone", action="store_true", help="also a summary line per zone / near / open query")
     a = ap.parse_args()
     if a.min_confidence is not None and not 0 <= a.min_confidence <= 1:
         ap.error("--min-confidence must be in [0, 1]")
@@ -330,6 +341,12 @@ def main():
                 continue
             c = calibration(qs, a.min_confidence)
             print(summary_line(d, mode, c, threshold_text(a.min_confidence, recorded)))
+            if a.by_zone:
+                for place in ("zone", "near", "open"):
+                    part = [q for q in qs if place_of(q) == place]
+                    if part:
+                        print(summary_line(f"{d} [{place}]", mode, calibration(part, a.min_confidence),
+                                           threshold_text(a.min_confidence, recorded)))
             if not a.brief:
                 print("\n".join(table_lines(c)))
             series.append((f"{os.path.basename(os.path.normpath(d))} {mode}", c))
