@@ -58,10 +58,75 @@ bool parse_sensing(const Args& args, sim::SimConfig* cfg, std::string* err) {
   return true;
 }
 
-}  // namespace
+// The world: the preset, then the seed, zone and cue density given over it.
+bool parse_world(const Args& args, sim::SimConfig* cfg, std::string* err) {
+  long long v;
+  const std::string preset = args.get("preset");
+  if (preset == "demo") *cfg = sim::SimConfig::demo();
+  else if (preset == "tiny") *cfg = sim::SimConfig::tiny();
+  else if (preset == "suite") *cfg = sim::SimConfig::suite(sim::ZoneType::Row, 1);
+  else if (preset == "tiny-lattice") *cfg = sim::SimConfig::tiny_lattice();
+  else {
+    *err = "unknown preset '" + preset + "' (demo, tiny, suite or tiny-lattice)";
+    return false;
+  }
+  uint64_t seed = cfg->world.seed;
+  if (args.has("seed")) {
+    if (!args.get_int("seed", &v, err) || v < 0) {
+      if (err->empty()) *err = "--seed must be >= 0";
+      return false;
+    }
+    seed = static_cast<uint64_t>(v);
+  }
+  sim::ZoneType zone = cfg->world.zone;
+  if (args.has("zone")) {
+    const std::string z = args.get("zone");
+    if (z == "auto") zone = static_cast<sim::ZoneType>(seed % 4);
+    else if (!sim::parse_zone(z.c_str(), &zone)) {
+      *err = "--zone must be row, lattice, hall, avenue or auto";
+      return false;
+    }
+  }
+  if (preset == "suite") *cfg = sim::SimConfig::suite(zone, seed);  // zone size and time gap by seed
+  cfg->world.zone = zone;
+  cfg->world.seed = seed;
+  if (args.has("seed") && preset == "tiny-lattice") cfg->time_gap.seed = seed * 2654435761u + 7u;
+  double d;
+  if (args.has("cue-density")) {
+    if (!args.get_double("cue-density", &d, err) || !(d >= 0.0 && d <= 1.0)) {
+      *err = "--cue-density must be a number in 0..1";
+      return false;
+    }
+    cfg->world.cue_density = static_cast<float>(d);
+  }
+  return true;
+}
 
-int cmd_simulate(int argc, char** argv) {
-  const std::vector<OptionSpec> specs = {
+// An integer option, when given, in lo..hi into *out; else `message` in *err.
+template <typename T>
+bool get_bounded(const Args& args, const std::string& name, long long lo, long long hi, const char* message, T* out,
+                 std::string* err) {
+  if (!args.has(name)) return true;
+  long long v;
+  if (!args.get_int(name, &v, err) || v < lo || v > hi) {
+    *err = message;
+    return false;
+  }
+  *out = static_cast<T>(v);
+  return true;
+}
+
+// The stretches of sequence 02, the world's extent in blocks and the offset of the written poses.
+bool parse_layout(const Args& args, sim::SimConfig* cfg, std::string* err) {
+  return get_bounded(args, "stretches", 0, 1000, "--stretches must be 0..1000", &cfg->stretches, err) &&
+         get_bounded(args, "stretch-scans", 2, 1000, "--stretch-scans must be 2..1000", &cfg->stretch_scans, err) &&
+         get_bounded(args, "blocks-x", 1, 64, "--blocks-x must be 1..64", &cfg->world.blocks_x, err) &&
+         get_bounded(args, "blocks-y", 1, 64, "--blocks-y must be 1..64", &cfg->world.blocks_y, err) &&
+         (!args.has("offset") || args.get_doubles("offset", 2, 3, cfg->pose_offset, nullptr, err));
+}
+
+std::vector<OptionSpec> simulate_specs() {
+  return {
       {"out", "dataset root to write (SemanticKITTI layout + meta.json)", "", false, true},
       {"preset",
        "world size: demo (a few km), tiny (tests), suite (bench/suite.sh: 2 x 2 blocks + zone) or "
@@ -113,6 +178,33 @@ int cmd_simulate(int argc, char** argv) {
        ""},
       {"quiet", "no progress on stderr", "", true},
   };
+}
+
+// Writes the dataset and prints what it holds.
+int run_simulate(const sim::SimConfig& cfg, const std::string& out, bool quiet) {
+  sim::SimSummary sum;
+  const Status s = sim::run_simulation(cfg, out, &sum, [&](const char* stage, uint32_t done, uint32_t total) {
+    if (!quiet && (done % 10 == 0 || done == total)) {
+      std::fprintf(stderr, "\r  simulate: %s %u / %u", stage, done, total);
+      if (done == total) std::fprintf(stderr, "\n");
+    }
+  });
+  if (s != Status::Ok) {
+    std::fprintf(stderr, "gsf simulate: failed: %s\n", to_string(s));
+    return 1;
+  }
+  std::printf(
+      "simulated %.0f m of road, zone %s (%u repeated instances, %u with a cue): %u map scans, %u queries "
+      "(%u in the repetitive zone, %u near it), %llu points -> %s\n",
+      sum.road_length_m, sim::zone_name(cfg.world.zone), sum.zone_instances, sum.cued_instances, sum.map_scans,
+      sum.queries, sum.zone_queries, sum.near_zone_queries, (unsigned long long)sum.points, out.c_str());
+  return 0;
+}
+
+}  // namespace
+
+int cmd_simulate(int argc, char** argv) {
+  const std::vector<OptionSpec> specs = simulate_specs();
   if (wants_help(argc, argv)) {
     std::printf("%s", usage_text("simulate",
                                  "Generate a semantic LiDAR world: sequence 00 = mapping drive, 01 = "
@@ -123,81 +215,11 @@ int cmd_simulate(int argc, char** argv) {
   }
   Args args;
   std::string err;
-  if (!args.parse(argc, argv, 2, specs, &err)) return usage_error("simulate", err);
-  long long v;
-  const std::string preset = args.get("preset");
   sim::SimConfig cfg;
-  if (preset == "demo") cfg = sim::SimConfig::demo();
-  else if (preset == "tiny") cfg = sim::SimConfig::tiny();
-  else if (preset == "suite") cfg = sim::SimConfig::suite(sim::ZoneType::Row, 1);
-  else if (preset == "tiny-lattice") cfg = sim::SimConfig::tiny_lattice();
-  else return usage_error("simulate", "unknown preset '" + preset + "' (demo, tiny, suite or tiny-lattice)");
-  uint64_t seed = cfg.world.seed;
-  if (args.has("seed")) {
-    if (!args.get_int("seed", &v, &err) || v < 0)
-      return usage_error("simulate", err.empty() ? "--seed must be >= 0" : err);
-    seed = static_cast<uint64_t>(v);
-  }
-  sim::ZoneType zone = cfg.world.zone;
-  if (args.has("zone")) {
-    const std::string z = args.get("zone");
-    if (z == "auto") zone = static_cast<sim::ZoneType>(seed % 4);
-    else if (!sim::parse_zone(z.c_str(), &zone))
-      return usage_error("simulate", "--zone must be row, lattice, hall, avenue or auto");
-  }
-  if (preset == "suite") cfg = sim::SimConfig::suite(zone, seed);  // zone size and time gap by seed
-  cfg.world.zone = zone;
-  cfg.world.seed = seed;
-  if (args.has("seed") && preset == "tiny-lattice") cfg.time_gap.seed = seed * 2654435761u + 7u;
-  double d;
-  if (args.has("cue-density")) {
-    if (!args.get_double("cue-density", &d, &err) || !(d >= 0.0 && d <= 1.0))
-      return usage_error("simulate", "--cue-density must be a number in 0..1");
-    cfg.world.cue_density = static_cast<float>(d);
-  }
-  if (!parse_sensing(args, &cfg, &err)) return usage_error("simulate", err);
-  if (args.has("stretches")) {
-    if (!args.get_int("stretches", &v, &err) || v < 0 || v > 1000)
-      return usage_error("simulate", "--stretches must be 0..1000");
-    cfg.stretches = static_cast<uint32_t>(v);
-  }
-  if (args.has("stretch-scans")) {
-    if (!args.get_int("stretch-scans", &v, &err) || v < 2 || v > 1000)
-      return usage_error("simulate", "--stretch-scans must be 2..1000");
-    cfg.stretch_scans = static_cast<uint32_t>(v);
-  }
-  if (args.has("blocks-x")) {
-    if (!args.get_int("blocks-x", &v, &err) || v < 1 || v > 64)
-      return usage_error("simulate", "--blocks-x must be 1..64");
-    cfg.world.blocks_x = static_cast<int>(v);
-  }
-  if (args.has("blocks-y")) {
-    if (!args.get_int("blocks-y", &v, &err) || v < 1 || v > 64)
-      return usage_error("simulate", "--blocks-y must be 1..64");
-    cfg.world.blocks_y = static_cast<int>(v);
-  }
-  if (args.has("offset")) {
-    if (!args.get_doubles("offset", 2, 3, cfg.pose_offset, nullptr, &err)) return usage_error("simulate", err);
-  }
-  const bool quiet = args.flag("quiet");
-  sim::SimSummary sum;
-  const Status s =
-      sim::run_simulation(cfg, args.get("out"), &sum, [&](const char* stage, uint32_t done, uint32_t total) {
-        if (!quiet && (done % 10 == 0 || done == total)) {
-          std::fprintf(stderr, "\r  simulate: %s %u / %u", stage, done, total);
-          if (done == total) std::fprintf(stderr, "\n");
-        }
-      });
-  if (s != Status::Ok) {
-    std::fprintf(stderr, "gsf simulate: failed: %s\n", to_string(s));
-    return 1;
-  }
-  std::printf(
-      "simulated %.0f m of road, zone %s (%u repeated instances, %u with a cue): %u map scans, %u queries "
-      "(%u in the repetitive zone, %u near it), %llu points -> %s\n",
-      sum.road_length_m, sim::zone_name(cfg.world.zone), sum.zone_instances, sum.cued_instances, sum.map_scans,
-      sum.queries, sum.zone_queries, sum.near_zone_queries, (unsigned long long)sum.points, args.get("out").c_str());
-  return 0;
+  if (!args.parse(argc, argv, 2, specs, &err) || !parse_world(args, &cfg, &err) || !parse_sensing(args, &cfg, &err) ||
+      !parse_layout(args, &cfg, &err))
+    return usage_error("simulate", err);
+  return run_simulate(cfg, args.get("out"), args.flag("quiet"));
 }
 
 }  // namespace gsf::cli

@@ -38,9 +38,10 @@ void write_pose(JsonWriter& j, const char* key, const Eigen::Isometry3d& pose) {
   j.end_array();
 }
 
-void write_result_diagnostics(JsonWriter& j, const LocalizeResult& x, const QueryTruth* truth) {
-  j.key("diagnostics");
-  j.begin_object();
+namespace {
+
+// The stage counters of one result.
+void write_stage_counts(JsonWriter& j, const LocalizeResult& x) {
   j.field("scan_voxels", x.scan_voxels);
   j.field("instances", x.query_instances);
   j.field("pole_instances", x.pole_instances);
@@ -71,38 +72,44 @@ void write_result_diagnostics(JsonWriter& j, const LocalizeResult& x, const Quer
   j.field("verified", x.verified);
   j.field("chosen_hypothesis", x.chosen_hypothesis);
   j.field("height_votes", x.height_votes);
-  {
-    const ConfidenceEvidence& e = x.confidence_evidence;  // confidence.h
-    j.key("confidence_evidence");
-    j.begin_object();
-    j.field("z_rival", e.z_rival);
-    j.field("z_shift", e.z_shift);
-    j.field("z_turn", e.z_turn);
-    j.field("rivals", e.rivals);
-    j.field("samples", e.samples);
-    j.field("blocks", e.blocks);
-    j.field("inlier_share", e.inlier_share);
-    j.field("known_share", e.known_share);
-    j.field("agreement", e.agreement);
-    j.end_object();
-  }
-  if (truth) {
-    j.field("true_correspondences", truth->true_correspondences);
-    j.field("repeatable_instances", truth->repeatable_instances);
-    j.field("truth_verified_score", truth->truth_verified_score);
-    if (truth->true_pairs) {
-      j.key("true_pairs");  // [GSF weight, query instance range m] of each true selected correspondence
+}
+
+// What the confidence is computed from (confidence.h).
+void write_confidence_evidence(JsonWriter& j, const ConfidenceEvidence& e) {
+  j.key("confidence_evidence");
+  j.begin_object();
+  j.field("z_rival", e.z_rival);
+  j.field("z_shift", e.z_shift);
+  j.field("z_turn", e.z_turn);
+  j.field("rivals", e.rivals);
+  j.field("samples", e.samples);
+  j.field("blocks", e.blocks);
+  j.field("inlier_share", e.inlier_share);
+  j.field("known_share", e.known_share);
+  j.field("agreement", e.agreement);
+  j.end_object();
+}
+
+// What the ground truth says of the correspondences.
+void write_truth(JsonWriter& j, const QueryTruth& truth) {
+  j.field("true_correspondences", truth.true_correspondences);
+  j.field("repeatable_instances", truth.repeatable_instances);
+  j.field("truth_verified_score", truth.truth_verified_score);
+  if (truth.true_pairs) {
+    j.key("true_pairs");  // [GSF weight, query instance range m] of each true selected correspondence
+    j.begin_array();
+    for (const auto& p : *truth.true_pairs) {
       j.begin_array();
-      for (const auto& p : *truth->true_pairs) {
-        j.begin_array();
-        j.value(double(p[0]));
-        j.value(double(p[1]));
-        j.end_array();
-      }
+      j.value(double(p[0]));
+      j.value(double(p[1]));
       j.end_array();
     }
+    j.end_array();
   }
-  write_stage_ms(j, "stage_ms", stage_ms(x.times));
+}
+
+// The reported hypotheses, best verified first, with their distance from the truth when known.
+void write_hypotheses(JsonWriter& j, const LocalizeResult& x, const QueryTruth* truth) {
   j.key("hypotheses");
   j.begin_array();
   for (uint32_t h = 0; h < x.hypotheses && h < kMaxReportedHypotheses; ++h) {  // best verified first
@@ -132,6 +139,18 @@ void write_result_diagnostics(JsonWriter& j, const LocalizeResult& x, const Quer
     j.end_object();
   }
   j.end_array();
+}
+
+}  // namespace
+
+void write_result_diagnostics(JsonWriter& j, const LocalizeResult& x, const QueryTruth* truth) {
+  j.key("diagnostics");
+  j.begin_object();
+  write_stage_counts(j, x);
+  write_confidence_evidence(j, x.confidence_evidence);
+  if (truth) write_truth(j, *truth);
+  write_stage_ms(j, "stage_ms", stage_ms(x.times));
+  write_hypotheses(j, x, truth);
   j.end_object();
 }
 

@@ -4,6 +4,7 @@
 #include <chrono>
 #include <cmath>
 #include <cstring>
+#include <initializer_list>
 #include <memory>
 
 #include "gsf/class_table.h"
@@ -40,6 +41,82 @@ TileStoreConfig tile_store_config(const MapBuildConfig& config) {
   t.max_resident_tiles = config.max_resident_tiles;
   t.spill_dir = config.spill_dir;
   return t;
+}
+
+// One map section: `elems` records of `elem_bytes` each.
+struct SectionData {
+  MapSection id;
+  const void* data;
+  size_t elems, elem_bytes;
+};
+
+// Writes the sections in order; stops at the sink's first error and returns it.
+Status write_sections(MapSink& sink, std::initializer_list<SectionData> sections) {
+  for (const SectionData& d : sections) {
+    const Status s = sink.section(d.id, d.data, d.elems * d.elem_bytes);
+    if (s != Status::Ok) return s;
+  }
+  return Status::Ok;
+}
+
+// The map's triangle settings: the map's K (TriangleConfig::map_neighbours) and room for every
+// triangle among ni instances.
+TriangleConfig map_triangle_config(const TriangleConfig& query, uint32_t ni) {
+  TriangleConfig tc = query;
+  tc.neighbours = tc.map_k();
+  tc.map_neighbours = 0;
+  const uint64_t tri_cap = std::min<uint64_t>(uint64_t(ni) * tc.neighbours * (tc.neighbours - 1) / 2 + 16, 1u << 30);
+  tc.max_triangles = static_cast<uint32_t>(tri_cap);
+  return tc;
+}
+
+// The triangles in index-key order (format v5: a key's bucket is a contiguous run) and the hash index,
+// written to the sink; frees *all.
+Status write_triangle_index(MapSink& sink, std::vector<Triangle>* all, float side_bin, MapView* header,
+                            MapBuildStats* st) {
+  const uint32_t nt = static_cast<uint32_t>(all->size());
+  std::vector<Triangle> sorted(nt + 1);
+  std::vector<uint64_t> ikeys(nt + 1), scratch(nt + 1);
+  std::vector<uint32_t> offsets(nt + 2), ids(nt + 1);
+  uint32_t key_count = 0;
+  const Status s = build_triangle_index(all->data(), nt, side_bin, sorted.data(), ikeys.data(), offsets.data(),
+                                        &key_count, scratch.data(), ids.data());
+  if (s != Status::Ok) return s;
+  std::vector<Triangle>().swap(*all);  // copied to `sorted`, not read after this
+  std::vector<uint32_t>().swap(ids);
+  std::vector<uint64_t>().swap(scratch);
+  st->triangles = nt;
+  st->index_keys = key_count;
+  header->counts.triangles = nt;
+  header->counts.index_keys = key_count;
+  return write_sections(sink, {{MapSection::Triangles, sorted.data(), nt, sizeof(MapTriangle)},
+                               {MapSection::IndexKeys, ikeys.data(), key_count, sizeof(uint64_t)},
+                               {MapSection::IndexOffsets, offsets.data(), size_t(key_count) + 1, sizeof(uint32_t)}});
+}
+
+// Instances and their grids (quantised by the tile stages), freed once written.
+Status write_instances(MapSink& sink, MapContent* content) {
+  const Status s = write_sections(
+      sink, {{MapSection::Instances, content->instances.data(), content->instances.size(), sizeof(MapInstance)},
+             {MapSection::GridMean, content->mean.data(), content->mean.size(), sizeof(uint8_t)},
+             {MapSection::GridVar, content->var.data(), content->var.size(), sizeof(uint16_t)}});
+  if (s != Status::Ok) return s;
+  std::vector<MapInstance>().swap(content->instances);
+  std::vector<uint8_t>().swap(content->mean);
+  std::vector<uint16_t>().swap(content->var);
+  return Status::Ok;
+}
+
+// The semantic layer (paletted by the tile stages).
+Status write_semantic_layer(MapSink& sink, const MapContent& c) {
+  return write_sections(
+      sink,
+      {{MapSection::SemanticTileKeys, c.semantic_keys.data(), c.semantic_keys.size(), sizeof(uint32_t)},
+       {MapSection::SemanticPaletteOffsets, c.semantic_palette_offsets.data(), c.semantic_palette_offsets.size(),
+        sizeof(uint32_t)},
+       {MapSection::SemanticPalette, c.semantic_palette.data(), c.semantic_palette.size(), sizeof(uint32_t)},
+       {MapSection::SemanticCells, c.semantic_cells.data(), c.semantic_cells.size(), sizeof(uint8_t)},
+       {MapSection::SemanticNeighbours, c.semantic_neighbours.data(), c.semantic_neighbours.size(), sizeof(uint32_t)}});
 }
 
 }  // namespace
@@ -135,31 +212,60 @@ Status MapBuilder::build(std::vector<uint64_t>* blob, size_t* bytes, MapBuildSta
   return build(sink, bytes, stats, progress);
 }
 
+// The tile stages' content (tiled_stages.h), then each section written as soon as it is final and
+// freed: the map is never whole in memory.
 Status MapBuilder::build(MapSink& sink, size_t* bytes_out, MapBuildStats* stats_out, const Progress& progress) {
   *bytes_out = 0;
   MapBuildStats st = stats_;
   st.georef = georef_;
-  // Instances, fields, refinement points and semantic layer, tile by tile (tiled_stages.h). The map
-  // being built needs the memory of the resident tiles more: the halo loads read them from the file.
+  MapContent content;
+  Status s = build_content(&content, &st, progress);
+  if (s != Status::Ok) return s;
+  if (content.instances.size() > kMaxMapInstances) return Status::CapacityExceeded;
+  MapView header = map_header(content, st);
+  s = write_instances(sink, &content);
+  if (s != Status::Ok) return s;
+  s = write_triangles(sink, content, &header, &st, progress);
+  if (s != Status::Ok) return s;
+  std::vector<float>().swap(content.centroids);
+  std::vector<uint8_t>().swap(content.labels);
+  s = write_refine_layer(sink, &content, &header, &st);
+  if (s != Status::Ok) return s;
+  s = write_semantic_layer(sink, content);
+  if (s != Status::Ok) return s;
+  content = MapContent();
+
+  size_t written = 0;
+  s = sink.finish(header, &written);
+  if (s != Status::Ok) return s;
+  *bytes_out = written;
+  st.bytes = written;
+  if (stats_out) *stats_out = st;
+  return Status::Ok;
+}
+
+// Instances, fields, refinement points and semantic layer, tile by tile (tiled_stages.h). The map
+// being built needs the memory of the resident tiles more: the halo loads read them from the file.
+Status MapBuilder::build_content(MapContent* content, MapBuildStats* st, const Progress& progress) {
   Status s = store_.spill_resident();
   if (s != Status::Ok) return s;
 #if defined(__GLIBC__)
   malloc_trim(0);  // the resident tiles were many small blocks: give their pages back
 #endif
-  MapContent content;
-  s = build_map_content(store_, config_, classes_, options_, &content, &st, progress);
-  st.tiles = store_.stats();
+  s = build_map_content(store_, config_, classes_, options_, content, st, progress);
+  st->tiles = store_.stats();
   if (s != Status::Ok) return s;
 #if defined(__GLIBC__)
   // The tile stages freed many small blocks (candidates, per-tile chunks) spread through the heap: hand
   // their pages back before the triangles and the refinement layer are allocated, or the peak counts them.
   malloc_trim(0);
 #endif
-  const uint32_t ni = static_cast<uint32_t>(content.instances.size());
-  if (ni > kMaxMapInstances) return Status::CapacityExceeded;
+  return Status::Ok;
+}
 
-  // The header's contents; counts of later sections are filled in as they are built. Each section goes
-  // to the sink as soon as it is final and is freed there: the map is never whole in memory.
+// The header's contents; counts of later sections are filled in as they are built.
+MapView MapBuilder::map_header(const MapContent& content, const MapBuildStats& st) const {
+  const uint32_t ni = static_cast<uint32_t>(content.instances.size());
   MapView header;
   header.georef = georef_;
   header.params = map_params_from(config_);
@@ -183,135 +289,98 @@ Status MapBuilder::build(MapSink& sink, size_t* bytes_out, MapBuildStats* stats_
     }
   if (ni == 0)
     for (int k = 0; k < 3; ++k) header.counts.bounds_min[k] = header.counts.bounds_max[k] = 0.0f;
-  auto write = [&](MapSection id, const void* data, size_t elems, size_t elem_bytes) {
-    return s == Status::Ok ? (s = sink.section(id, data, elems * elem_bytes)) : s;
-  };
-  // Instances and their grids (quantised by the tile stages).
-  write(MapSection::Instances, content.instances.data(), ni, sizeof(MapInstance));
-  write(MapSection::GridMean, content.mean.data(), content.mean.size(), sizeof(uint8_t));
-  write(MapSection::GridVar, content.var.data(), content.var.size(), sizeof(uint16_t));
-  if (s != Status::Ok) return s;
-  std::vector<MapInstance>().swap(content.instances);
-  std::vector<uint8_t>().swap(content.mean);
-  std::vector<uint16_t>().swap(content.var);
+  return header;
+}
 
-  // Triangles and the hash index over all map instances.
-  {
-    const auto t_tri = std::chrono::steady_clock::now();
-    TriangleConfig tc = config_.triangle;
-    tc.neighbours = tc.map_k();  // the map's K (TriangleConfig::map_neighbours)
-    tc.map_neighbours = 0;
-    const uint64_t tri_cap = std::min<uint64_t>(uint64_t(ni) * tc.neighbours * (tc.neighbours - 1) / 2 + 16, 1u << 30);
-    tc.max_triangles = static_cast<uint32_t>(tri_cap);
-    Workspace tws(TriangleBuilder::required_bytes(tc, ni + 1) + size_t(tri_cap) * sizeof(Triangle) + 4096);
-    TriangleBuilder tb;
-    FixedVector<Triangle> tris;
-    if (tb.bind(tws.arena, tc, ni + 1) != Status::Ok || !tris.bind(tws.arena, tc.max_triangles))
-      return Status::InvalidArgument;
-    // The triangle vertices: every instance, or those the query stages found in enough mapping scans
-    // (kept in id order, so the canonical vertex order's id tie-breaks are those of the full build).
-    std::vector<uint32_t> vertex_ids;
-    std::vector<float> vertex_xyz;
-    std::vector<uint8_t> vertex_labels;
-    const bool all_vertices = options_.triangle_min_detections == 0;
-    if (!all_vertices) {
-      const std::vector<uint32_t> det =
-          count_detections(content.centroids.data(), content.labels.data(), ni, detections_, options_.detection_radius);
-      const std::vector<uint32_t> near = count_detections(content.centroids.data(), content.labels.data(), ni,
-                                                          scan_positions_, options_.detection_range);
-      vertex_ids = triangle_vertices(det, near, options_.triangle_min_detections);
-      for (uint32_t i : vertex_ids) {
-        for (int k = 0; k < 3; ++k) vertex_xyz.push_back(content.centroids[3 * size_t(i) + k]);
-        vertex_labels.push_back(content.labels[i]);
-      }
+// The triangle vertices: every instance, or those the query stages found in enough mapping scans (kept
+// in id order, so the canonical vertex order's id tie-breaks are those of the full build).
+struct MapBuilder::TriangleVertices {
+  bool all = true;            // every instance: the content's own arrays
+  std::vector<uint32_t> ids;  // else the chosen instances, their centroids and labels
+  std::vector<float> xyz;
+  std::vector<uint8_t> labels;
+  const float* vx = nullptr;  // the vertices' centroids (3 each) and labels, whichever they are
+  const uint8_t* vl = nullptr;
+  uint32_t count = 0;
+};
+
+void MapBuilder::choose_triangle_vertices(const MapContent& content, TriangleVertices* v) const {
+  const uint32_t ni = static_cast<uint32_t>(content.labels.size());  // the instance records are written and freed
+  v->all = options_.triangle_min_detections == 0;
+  if (!v->all) {
+    const std::vector<uint32_t> det =
+        count_detections(content.centroids.data(), content.labels.data(), ni, detections_, options_.detection_radius);
+    const std::vector<uint32_t> near = count_detections(content.centroids.data(), content.labels.data(), ni,
+                                                        scan_positions_, options_.detection_range);
+    v->ids = triangle_vertices(det, near, options_.triangle_min_detections);
+    for (uint32_t i : v->ids) {
+      for (int k = 0; k < 3; ++k) v->xyz.push_back(content.centroids[3 * size_t(i) + k]);
+      v->labels.push_back(content.labels[i]);
     }
-    const uint32_t nv = all_vertices ? ni : static_cast<uint32_t>(vertex_ids.size());
-    st.triangle_instances = nv;
-    s = all_vertices ? tb.build(content.centroids.data(), 3, content.labels.data(), ni, tris)
-                     : tb.build(vertex_xyz.data(), 3, vertex_labels.data(), nv, tris);
-    if (s != Status::Ok) return s;
-    std::vector<Triangle> all(tris.data(), tris.data() + tris.size());
-    std::vector<uint64_t>().swap(tws.memory);  // `tris` is copied to `all`
-    if (options_.scan_triangles && !detections_.empty()) {
-      // What a query at each mapping scan's pose would form (scan_triangles.h), over the same vertices.
-      const float* vx = all_vertices ? content.centroids.data() : vertex_xyz.data();
-      const uint8_t* vl = all_vertices ? content.labels.data() : vertex_labels.data();
-      const std::vector<uint32_t> nearest = nearest_instances(vx, vl, nv, detections_, options_.detection_radius);
-      std::vector<uint32_t> begin = scan_detection_begin_;
-      begin.push_back(static_cast<uint32_t>(detections_.size()));
-      ScanTriangleStats sts;
-      const size_t before = all.size();
-      s = add_scan_triangles(vx, vl, nv, nearest, begin, config_.triangle, options_.scan_triangle_max_key_share, &all,
-                             &sts);
-      if (s != Status::Ok) return s;
-      st.scan_triangles = static_cast<uint32_t>(all.size() - before);
-      st.scan_triangles_crowded = sts.crowded;
-    }
-    const uint32_t nt = static_cast<uint32_t>(all.size());
-    if (!all_vertices)
-      for (uint32_t t = 0; t < nt; ++t)
-        for (int k = 0; k < 3; ++k) all[t].v[k] = vertex_ids[all[t].v[k]];
-    // The map stores its triangles in index-key order (format v5), so a key's bucket is a contiguous run.
-    std::vector<Triangle> sorted(nt + 1);
-    std::vector<uint64_t> ikeys(nt + 1), scratch(nt + 1);
-    std::vector<uint32_t> offsets(nt + 2), ids(nt + 1);
-    uint32_t key_count = 0;
-    s = build_triangle_index(all.data(), nt, tc.side_bin, sorted.data(), ikeys.data(), offsets.data(), &key_count,
-                             scratch.data(), ids.data());
-    if (s != Status::Ok) return s;
-    std::vector<Triangle>().swap(all);  // copied to `sorted`, not read after this
-    std::vector<uint32_t>().swap(ids);
-    std::vector<uint64_t>().swap(scratch);
-    st.triangles = nt;
-    st.index_keys = key_count;
-    header.counts.triangles = nt;
-    header.counts.index_keys = key_count;
-    write(MapSection::Triangles, sorted.data(), nt, sizeof(MapTriangle));
-    write(MapSection::IndexKeys, ikeys.data(), key_count, sizeof(uint64_t));
-    write(MapSection::IndexOffsets, offsets.data(), size_t(key_count) + 1, sizeof(uint32_t));
-    if (s != Status::Ok) return s;
-    st.seconds_triangles = seconds_since(t_tri);
-    if (progress) progress("triangles", nt, nt);
   }
-  std::vector<float>().swap(content.centroids);
-  std::vector<uint8_t>().swap(content.labels);
+  v->vx = v->all ? content.centroids.data() : v->xyz.data();
+  v->vl = v->all ? content.labels.data() : v->labels.data();
+  v->count = v->all ? ni : static_cast<uint32_t>(v->ids.size());
+}
 
-  // The refinement layer, sorted into its grid with normals (refine_layer_builder.h).
-  {
-    std::vector<MapRefineTile> tiles;
-    std::vector<MapRefinePoint> points;
-    if (st.refine_points > 0) {
-      s = build_refine_layer(&content.refine, config_.refine.cell, &tiles, &points);  // frees the chunks
-      if (s != Status::Ok) return s;
-    }
-    std::vector<std::vector<float>>().swap(content.refine);
-    header.counts.refine_points = static_cast<uint32_t>(points.size());
-    header.counts.refine_tiles = static_cast<uint32_t>(tiles.size());
-    st.refine_tiles = header.counts.refine_tiles;
-    write(MapSection::RefineTiles, tiles.data(), tiles.size(), sizeof(MapRefineTile));
-    write(MapSection::RefinePoints, points.data(), points.size(), sizeof(MapRefinePoint));
+// Triangles and the hash index over all map instances (or the chosen vertices), with those the mapping
+// scans' views would form.
+Status MapBuilder::write_triangles(MapSink& sink, const MapContent& content, MapView* header, MapBuildStats* st,
+                                   const Progress& progress) const {
+  const auto t_tri = std::chrono::steady_clock::now();
+  const uint32_t ni = static_cast<uint32_t>(content.labels.size());  // the instance records are written and freed
+  const TriangleConfig tc = map_triangle_config(config_.triangle, ni);
+  Workspace tws(TriangleBuilder::required_bytes(tc, ni + 1) + size_t(tc.max_triangles) * sizeof(Triangle) + 4096);
+  TriangleBuilder tb;
+  FixedVector<Triangle> tris;
+  if (tb.bind(tws.arena, tc, ni + 1) != Status::Ok || !tris.bind(tws.arena, tc.max_triangles))
+    return Status::InvalidArgument;
+  TriangleVertices v;
+  choose_triangle_vertices(content, &v);
+  st->triangle_instances = v.count;
+  Status s = tb.build(v.vx, 3, v.vl, v.count, tris);
+  if (s != Status::Ok) return s;
+  std::vector<Triangle> all(tris.data(), tris.data() + tris.size());
+  std::vector<uint64_t>().swap(tws.memory);  // `tris` is copied to `all`
+  if (options_.scan_triangles && !detections_.empty()) {
+    // What a query at each mapping scan's pose would form (scan_triangles.h), over the same vertices.
+    const std::vector<uint32_t> nearest =
+        nearest_instances(v.vx, v.vl, v.count, detections_, options_.detection_radius);
+    std::vector<uint32_t> begin = scan_detection_begin_;
+    begin.push_back(static_cast<uint32_t>(detections_.size()));
+    ScanTriangleStats sts;
+    const size_t before = all.size();
+    s = add_scan_triangles(v.vx, v.vl, v.count, nearest, begin, config_.triangle, options_.scan_triangle_max_key_share,
+                           &all, &sts);
     if (s != Status::Ok) return s;
+    st->scan_triangles = static_cast<uint32_t>(all.size() - before);
+    st->scan_triangles_crowded = sts.crowded;
   }
-
-  // The semantic layer (paletted by the tile stages).
-  write(MapSection::SemanticTileKeys, content.semantic_keys.data(), content.semantic_keys.size(), sizeof(uint32_t));
-  write(MapSection::SemanticPaletteOffsets, content.semantic_palette_offsets.data(),
-        content.semantic_palette_offsets.size(), sizeof(uint32_t));
-  write(MapSection::SemanticPalette, content.semantic_palette.data(), content.semantic_palette.size(),
-        sizeof(uint32_t));
-  write(MapSection::SemanticCells, content.semantic_cells.data(), content.semantic_cells.size(), sizeof(uint8_t));
-  write(MapSection::SemanticNeighbours, content.semantic_neighbours.data(), content.semantic_neighbours.size(),
-        sizeof(uint32_t));
+  const uint32_t nt = static_cast<uint32_t>(all.size());
+  if (!v.all)  // vertex numbers -> map instance ids
+    for (uint32_t t = 0; t < nt; ++t)
+      for (int k = 0; k < 3; ++k) all[t].v[k] = v.ids[all[t].v[k]];
+  s = write_triangle_index(sink, &all, tc.side_bin, header, st);
   if (s != Status::Ok) return s;
-  content = MapContent();
-
-  size_t written = 0;
-  s = sink.finish(header, &written);
-  if (s != Status::Ok) return s;
-  *bytes_out = written;
-  st.bytes = written;
-  if (stats_out) *stats_out = st;
+  st->seconds_triangles = seconds_since(t_tri);
+  if (progress) progress("triangles", nt, nt);
   return Status::Ok;
+}
+
+// The refinement layer, sorted into its grid with normals (refine_layer_builder.h); frees the points.
+Status MapBuilder::write_refine_layer(MapSink& sink, MapContent* content, MapView* header, MapBuildStats* st) const {
+  std::vector<MapRefineTile> tiles;
+  std::vector<MapRefinePoint> points;
+  if (st->refine_points > 0) {
+    const Status s = build_refine_layer(&content->refine, config_.refine.cell, &tiles, &points);  // frees the chunks
+    if (s != Status::Ok) return s;
+  }
+  std::vector<std::vector<float>>().swap(content->refine);
+  header->counts.refine_points = static_cast<uint32_t>(points.size());
+  header->counts.refine_tiles = static_cast<uint32_t>(tiles.size());
+  st->refine_tiles = header->counts.refine_tiles;
+  return write_sections(sink, {{MapSection::RefineTiles, tiles.data(), tiles.size(), sizeof(MapRefineTile)},
+                               {MapSection::RefinePoints, points.data(), points.size(), sizeof(MapRefinePoint)}});
 }
 
 }  // namespace gsf::mapping

@@ -35,6 +35,8 @@
 
 namespace gsf::mapping {
 
+struct MapContent;  // tiled_stages.h
+
 struct MapBuildStats {
   uint32_t scans = 0;
   uint64_t points = 0;
@@ -158,6 +160,15 @@ class MapBuilder {
   Status build(std::vector<uint64_t>* blob, size_t* bytes, MapBuildStats* stats, const Progress& progress = nullptr);
 
  private:
+  struct TriangleVertices;  // map_builder.cpp
+  // build()'s steps (map_builder.cpp).
+  Status build_content(MapContent* content, MapBuildStats* st, const Progress& progress);
+  MapView map_header(const MapContent& content, const MapBuildStats& st) const;
+  void choose_triangle_vertices(const MapContent& content, TriangleVertices* v) const;
+  Status write_triangles(MapSink& sink, const MapContent& content, MapView* header, MapBuildStats* st,
+                         const Progress& progress) const;
+  Status write_refine_layer(MapSink& sink, MapContent* content, MapView* header, MapBuildStats* st) const;
+
   LocalizerConfig config_;  // options_.stages, with classes pointing at classes_
   ClassTable classes_;      // copy of the label set
   MapBuildConfig options_;

@@ -461,13 +461,9 @@ void place_cues(Gen& g, const std::vector<Rect>& keep_out) {
   }
 }
 
-}  // namespace
-
-World generate_world(const WorldParams& p) {
-  World w;
-  w.params = p;
-  Gen g{w, gsf::Rng(p.seed)};
-  const float B = p.block_size, hw = p.road_width / 2, sw = p.sidewalk_width;
+// The road grid (and the row zone's road), and where the repetitive zone lies along x.
+void lay_roads(World& w, const WorldParams& p) {
+  const float B = p.block_size;
   const float gx = p.blocks_x * B, gy = p.blocks_y * B;
   for (int j = 0; j <= p.blocks_y; ++j) w.roads.push_back(RoadSegment{0, j * B, gx, j * B, false});
   for (int i = 0; i <= p.blocks_x; ++i) w.roads.push_back(RoadSegment{i * B, 0, i * B, gy, false});
@@ -476,96 +472,112 @@ World generate_world(const WorldParams& p) {
   w.zone_x1 = w.zone_x0 + p.zone_length;
   if (p.repetitive_zone && p.zone == ZoneType::Row)
     w.roads.push_back(RoadSegment{gx, 0.0f, w.zone_x1 + p.zone_margin, 0.0f, true});
+}
 
-  auto near_crossing = [&](float along, float margin) {
-    const float m = std::fmod(along, B);
-    return m < hw + sw + margin || m > B - hw - sw - margin;
-  };
-  // Street furniture along both sides of every grid road.
+// Whether `along` a grid road is within `margin` of a crossing's sidewalks.
+bool near_crossing(const WorldParams& p, float along, float margin) {
+  const float B = p.block_size, hw = p.road_width / 2, sw = p.sidewalk_width;
+  const float m = std::fmod(along, B);
+  return m < hw + sw + margin || m > B - hw - sw - margin;
+}
+
+// Street furniture along both sides of every grid road: poles (some with signs), trees, parked cars.
+void furnish_roads(Gen& g) {
+  const WorldParams& p = g.w.params;
+  const float B = p.block_size, hw = p.road_width / 2, sw = p.sidewalk_width;
+  const float gx = p.blocks_x * B, gy = p.blocks_y * B;
   for (int j = 0; j <= p.blocks_y; ++j)
     for (int side = -1; side <= 1; side += 2) {
       const float y = j * B;
       if ((j == 0 && side < 0) || (j == p.blocks_y && side > 0)) {}  // outer edges still get furniture
       for (float x = g.uni(3, 12); x < gx; x += g.uni(22, 38))
-        if (!near_crossing(x, 2)) g.pole(x, y + side * (hw + 0.4f), g.chance(0.3f), 0, -float(side));
+        if (!near_crossing(p, x, 2)) g.pole(x, y + side * (hw + 0.4f), g.chance(0.3f), 0, -float(side));
       if (g.chance(0.7f))
         for (float x = g.uni(4, 10); x < gx; x += g.uni(11, 19))
-          if (!near_crossing(x, 3)) g.tree(x, y + side * (hw + sw - 0.8f));
+          if (!near_crossing(p, x, 3)) g.tree(x, y + side * (hw + sw - 0.8f));
       for (float x = g.uni(5, 12); x < gx; x += g.uni(6.5f, 9.5f))
-        if (!near_crossing(x, 6) && g.chance(0.55f)) g.car(x, y + side * (hw - 1.2f), true);
+        if (!near_crossing(p, x, 6) && g.chance(0.55f)) g.car(x, y + side * (hw - 1.2f), true);
     }
   for (int i = 0; i <= p.blocks_x; ++i)
     for (int side = -1; side <= 1; side += 2) {
       const float x = i * B;
       for (float y = g.uni(3, 12); y < gy; y += g.uni(22, 38))
-        if (!near_crossing(y, 2)) g.pole(x + side * (hw + 0.4f), y, g.chance(0.3f), -float(side), 0);
+        if (!near_crossing(p, y, 2)) g.pole(x + side * (hw + 0.4f), y, g.chance(0.3f), -float(side), 0);
       if (g.chance(0.6f))
         for (float y = g.uni(4, 10); y < gy; y += g.uni(11, 19))
-          if (!near_crossing(y, 3)) g.tree(x + side * (hw + sw - 0.8f), y);
+          if (!near_crossing(p, y, 3)) g.tree(x + side * (hw + sw - 0.8f), y);
       for (float y = g.uni(5, 12); y < gy; y += g.uni(6.5f, 9.5f))
-        if (!near_crossing(y, 6) && g.chance(0.5f)) g.car(x + side * (hw - 1.2f), y, false);
+        if (!near_crossing(p, y, 6) && g.chance(0.5f)) g.car(x + side * (hw - 1.2f), y, false);
     }
-  // Blocks: buildings around the perimeter, fences, bushes, standalone signs, parking lots.
-  for (int bi = 0; bi < p.blocks_x; ++bi)
-    for (int bj = 0; bj < p.blocks_y; ++bj) {
-      const float x0 = bi * B + hw + sw, y0 = bj * B + hw + sw, x1 = (bi + 1) * B - hw - sw,
-                  y1 = (bj + 1) * B - hw - sw;
-      const bool parking = (bi + 2 * bj) % 3 == 0;
-      // bottom / top rows of buildings
-      for (int row = 0; row < 2; ++row) {
-        float x = x0 + g.uni(1, 6);
-        while (x < x1 - 10) {
-          const float len = std::min(g.uni(12, 35), x1 - x - 2), depth = g.uni(10, 18), h = g.uni(6, 24);
-          const float setback = (row == 0 && parking) ? 8.0f : g.uni(2, 6);
-          if (row == 0) g.box(kBuilding, g.id(), x, y0 + setback, 0, x + len, y0 + setback + depth, h);
-          else g.box(kBuilding, g.id(), x, y1 - setback - depth, 0, x + len, y1 - setback, h);
-          x += len + g.uni(4, 14);
-        }
-      }
-      // left / right columns of buildings in the middle band
-      for (int col = 0; col < 2; ++col) {
-        float y = y0 + 26 + g.uni(0, 6);
-        while (y < y1 - 30) {
-          const float len = std::min(g.uni(10, 25), y1 - 26 - y), depth = g.uni(10, 16), h = g.uni(6, 20);
-          if (len < 6) break;
-          const float setback = g.uni(2, 6);
-          if (col == 0) g.box(kBuilding, g.id(), x0 + setback, y, 0, x0 + setback + depth, y + len, h);
-          else g.box(kBuilding, g.id(), x1 - setback - depth, y, 0, x1 - setback, y + len, h);
-          y += len + g.uni(5, 12);
-        }
-      }
-      if (g.chance(0.5f)) {  // a fence along the sidewalk
-        const float fx = x0 + g.uni(5, 30), fl = g.uni(10, 30);
-        g.box(kFence, 0, fx, y1 - 0.6f, 0, std::min(fx + fl, x1 - 2), y1 - 0.5f, g.uni(1.0f, 1.8f));
-      }
-      for (int k = 0; k < 6; ++k)
-        g.bush(g.uni(x0 + 1, x1 - 1), g.chance(0.5f) ? y0 + g.uni(0.5f, 2.0f) : y1 - g.uni(0.5f, 2.0f));
-      if (g.chance(0.6f)) {  // a standalone sign near the kerb
-        const float sx = g.uni(x0 + 10, x1 - 10);
-        g.cylinder(kPole, g.id(), sx, y0 + 0.5f, 0.0f, 0.06f, 2.4f);
-        const uint32_t s = g.id();
-        g.box(kSign, s, sx - 0.35f, y0 + 0.2f, 2.0f, sx + 0.35f, y0 + 0.28f, 2.7f);
-      }
-      if (parking)  // cars in the parking strip
-        for (float x = x0 + g.uni(2, 6); x < x1 - 4; x += g.uni(2.6f, 3.4f))
-          if (g.chance(0.5f)) g.car(x, y0 + 3.0f, false);
-    }
-  w.city_x1 = gx + hw + sw;  // poles, trees and cars of the grid stay within the outer sidewalks
-  if (p.repetitive_zone) {
-    std::vector<Rect> keep_out;  // bands the drives use: cues stay out of them
-    switch (p.zone) {
-      case ZoneType::Row: row_zone(g, &keep_out); break;
-      case ZoneType::Lattice: lattice_zone(g, &keep_out); break;
-      case ZoneType::Hall: hall_zone(g, &keep_out); break;
-      case ZoneType::Avenue: avenue_zone(g, &keep_out); break;
-    }
-    if (!p.legacy_row_cues()) place_cues(g, keep_out);
-    for (ZoneInstance& zi : w.zone_instances) {
-      zi.cued = false;
-      for (uint32_t c : w.zone_cue_prims) zi.cued = zi.cued || xy_distance(w.prims[c], zi.x, zi.y) <= kCueRadius;
+}
+
+// One block (bi, bj): buildings around the perimeter, a fence, bushes, a standalone sign, a parking lot.
+void fill_block(Gen& g, int bi, int bj) {
+  const WorldParams& p = g.w.params;
+  const float B = p.block_size, hw = p.road_width / 2, sw = p.sidewalk_width;
+  const float x0 = bi * B + hw + sw, y0 = bj * B + hw + sw, x1 = (bi + 1) * B - hw - sw, y1 = (bj + 1) * B - hw - sw;
+  const bool parking = (bi + 2 * bj) % 3 == 0;
+  // bottom / top rows of buildings
+  for (int row = 0; row < 2; ++row) {
+    float x = x0 + g.uni(1, 6);
+    while (x < x1 - 10) {
+      const float len = std::min(g.uni(12, 35), x1 - x - 2), depth = g.uni(10, 18), h = g.uni(6, 24);
+      const float setback = (row == 0 && parking) ? 8.0f : g.uni(2, 6);
+      if (row == 0) g.box(kBuilding, g.id(), x, y0 + setback, 0, x + len, y0 + setback + depth, h);
+      else g.box(kBuilding, g.id(), x, y1 - setback - depth, 0, x + len, y1 - setback, h);
+      x += len + g.uni(4, 14);
     }
   }
-  // World bounds.
+  // left / right columns of buildings in the middle band
+  for (int col = 0; col < 2; ++col) {
+    float y = y0 + 26 + g.uni(0, 6);
+    while (y < y1 - 30) {
+      const float len = std::min(g.uni(10, 25), y1 - 26 - y), depth = g.uni(10, 16), h = g.uni(6, 20);
+      if (len < 6) break;
+      const float setback = g.uni(2, 6);
+      if (col == 0) g.box(kBuilding, g.id(), x0 + setback, y, 0, x0 + setback + depth, y + len, h);
+      else g.box(kBuilding, g.id(), x1 - setback - depth, y, 0, x1 - setback, y + len, h);
+      y += len + g.uni(5, 12);
+    }
+  }
+  if (g.chance(0.5f)) {  // a fence along the sidewalk
+    const float fx = x0 + g.uni(5, 30), fl = g.uni(10, 30);
+    g.box(kFence, 0, fx, y1 - 0.6f, 0, std::min(fx + fl, x1 - 2), y1 - 0.5f, g.uni(1.0f, 1.8f));
+  }
+  for (int k = 0; k < 6; ++k)
+    g.bush(g.uni(x0 + 1, x1 - 1), g.chance(0.5f) ? y0 + g.uni(0.5f, 2.0f) : y1 - g.uni(0.5f, 2.0f));
+  if (g.chance(0.6f)) {  // a standalone sign near the kerb
+    const float sx = g.uni(x0 + 10, x1 - 10);
+    g.cylinder(kPole, g.id(), sx, y0 + 0.5f, 0.0f, 0.06f, 2.4f);
+    const uint32_t s = g.id();
+    g.box(kSign, s, sx - 0.35f, y0 + 0.2f, 2.0f, sx + 0.35f, y0 + 0.28f, 2.7f);
+  }
+  if (parking)  // cars in the parking strip
+    for (float x = x0 + g.uni(2, 6); x < x1 - 4; x += g.uni(2.6f, 3.4f))
+      if (g.chance(0.5f)) g.car(x, y0 + 3.0f, false);
+}
+
+// The repetitive zone of the world's type, its distinctive cues, and which of its instances have one.
+void add_repetitive_zone(Gen& g) {
+  World& w = g.w;
+  std::vector<Rect> keep_out;  // bands the drives use: cues stay out of them
+  switch (w.params.zone) {
+    case ZoneType::Row: row_zone(g, &keep_out); break;
+    case ZoneType::Lattice: lattice_zone(g, &keep_out); break;
+    case ZoneType::Hall: hall_zone(g, &keep_out); break;
+    case ZoneType::Avenue: avenue_zone(g, &keep_out); break;
+  }
+  if (!w.params.legacy_row_cues()) place_cues(g, keep_out);
+  for (ZoneInstance& zi : w.zone_instances) {
+    zi.cued = false;
+    for (uint32_t c : w.zone_cue_prims) zi.cued = zi.cued || xy_distance(w.prims[c], zi.x, zi.y) <= kCueRadius;
+  }
+}
+
+// World bounds: the grid and the zone with 40 m around.
+void set_bounds(World& w) {
+  const WorldParams& p = w.params;
+  const float gx = p.blocks_x * p.block_size, gy = p.blocks_y * p.block_size;
   w.min_xy[0] = -40;
   w.min_xy[1] = -40;
   w.max_xy[0] = (p.repetitive_zone ? w.zone_x1 + p.zone_margin : gx) + 40;
@@ -576,6 +588,22 @@ World generate_world(const WorldParams& p) {
     w.max_xy[0] = std::max(w.max_xy[0], w.zone_rect[2] + 40);
     w.max_xy[1] = std::max(w.max_xy[1], w.zone_rect[3] + 40);
   }
+}
+
+}  // namespace
+
+World generate_world(const WorldParams& p) {
+  World w;
+  w.params = p;
+  Gen g{w, gsf::Rng(p.seed)};
+  lay_roads(w, p);
+  furnish_roads(g);
+  for (int bi = 0; bi < p.blocks_x; ++bi)
+    for (int bj = 0; bj < p.blocks_y; ++bj) fill_block(g, bi, bj);
+  const float gx = p.blocks_x * p.block_size, hw = p.road_width / 2, sw = p.sidewalk_width;
+  w.city_x1 = gx + hw + sw;  // poles, trees and cars of the grid stay within the outer sidewalks
+  if (p.repetitive_zone) add_repetitive_zone(g);
+  set_bounds(w);
   return w;
 }
 
