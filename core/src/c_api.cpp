@@ -93,11 +93,9 @@ bool to_cpp(const gsf_config* c, gsf::LocalizerConfig* out) {
   k.voxel.max_range = c->voxel_max_range;
   k.voxel.max_voxels = c->voxel_max_voxels;
   k.cluster.max_instances = c->cluster_max_instances;
-  if (!flag(c->match_use_gsf, &k.match.use_gsf)) return false;
   k.gsf.tau = c->gsf_tau;
   k.match.min_similarity = c->match_min_similarity;
   k.gsf.observed_variance = c->gsf_observed_variance;
-  k.gsf.normalize_mass = c->gsf_normalize_mass;
   k.gsf.covariance_weight = c->gsf_covariance_weight;
   k.gsf.yaw_bins = c->gsf_yaw_bins;
   k.match.max_correspondences = c->match_max_correspondences;
@@ -186,11 +184,9 @@ void gsf_config_default(gsf_config* c) noexcept {
   c->voxel_max_range = k.voxel.max_range;
   c->voxel_max_voxels = k.voxel.max_voxels;
   c->cluster_max_instances = k.cluster.max_instances;
-  c->match_use_gsf = k.match.use_gsf ? 1 : 0;
   c->gsf_tau = k.gsf.tau;
   c->match_min_similarity = k.match.min_similarity;
   c->gsf_observed_variance = k.gsf.observed_variance;
-  c->gsf_normalize_mass = k.gsf.normalize_mass;
   c->gsf_covariance_weight = k.gsf.covariance_weight;
   c->gsf_yaw_bins = k.gsf.yaw_bins;
   c->match_max_correspondences = k.match.max_correspondences;

@@ -14,19 +14,18 @@ Status validate(const LocalizerConfig& c) {
   if (m.max_matches_per_triangle == 0 || m.max_matches_per_triangle > (1u << 20) || !(m.min_similarity >= 0) ||
       !(m.vertex_tie_tolerance >= 0 && m.vertex_tie_tolerance < 1) || m.max_candidates < 3 ||
       m.max_candidates > (1u << 22) || m.max_correspondences < 3 || m.max_correspondences > 4096 ||
-      m.max_field_points == 0 || m.heading_sample_triangles == 0 || m.reject_mirrored > 1)
+      m.max_field_points == 0 || m.heading_sample_triangles == 0 || m.max_matches_per_scan == 0)
     return Status::InvalidArgument;
   const GsfFilterConfig& g = c.gsf;
   if (g.yaw_bins < 4 || g.yaw_bins > 4096 || g.probe_cache_slots == 0 || g.similarity_cache_slots == 0 ||
-      !(g.tau > 0) || !(g.observed_variance > 0) || !(g.covariance_weight >= 0) || !(g.normalize_mass >= 0))
+      !(g.tau > 0) || !(g.observed_variance > 0) || !(g.covariance_weight >= 0))
     return Status::InvalidArgument;
   const HypothesisConfig& h = c.hypotheses;
   if (h.max_hypotheses == 0 || h.max_hypotheses > PoseHypotheses::kMaxHypotheses || h.first_budget == 0 ||
       h.next_budget == 0 || !(h.consistency_eps > 0) || !(h.tls_threshold > 0) || h.min_inliers < 3 ||
       h.max_iterations == 0 || !(h.same_pose_m >= 0) || !(h.same_pose_deg >= 0) ||
       !(h.heading_separation_deg > 0.0f && h.heading_separation_deg < 90.0f) || h.max_peeled == 0 ||
-      !(h.shift_bin > 0) || !(h.max_tilt_deg >= 0 && h.max_tilt_deg <= 180) || h.shift_vote_support > 1 ||
-      (h.shift_vote_support && h.tls_threshold > h.shift_bin) || h.height_consensus > 1 ||
+      !(h.shift_bin > 0) || !(h.max_tilt_deg >= 0 && h.max_tilt_deg <= 180) || h.tls_threshold > h.shift_bin ||
       h.shift_vote_pairs > (1u << 20))
     return Status::InvalidArgument;
   if (c.verify.max_points == 0 || c.verify.refine_top > 64 || c.verify.coarse_divisor == 0 ||

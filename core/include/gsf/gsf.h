@@ -64,8 +64,7 @@ typedef struct gsf_config {
   float voxel_min_range, voxel_max_range;  // m
   uint32_t voxel_max_voxels;
   uint32_t cluster_max_instances;
-  uint32_t match_use_gsf;  // 0: instance-only (no Gaussian semantic field filter)
-  float gsf_tau, match_min_similarity, gsf_observed_variance, gsf_normalize_mass;
+  float gsf_tau, match_min_similarity, gsf_observed_variance;
   float gsf_covariance_weight;
   uint32_t gsf_yaw_bins, match_max_correspondences, match_max_matches_per_triangle;
   float triangle_relative_side_tolerance;
