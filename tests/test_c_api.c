@@ -111,6 +111,8 @@ static void test_sizes(void) {
   bad = cfg;
   bad.confidence_min_probability = 1.5f;  // not a probability
   CHECK(gsf_workspace_bytes(&bad) == 0);
+  CHECK(strcmp(gsf_config_check(&bad), "confidence.min_probability") == 0);  // which value, by name
+  CHECK(gsf_config_check(&cfg) == NULL);
 }
 
 static void test_map_load(const void* blob, size_t bytes) {

@@ -1,5 +1,7 @@
 // LocalizerConfig: every capacity and tuning value of the query pipeline, one sub-struct per stage.
-// Defaults are the evaluated settings (docs/results.md); units in comments. The map builder records the
+// Defaults are the evaluated settings (docs/results.md); units in comments. Each settable value is in
+// the one parameter list (core/src/parameters.def; gsf/parameters.h: names, units, ranges, docs; the
+// table is docs/parameters.md). The map builder records the
 // values that must agree between map and localizer in MapParams (map_params_from).
 #pragma once
 #include <cstdint>
@@ -102,6 +104,8 @@ struct LocalizerConfig {
   ConfidenceConfig confidence;
 };
 
+// Ok, or InvalidArgument when a parameter is out of its range or breaks a rule with another one;
+// check_config() (parameters.h) says which parameter and why.
 Status validate(const LocalizerConfig& config);
 // The label set in effect: *config.classes, or the built-in SemanticKITTI table.
 const ClassTable& label_set(const LocalizerConfig& config);
