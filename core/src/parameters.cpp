@@ -135,17 +135,45 @@ bool in_range(const ParamInfo& p, double v) {
 
 const ParamInfo& param(const char* name) {
   const ParamInfo* p = find_parameter(name);
-  return p ? *p : kParams[0];  // every name below is in the list (test_config checks each rule fires)
+  return p ? *p : kParams[0];  // every rule's name is in the list (test_config checks each rule fires)
 }
 
-ConfigCheck fail(const char* name, const char* rule) {
-  return ConfigCheck{Status::InvalidArgument, &param(name), rule};
-}
+// The rules between parameters, in the order check_config() tries them.
+static_assert(kMaxGridPoints == 128, "the rule's text");
+const ParamRule kRules[] = {
+    {"voxel.max_range", "must be > voxel.min_range",
+     [](const LocalizerConfig& c) { return !(c.voxel.max_range > c.voxel.min_range); }},
+    {"voxel.column_size", "must be >= voxel.voxel_size",
+     [](const LocalizerConfig& c) { return !(c.voxel.column_size >= c.voxel.voxel_size); }},
+    {"field.grid_layers", "must be 1 for bird's-eye fields (field.input_dims = 2)",
+     [](const LocalizerConfig& c) { return c.field.input_dims == 2 && c.field.grid_layers != 1; }},
+    {"field.grid_nx", "x field.grid_ny x field.grid_layers must be <= 128",
+     [](const LocalizerConfig& c) { return grid_points(c.field) > kMaxGridPoints; }},
+    {"triangle.map_neighbours", "must be 0 or >= triangle.neighbours",
+     [](const LocalizerConfig& c) {
+       return c.triangle.map_neighbours != 0 && c.triangle.map_neighbours < c.triangle.neighbours;
+     }},
+    {"triangle.max_side", "must be > triangle.min_side",
+     [](const LocalizerConfig& c) { return !(c.triangle.max_side > c.triangle.min_side); }},
+    {"triangle.max_side", "/ triangle.side_bin must be < 65534 (the key's 16 bits)",
+     [](const LocalizerConfig& c) {
+       return !(c.triangle.max_side / c.triangle.side_bin < float(kTriangleKeyMaxBin - 1));
+     }},
+    {"hypotheses.tls_threshold", "must be <= hypotheses.shift_bin (the shift votes' support radius)",
+     [](const LocalizerConfig& c) { return c.hypotheses.tls_threshold > c.hypotheses.shift_bin; }},
+    {"refine.radius_start", "must be >= refine.radius_end",
+     [](const LocalizerConfig& c) { return !(c.refine.radius_start >= c.refine.radius_end); }},
+    {"refine.radius_start", "must be <= 1.5 x refine.cell",
+     [](const LocalizerConfig& c) { return c.refine.radius_start > c.refine.cell * 1.5f; }},
+};
+constexpr uint32_t kRuleCount = sizeof(kRules) / sizeof(kRules[0]);
 
 }  // namespace
 
 uint32_t parameter_count() { return kCount; }
 const ParamInfo& parameter(uint32_t i) { return kParams[i < kCount ? i : 0]; }
+uint32_t parameter_rule_count() { return kRuleCount; }
+const ParamRule& parameter_rule(uint32_t i) { return kRules[i < kRuleCount ? i : 0]; }
 
 const ParamInfo* find_parameter(const char* name) {
   if (name == nullptr) return nullptr;
@@ -202,24 +230,8 @@ ConfigCheck check_config(const LocalizerConfig& c) {
       if ((p.classes & class_bit(k)) && !in_range(p, *at<float>(m, p, k)))
         return ConfigCheck{Status::InvalidArgument, &p, nullptr};
   }
-  // Rules between parameters.
-  if (!(c.voxel.max_range > c.voxel.min_range)) return fail("voxel.max_range", "must be > voxel.min_range");
-  if (!(c.voxel.column_size >= c.voxel.voxel_size)) return fail("voxel.column_size", "must be >= voxel.voxel_size");
-  if (c.field.input_dims == 2 && c.field.grid_layers != 1)
-    return fail("field.grid_layers", "must be 1 for bird's-eye fields (field.input_dims = 2)");
-  static_assert(kMaxGridPoints == 128, "the rule's text");
-  if (grid_points(c.field) > kMaxGridPoints)
-    return fail("field.grid_nx", "field.grid_nx x grid_ny x grid_layers must be <= 128");
-  if (c.triangle.map_neighbours != 0 && c.triangle.map_neighbours < c.triangle.neighbours)
-    return fail("triangle.map_neighbours", "must be 0 or >= triangle.neighbours");
-  if (!(c.triangle.max_side > c.triangle.min_side)) return fail("triangle.max_side", "must be > triangle.min_side");
-  if (!(c.triangle.max_side / c.triangle.side_bin < float(kTriangleKeyMaxBin - 1)))
-    return fail("triangle.max_side", "triangle.max_side / triangle.side_bin must be < 65534 (the key's 16 bits)");
-  if (c.hypotheses.tls_threshold > c.hypotheses.shift_bin)
-    return fail("hypotheses.tls_threshold", "must be <= hypotheses.shift_bin (shift-vote support radius)");
-  if (!(c.refine.radius_start >= c.refine.radius_end))
-    return fail("refine.radius_start", "must be >= refine.radius_end");
-  if (c.refine.radius_start > c.refine.cell * 1.5f) return fail("refine.radius_start", "must be <= 1.5 x refine.cell");
+  for (const ParamRule& r : kRules)
+    if (r.broken(c)) return ConfigCheck{Status::InvalidArgument, &param(r.name), r.rule};
   return ConfigCheck{};
 }
 

@@ -25,6 +25,13 @@ std::string number_text(double x) {
   return buf;
 }
 
+std::string value_text(const ParamInfo& p, double v) {
+  if (p.type != ParamType::F32) return number_text(v);
+  char buf[32];
+  std::snprintf(buf, sizeof buf, "%.7g", v);  // the float's shortest decimal (0.06, not 0.0599999987)
+  return buf;
+}
+
 std::string range_text(const ParamInfo& p) {
   if (p.type == ParamType::Bool) return "0 or 1";
   std::string r = (p.lo_open ? "(" : "[") + number_text(p.lo) + ", " + number_text(p.hi) +
@@ -35,8 +42,9 @@ std::string range_text(const ParamInfo& p) {
 
 std::string describe(const ConfigCheck& check, const LocalizerConfig& config) {
   if (check.status == Status::Ok || check.param == nullptr) return "ok";
-  const std::string value = check.param->name + std::string(" = ") + number_text(get_parameter(config, *check.param));
-  if (check.rule) return value + ": " + check.rule;
+  const std::string value =
+      check.param->name + std::string(" = ") + value_text(*check.param, get_parameter(config, *check.param));
+  if (check.rule) return value + ": " + check.param->name + " " + check.rule;
   return value + ": outside " + range_text(*check.param);
 }
 

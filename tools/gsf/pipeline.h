@@ -26,6 +26,7 @@ bool apply_overrides(LocalizerConfig* config, const std::string& comma_list, std
 // docs print it, and a failed check as "name = value: why".
 std::string range_text(const ParamInfo& param);
 std::string number_text(double x);
+std::string value_text(const ParamInfo& param, double value);
 std::string describe(const ConfigCheck& check, const LocalizerConfig& config);
 
 enum class LogitMode { None, Synthetic };

@@ -57,6 +57,15 @@ bool parameter_accepts(const ParamInfo& p, double value);
 // and the config is unchanged.
 Status set_parameter(LocalizerConfig* config, const ParamInfo& p, double value);
 
+// A rule between parameters: `name` (the parameter it is reported on) breaks `rule` when broken(config).
+struct ParamRule {
+  const char* name;
+  const char* rule;  // what follows the name: "must be > voxel.min_range", "/ triangle.side_bin must be < 65534"
+  bool (*broken)(const LocalizerConfig& config);
+};
+uint32_t parameter_rule_count();
+const ParamRule& parameter_rule(uint32_t index);
+
 // What check_config found: Ok, or the first parameter that is out of its range or breaks a rule with
 // another one (`rule` then says which, e.g. "must be > voxel.min_range"; nullptr for a range failure:
 // param's lo..hi tell it).
