@@ -122,9 +122,9 @@ int main() {
         double e = 0;
         exact.w2_squared(qm.data(), qc.data(), mm.data(), mc.data(), G, weights, &e);
         const double mean_term = w2_mean_term(qm.data(), mm.data(), G, weights);
-        const ObservedW2 fast = w2_squared_diag_observed(qm.data(), qv.data(), mm.data(), mv.data(), G, weights,
-                                                         cfg.gsf.observed_variance * cfg.field.signal_variance,
-                                                         cfg.gsf.normalize_mass, cfg.gsf.covariance_weight);
+        const ObservedW2 fast =
+            w2_squared_diag_observed(qm.data(), qv.data(), mm.data(), mv.data(), G, weights,
+                                     cfg.gsf.observed_variance * cfg.field.signal_variance, cfg.gsf.covariance_weight);
         const double v[3] = {e, mean_term, fast.used ? fast.w2 / fast.used : 1e300};
         for (int p = 0; p < 3; ++p)
           if (v[p] < best[p]) {

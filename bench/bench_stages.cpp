@@ -273,7 +273,7 @@ int main(int argc, char** argv) {
       std::fprintf(stderr, "--set: %s\n", error.c_str());
       return 2;
     }
-    md.cfg.match.use_gsf = md.gsf;
+    md.cfg.gsf.enabled = md.gsf;
     md.cfg.refine.enabled = md.refine;
     md.workspace.assign(Localizer::required_bytes(md.cfg) / 8 + 2, 0);
     s = md.loc.init(md.cfg, map, md.workspace.data(), md.workspace.size() * 8, counting ? nullptr : &clock);

@@ -5,7 +5,7 @@ by its query instance's range and the query's region, from a suite run's per-que
 Run the suite with the gate off and every pair kept, so each true pair's best omega over all its matches
 is recorded:
     bash bench/suite.sh --seeds "6 7 8 9 10" --gsf BIN --jobs 2 --out OUT \
-        --set match.min_similarity=0,match.fill_pairs=0,match.max_correspondences=4096
+        --set match.min_similarity=0,match.max_correspondences=4096   # gate 0: nothing below it to fill
     python3 bench/true_pair_omega.py OUT [--gate 0.3]
 """
 import argparse

@@ -26,6 +26,10 @@ expect 2 "expects an integer" -- "$gsf" evaluate --map m --dataset d --limit ten
 expect 2 "min-confidence must be in" -- "$gsf" evaluate --map m --dataset d --min-confidence 1.01
 expect 2 "min-confidence must be in" -- "$gsf" evaluate --map m --dataset d --min-confidence -0.1
 expect 2 "unknown config name" -- "$gsf" build-map --dataset d --out m --set match.nonsense=1
+expect 2 "gsf.tau must be (0, 1000]" -- "$gsf" build-map --dataset d --out m --set gsf.tau=0
+expect 2 "must be <= hypotheses.shift_bin" -- "$gsf" build-map --dataset d --out m --set hypotheses.tls_threshold=3
+expect 0 "gsf.tau = 0.1 (default 0.2)" -- "$gsf" params --set gsf.tau=0.1
+expect 0 "## User-facing (25)" -- "$gsf" params --markdown
 # Simulated network errors on the labels read (build-map, evaluate, localize): rates in 0..1, seed >= 0.
 expect 2 "label-noise must be a number in 0..1" -- "$gsf" evaluate --map m --dataset d --label-noise 1.5
 expect 2 "object-confusion must be a number in 0..1" -- "$gsf" build-map --dataset d --out m --object-confusion -0.1

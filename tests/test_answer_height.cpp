@@ -53,10 +53,4 @@ TEST_CASE("The answer's height is the weighted median vertical offset of the cor
   T.translation().x() += 30.0;
   CHECK(consensus_height(a, b, weights, 9, 1.5f, 3, scratch, &T) == 0);
   CHECK(T.translation().z() == 6.3);
-  // The switch is 0 or 1.
-  LocalizerConfig cfg;
-  cfg.hypotheses.height_consensus = 2;
-  CHECK(validate(cfg) == Status::InvalidArgument);
-  cfg.hypotheses.height_consensus = 0;
-  CHECK(validate(cfg) == Status::Ok);
 }

@@ -88,7 +88,7 @@ static void test_sizes(void) {
   gsf_config_default(&cfg);
   gsf_config_default(NULL);  // no-op
   CHECK(cfg.struct_bytes == sizeof(gsf_config));
-  CHECK(cfg.match_use_gsf == 1 && cfg.refine_enabled == 0);
+  CHECK(cfg.verify_enabled == 1 && cfg.refine_enabled == 0);
   CHECK(cfg.max_scan_points > 0 && cfg.gsf_tau > 0.0f);
   const size_t storage = gsf_localizer_storage_bytes();
   CHECK(storage > 0 && storage % GSF_ALIGNMENT == 0);
@@ -111,6 +111,8 @@ static void test_sizes(void) {
   bad = cfg;
   bad.confidence_min_probability = 1.5f;  // not a probability
   CHECK(gsf_workspace_bytes(&bad) == 0);
+  CHECK(strcmp(gsf_config_check(&bad), "confidence.min_probability") == 0);  // which value, by name
+  CHECK(gsf_config_check(&cfg) == NULL);
 }
 
 static void test_map_load(const void* blob, size_t bytes) {
@@ -247,7 +249,7 @@ static void test_init_rejects(const gsf_map* map) {
   bad.struct_bytes = sizeof(gsf_config) - 4;
   CHECK_STATUS(gsf_localizer_init(storage, sb, &bad, map, ws, wb, &loc), GSF_STATUS_INVALID_ARGUMENT);
   bad = cfg;
-  bad.match_use_gsf = 2;  // flags are 0 or 1
+  bad.refine_enabled = 2;  // flags are 0 or 1
   CHECK_STATUS(gsf_localizer_init(storage, sb, &bad, map, ws, wb, &loc), GSF_STATUS_INVALID_ARGUMENT);
   bad = cfg;
   bad.match_max_correspondences = 1;

@@ -50,7 +50,7 @@ TEST_CASE("Fields and W2 never allocate after bind") {
     double e = 0;
     REQUIRE(exact.w2_squared(mean.data(), cov.data(), &mean[G * kNumClasses], &cov[G * G], G, w, &e) == Status::Ok);
     total += e + w2_squared_diag(mean.data(), var.data(), &mean[G * kNumClasses], &var[G], G, w);
-    total += w2_squared_diag_observed(mean.data(), var.data(), &mean[G * kNumClasses], &var[G], G, w, 0.6f).w2;
+    total += w2_squared_diag_observed(mean.data(), var.data(), &mean[G * kNumClasses], &var[G], G, w, 0.6f, 1.0f).w2;
   }
   CHECK(scope.allocations() == 0);
   CHECK(total > 0.0);  // the work was done

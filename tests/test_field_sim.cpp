@@ -102,7 +102,7 @@ TEST_CASE("Identical zone columns with different surroundings differ more than o
       auto dist = [&](int k) {
         dequantize_instance_grid(map, uint32_t(k), mm.data(), mv.data());
         const ObservedW2 r = w2_squared_diag_observed(qm.data(), qv.data(), mm.data(), mv.data(), G, weights,
-                                                      cfg.gsf.observed_variance * cfg.field.signal_variance);
+                                                      cfg.gsf.observed_variance * cfg.field.signal_variance, 1.0f);
         return r.used ? r.w2 / r.used : 1e9;
       };
       const double d_self = dist(self);

@@ -158,7 +158,7 @@ TEST_CASE("W2: zero for identical, symmetric, 1-D and diagonal closed forms, tri
   exact.w2_squared(m1.data(), dg1.data(), m2.data(), dg2.data(), g, w, &d);
   CHECK(d == Approx(w2_squared_diag(m1.data(), v1.data(), m2.data(), v2.data(), g, w)).epsilon(1e-4));
   // The observed-only path with everything observed and covariance weight 1 equals the diagonal path.
-  const ObservedW2 ob = w2_squared_diag_observed(m1.data(), v1.data(), m2.data(), v2.data(), g, w, 1e9f);
+  const ObservedW2 ob = w2_squared_diag_observed(m1.data(), v1.data(), m2.data(), v2.data(), g, w, 1e9f, 1.0f);
   CHECK(ob.used == static_cast<uint32_t>(g));
   CHECK(ob.w2 == Approx(w2_squared_diag(m1.data(), v1.data(), m2.data(), v2.data(), g, w)).epsilon(1e-6));
   // Stability weights scale the classes: a difference only in a volatile class (0.1) costs 10x less.

@@ -22,7 +22,7 @@ struct Tally {
 
 Tally localize_all(const gsf_test::TinyWorld& w, bool gsf_on) {
   LocalizerConfig cfg = w.config;
-  cfg.match.use_gsf = gsf_on;
+  cfg.gsf.enabled = gsf_on;
   std::vector<uint64_t> ws(Localizer::required_bytes(cfg) / 8 + 2);
   Localizer loc;
   REQUIRE(loc.init(cfg, w.map, ws.data(), ws.size() * 8) == Status::Ok);

@@ -21,7 +21,7 @@ struct Count {
 Count run(bool gsf_on, bool verify) {
   const gsf_test::TinyWorld& w = gsf_test::tiny_lattice_world();
   LocalizerConfig cfg = w.config;
-  cfg.match.use_gsf = gsf_on;
+  cfg.gsf.enabled = gsf_on;
   cfg.verify.enabled = verify;
   if (!verify) {  // the paper's pipeline: the maximum clique's pose, no upright prior
     cfg.hypotheses.max_hypotheses = 1;

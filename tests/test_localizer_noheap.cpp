@@ -14,6 +14,11 @@ TEST_CASE("localize() never allocates after init") {
   std::vector<uint64_t> ws(Localizer::required_bytes(w.config) / 8 + 2);
   Localizer loc;
   REQUIRE(loc.init(w.config, w.map, ws.data(), ws.size() * 8) == Status::Ok);
+  LocalizerConfig off = w.config;  // GSF off: the instance-only paths
+  off.gsf.enabled = false;
+  std::vector<uint64_t> ws_off(Localizer::required_bytes(off) / 8 + 2);
+  Localizer loc_off;
+  REQUIRE(loc_off.init(off, w.map, ws_off.data(), ws_off.size() * 8) == Status::Ok);
   // Under qemu (the aarch64 test preset sets GSF_UNDER_EMULATOR) a call costs ~30x the host's: the same
   // paths (every query of the world, GSF on and off) run fewer times there; the host runs all 1,000.
   const uint32_t target = std::getenv("GSF_UNDER_EMULATOR") ? 200 : 1000;
@@ -22,8 +27,7 @@ TEST_CASE("localize() never allocates after init") {
   gsf_test::AllocationScope scope;
   while (calls < target) {
     for (const auto& q : w.queries) {
-      loc.set_use_gsf(calls % 2 == 0);
-      ok += loc.localize(q.view(), &r) == Status::Ok;
+      ok += (calls % 2 == 0 ? loc : loc_off).localize(q.view(), &r) == Status::Ok;
       if (++calls >= target) break;
     }
   }
@@ -45,13 +49,17 @@ TEST_CASE("localize() never allocates after init with refinement on, on a lattic
     std::vector<uint64_t> ws(Localizer::required_bytes(cfg) / 8 + 2);
     Localizer loc;
     REQUIRE(loc.init(cfg, w.map, ws.data(), ws.size() * 8) == Status::Ok);
+    LocalizerConfig off = cfg;
+    off.gsf.enabled = false;
+    std::vector<uint64_t> ws_off(Localizer::required_bytes(off) / 8 + 2);
+    Localizer loc_off;
+    REQUIRE(loc_off.init(off, w.map, ws_off.data(), ws_off.size() * 8) == Status::Ok);
     LocalizeResult r;
     uint32_t calls = 0, ok = 0, refined = 0, voted = 0, poles = 0;
     gsf_test::AllocationScope scope;
     for (int pass = 0; pass < 2; ++pass)
       for (const auto& q : w.queries) {
-        loc.set_use_gsf(pass == 0);
-        ok += loc.localize(q.view(), &r) == Status::Ok;
+        ok += (pass == 0 ? loc : loc_off).localize(q.view(), &r) == Status::Ok;
         refined += r.refined;
         voted += r.hypotheses > r.clique_searches;  // more hypotheses than cliques: shift votes ran
         poles += r.pole_instances > 0;

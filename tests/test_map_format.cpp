@@ -84,6 +84,7 @@ struct SmallMap {
     t.side[1] = 5.8f;
     t.side[2] = 8.9f;
     for (int k = 0; k < 3; ++k) t.label[k] = kPole;
+    t.orientation = kOrientationCounterClockwise;
     tris.push_back(t);
     t.v[2] = 3;
     t.side[2] = 9.5f;
@@ -304,14 +305,15 @@ TEST_CASE("Semantically invalid contents with valid CRCs are rejected") {
   REQUIRE(write_map(sm.view, blob.data(), size, nullptr) == Status::Ok);
   MapView v;
   CHECK(load_map(blob.data(), size, &v) == Status::CorruptData);
-  // A triangle orientation beyond the four senses (triangle.h); every sense itself loads.
+  // A triangle orientation that is none of the three senses (triangle.h); every sense itself loads.
   for (uint8_t o = 0; o <= 4; ++o) {
     SmallMap om;
     om.tris[0].orientation = o;
     Blob b2(size);
     REQUIRE(write_map(om.view, b2.data(), size, nullptr) == Status::Ok);
     INFO("orientation " << int(o));
-    CHECK(load_map(b2.data(), size, &v) == (o <= kOrientationFlat ? Status::Ok : Status::CorruptData));
+    CHECK(load_map(b2.data(), size, &v) ==
+          (o >= kOrientationCounterClockwise && o <= kOrientationFlat ? Status::Ok : Status::CorruptData));
   }
 
   // Quantisation scales whose levels are not all finite (or variances below 0), behind valid CRCs.

@@ -31,7 +31,7 @@ Outcome localize_revisit(const char* seq, std::initializer_list<uint32_t> map_fr
   port::SemanticKittiSource src;
   REQUIRE(src.open(root, seq) == Status::Ok);
   LocalizerConfig cfg;
-  cfg.match.use_gsf = gsf;
+  cfg.gsf.enabled = gsf;
   mapping::MapBuildConfig build_config;
   build_config.stages = cfg;
   mapping::MapBuilder builder(build_config);

@@ -98,8 +98,10 @@ TEST_CASE("A lattice where every triangle collides in the hash: matches, corresp
   q.points = pts.data();
   q.labels = labels.data();
   q.count = static_cast<uint32_t>(labels.size());
-  for (bool gsf : {false, true}) {
-    loc.set_use_gsf(gsf);
+  for (bool gsf : {false, true}) {  // the loop ends with GSF on, as `full` below needs
+    LocalizerConfig mode = cfg;
+    mode.gsf.enabled = gsf;
+    REQUIRE(loc.init(mode, map, ws.data(), ws.size() * 8) == Status::Ok);
     LocalizeResult r;
     loc.localize(q, &r);
     INFO("gsf " << gsf << ": " << r.query_triangles << " triangles, " << r.triangle_matches << " matches, "
@@ -125,7 +127,6 @@ TEST_CASE("A lattice where every triangle collides in the hash: matches, corresp
   std::vector<uint64_t> ws2(need / 8 + 2);
   REQUIRE(lb.init(budgeted, map, ws2.data(), ws2.size() * 8) == Status::Ok);
   LocalizeResult full, cut;
-  loc.set_use_gsf(true);
   loc.localize(q, &full);
   lb.localize(q, &cut);
   REQUIRE(cut.query_triangles == full.query_triangles);

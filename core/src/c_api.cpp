@@ -11,6 +11,7 @@
 #include "gsf/config.h"
 #include "gsf/localizer.h"
 #include "gsf/map_format.h"
+#include "gsf/parameters.h"
 #include "gsf/semantic_classes.h"
 #include "gsf/status.h"
 
@@ -78,50 +79,57 @@ Handle* live_handle(gsf_localizer* h) {
   return std::launder(reinterpret_cast<Handle*>(h));
 }
 
-bool flag(uint32_t v, bool* out) {
-  if (v > 1) return false;
-  *out = v == 1;
+// gsf_config <-> LocalizerConfig, generated from the parameter list (parameters.def): every USER
+// parameter is the gsf_config field group_field of its type (flags: uint32_t 0 or 1), and the struct
+// holds nothing else but struct_bytes and label_set.
+template <typename C, typename K>
+bool from_c(C c, K* k) {
+  static_assert(std::is_same<C, K>::value, "gsf_config field type differs from the parameter's");
+  *k = c;
   return true;
 }
+inline bool from_c(uint32_t c, bool* k) {
+  if (c > 1) return false;
+  *k = c == 1;
+  return true;
+}
+template <typename K, typename C>
+void to_c(K k, C* c) {
+  static_assert(std::is_same<C, K>::value, "gsf_config field type differs from the parameter's");
+  *c = k;
+}
+inline void to_c(bool k, uint32_t* c) { *c = k ? 1u : 0u; }
 
-// gsf_config -> LocalizerConfig (C++ defaults for every value the C struct does not carry).
-bool to_cpp(const gsf_config* c, gsf::LocalizerConfig* out) {
-  if (c == nullptr || c->struct_bytes != sizeof(gsf_config)) return false;
+#define GSF_PARAM(level, type, group, field, unit, bounds, lo, hi, doc) \
+  GSF_C_##level(group##_##field, group.field, #group "." #field)
+#define GSF_PARAM_TOP(level, type, field, unit, bounds, lo, hi, doc) GSF_C_##level(field, field, #field)
+#define GSF_PARAM_CLASSES(level, type, group, field, classes, name, unit, bounds, lo, hi, doc) \
+  GSF_C_CLASSES_##level  // per-class parameters are expert (no GSF_C_CLASSES_USER)
+#define GSF_C_EXPERT(c_field, cpp_field, name)
+#define GSF_C_CLASSES_EXPERT
+
+#define GSF_C_USER(c_field, cpp_field, name) +sizeof(gsf_config::c_field)
+constexpr size_t kUserFieldBytes = 0
+#include "parameters.def"
+    ;
+#undef GSF_C_USER
+static_assert(sizeof(gsf_config) == kUserFieldBytes + 2 * sizeof(uint32_t),
+              "gsf_config holds exactly the USER parameters of parameters.def, struct_bytes and label_set");
+
+// gsf_config -> LocalizerConfig (C++ defaults for every expert value). On failure *bad names the field.
+bool to_cpp(const gsf_config* c, gsf::LocalizerConfig* out, const char** bad) {
+  if (c == nullptr || c->struct_bytes != sizeof(gsf_config)) {
+    *bad = c == nullptr ? "config" : "struct_bytes";
+    return false;
+  }
   gsf::LocalizerConfig k;
-  k.max_scan_points = c->max_scan_points;
-  k.voxel.min_range = c->voxel_min_range;
-  k.voxel.max_range = c->voxel_max_range;
-  k.voxel.max_voxels = c->voxel_max_voxels;
-  k.cluster.max_instances = c->cluster_max_instances;
-  if (!flag(c->match_use_gsf, &k.match.use_gsf)) return false;
-  k.gsf.tau = c->gsf_tau;
-  k.match.min_similarity = c->match_min_similarity;
-  k.gsf.observed_variance = c->gsf_observed_variance;
-  k.gsf.normalize_mass = c->gsf_normalize_mass;
-  k.gsf.covariance_weight = c->gsf_covariance_weight;
-  k.gsf.yaw_bins = c->gsf_yaw_bins;
-  k.match.max_correspondences = c->match_max_correspondences;
-  k.match.max_matches_per_triangle = c->match_max_matches_per_triangle;
-  k.triangle.relative_side_tolerance = c->triangle_relative_side_tolerance;
-  k.hypotheses.consistency_eps = c->hypotheses_consistency_eps;
-  k.hypotheses.first_budget = c->hypotheses_first_budget;
-  k.hypotheses.next_budget = c->hypotheses_next_budget;
-  k.hypotheses.tls_threshold = c->hypotheses_tls_threshold;
-  k.hypotheses.min_inliers = c->hypotheses_min_inliers;
-  k.hypotheses.max_hypotheses = c->hypotheses_max_hypotheses;
-  if (!flag(c->verify_enabled, &k.verify.enabled)) return false;
-  k.triangle.max_triangles = c->triangle_max_triangles;
-  if (!flag(c->refine_enabled, &k.refine.enabled)) return false;
-  k.confidence.min_probability = c->confidence_min_probability;
-  k.voxel.voxel_size = c->voxel_size;
-  k.field.length_scale = c->field_length_scale;
-  k.field.radius = c->field_radius;
-  k.field.grid_spacing = c->field_grid_spacing;
-  k.field.noise_variance = c->field_noise_variance;
-  k.field.inducing_points = c->field_inducing_points;
-  k.field.grid_nx = c->field_grid_nx;
-  k.field.grid_ny = c->field_grid_ny;
-  k.triangle.neighbours = c->triangle_neighbours;
+#define GSF_C_USER(c_field, cpp_field, name) \
+  if (!from_c(c->c_field, &k.cpp_field)) {   \
+    *bad = name;                             \
+    return false;                            \
+  }
+#include "parameters.def"
+#undef GSF_C_USER
   // Built-in tables in static storage, built on first use (read-only afterwards; init copies them).
   if (c->label_set == GSF_LABEL_SET_NUSCENES_LIDARSEG) {
     static const gsf::ClassTable nuscenes = [] {
@@ -131,10 +139,16 @@ bool to_cpp(const gsf_config* c, gsf::LocalizerConfig* out) {
     }();
     k.classes = &nuscenes;
   } else if (c->label_set != GSF_LABEL_SET_SEMANTIC_KITTI) {
+    *bad = "label_set";
     return false;
   }
   *out = k;
   return true;
+}
+
+bool to_cpp(const gsf_config* c, gsf::LocalizerConfig* out) {
+  const char* bad = nullptr;
+  return to_cpp(c, out, &bad);
 }
 
 void fill(const gsf::LocalizeResult& r, gsf_result* out) {
@@ -181,41 +195,18 @@ void gsf_config_default(gsf_config* c) noexcept {
   const gsf::LocalizerConfig k;
   std::memset(c, 0, sizeof(*c));
   c->struct_bytes = sizeof(gsf_config);
-  c->max_scan_points = k.max_scan_points;
-  c->voxel_min_range = k.voxel.min_range;
-  c->voxel_max_range = k.voxel.max_range;
-  c->voxel_max_voxels = k.voxel.max_voxels;
-  c->cluster_max_instances = k.cluster.max_instances;
-  c->match_use_gsf = k.match.use_gsf ? 1 : 0;
-  c->gsf_tau = k.gsf.tau;
-  c->match_min_similarity = k.match.min_similarity;
-  c->gsf_observed_variance = k.gsf.observed_variance;
-  c->gsf_normalize_mass = k.gsf.normalize_mass;
-  c->gsf_covariance_weight = k.gsf.covariance_weight;
-  c->gsf_yaw_bins = k.gsf.yaw_bins;
-  c->match_max_correspondences = k.match.max_correspondences;
-  c->match_max_matches_per_triangle = k.match.max_matches_per_triangle;
-  c->triangle_relative_side_tolerance = k.triangle.relative_side_tolerance;
-  c->hypotheses_consistency_eps = k.hypotheses.consistency_eps;
-  c->hypotheses_first_budget = k.hypotheses.first_budget;
-  c->hypotheses_next_budget = k.hypotheses.next_budget;
-  c->hypotheses_tls_threshold = k.hypotheses.tls_threshold;
-  c->hypotheses_min_inliers = k.hypotheses.min_inliers;
-  c->hypotheses_max_hypotheses = k.hypotheses.max_hypotheses;
-  c->verify_enabled = k.verify.enabled ? 1 : 0;
-  c->triangle_max_triangles = k.triangle.max_triangles;
-  c->refine_enabled = k.refine.enabled ? 1 : 0;
-  c->confidence_min_probability = k.confidence.min_probability;
-  c->voxel_size = k.voxel.voxel_size;
-  c->field_length_scale = k.field.length_scale;
-  c->field_radius = k.field.radius;
-  c->field_grid_spacing = k.field.grid_spacing;
-  c->field_noise_variance = k.field.noise_variance;
-  c->field_inducing_points = k.field.inducing_points;
-  c->field_grid_nx = k.field.grid_nx;
-  c->field_grid_ny = k.field.grid_ny;
+#define GSF_C_USER(c_field, cpp_field, name) to_c(k.cpp_field, &c->c_field);
+#include "parameters.def"
+#undef GSF_C_USER
   c->label_set = GSF_LABEL_SET_SEMANTIC_KITTI;
-  c->triangle_neighbours = k.triangle.neighbours;
+}
+
+const char* gsf_config_check(const gsf_config* c) noexcept {
+  gsf::LocalizerConfig k;
+  const char* bad = nullptr;
+  if (!to_cpp(c, &k, &bad)) return bad;
+  const gsf::ConfigCheck check = gsf::check_config(k);
+  return check.status == Status::Ok ? nullptr : check.param->name;
 }
 
 int gsf_map_load(const void* blob, size_t bytes, gsf_map* out) noexcept {

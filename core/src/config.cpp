@@ -1,44 +1,11 @@
 #include "gsf/config.h"
 
-#include <cmath>
+#include "gsf/parameters.h"
 
 namespace gsf {
 
-Status validate(const LocalizerConfig& c) {
-  if (c.max_scan_points == 0) return Status::InvalidArgument;
-  Status s = validate(c.field);
-  if (s != Status::Ok) return s;
-  s = validate(c.triangle);
-  if (s != Status::Ok) return s;
-  const MatchConfig& m = c.match;
-  if (m.max_matches_per_triangle == 0 || m.max_matches_per_triangle > (1u << 20) || !(m.min_similarity >= 0) ||
-      !(m.vertex_tie_tolerance >= 0 && m.vertex_tie_tolerance < 1) || m.max_candidates < 3 ||
-      m.max_candidates > (1u << 22) || m.max_correspondences < 3 || m.max_correspondences > 4096 ||
-      m.max_field_points == 0 || m.heading_sample_triangles == 0 || m.reject_mirrored > 1)
-    return Status::InvalidArgument;
-  const GsfFilterConfig& g = c.gsf;
-  if (g.yaw_bins < 4 || g.yaw_bins > 4096 || g.probe_cache_slots == 0 || g.similarity_cache_slots == 0 ||
-      !(g.tau > 0) || !(g.observed_variance > 0) || !(g.covariance_weight >= 0) || !(g.normalize_mass >= 0))
-    return Status::InvalidArgument;
-  const HypothesisConfig& h = c.hypotheses;
-  if (h.max_hypotheses == 0 || h.max_hypotheses > PoseHypotheses::kMaxHypotheses || h.first_budget == 0 ||
-      h.next_budget == 0 || !(h.consistency_eps > 0) || !(h.tls_threshold > 0) || h.min_inliers < 3 ||
-      h.max_iterations == 0 || !(h.same_pose_m >= 0) || !(h.same_pose_deg >= 0) ||
-      !(h.heading_separation_deg > 0.0f && h.heading_separation_deg < 90.0f) || h.max_peeled == 0 ||
-      !(h.shift_bin > 0) || !(h.max_tilt_deg >= 0 && h.max_tilt_deg <= 180) || h.shift_vote_support > 1 ||
-      (h.shift_vote_support && h.tls_threshold > h.shift_bin) || h.height_consensus > 1 ||
-      h.shift_vote_pairs > (1u << 20))
-    return Status::InvalidArgument;
-  if (c.verify.max_points == 0 || c.verify.refine_top > 64 || c.verify.coarse_divisor == 0 ||
-      c.verify.search_divisor == 0 || c.verify.polish_divisor == 0 || c.verify.full_top == 0 ||
-      !(c.verify.refine_step_m >= 0) || !(c.verify.refine_step_deg >= 0) || c.verify.refine_rounds > 16 ||
-      !(c.verify.rarity_exponent >= 0 && c.verify.rarity_exponent <= 2) ||
-      !(c.verify.disagree_weight >= 0 && c.verify.disagree_weight <= 100))
-    return Status::InvalidArgument;
-  if (!(c.confidence.min_probability >= 0.0f && c.confidence.min_probability <= 1.0f)) return Status::InvalidArgument;
-  if (c.cluster.max_instances == 0 || c.cluster.max_instances >= (1u << 16)) return Status::InvalidArgument;
-  return Status::Ok;
-}
+// The ranges and rules are the parameter list's (parameters.def, check_config in parameters.cpp).
+Status validate(const LocalizerConfig& c) { return check_config(c).status; }
 
 const ClassTable& label_set(const LocalizerConfig& c) {
   if (c.classes) return *c.classes;

@@ -79,9 +79,9 @@ float GsfFilter::similarity(const QueryFields& qf, uint32_t qi, const MapView& m
       solver_->probe(f, qf.chol + size_t(qi) * M * M, grid_, G, mean, var, nullptr);
     }
     dequantize_instance_grid(map, mi, map_mean_, map_var_);
-    const ObservedW2 r = w2_squared_diag_observed(mean, var, map_mean_, map_var_, G, weights_,
-                                                  config_.observed_variance * field_.signal_variance,
-                                                  config_.normalize_mass, config_.covariance_weight);
+    const ObservedW2 r =
+        w2_squared_diag_observed(mean, var, map_mean_, map_var_, G, weights_,
+                                 config_.observed_variance * field_.signal_variance, config_.covariance_weight);
     if (r.used >= 4) omega = static_cast<float>(std::exp(-(r.w2 / r.used) / config_.tau));
   }
   if (float* slot = similarity_.find_or_insert(skey)) *slot = omega;

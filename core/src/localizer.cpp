@@ -294,7 +294,7 @@ void Localizer::Impl::fit_query_fields(const LocalizerConfig& cfg, LocalizeResul
   const uint32_t M = cfg.field.inducing_points;
   for (uint32_t i = 0; i < n; ++i) {
     q_m[i] = 0;
-    if (!cfg.match.use_gsf) continue;
+    if (!cfg.gsf.enabled) continue;
     uint32_t total = 0;
     const FieldGather gather{cfg.match.max_field_points, gather_ids, gather_xyz, gather_targets, gather_labels};
     uint32_t m = 0, got = 0;
@@ -321,10 +321,8 @@ Status Localizer::Impl::build_query_triangles(LocalizeResult& out) {
 void Localizer::Impl::limit_matches(const LocalizerConfig& cfg) {
   const uint32_t T = triangles.size();
   uint32_t cap = cfg.match.max_matches_per_triangle;
-  if (cfg.match.max_matches_per_scan > 0 && T > 0 && cfg.match.max_matches_per_scan / T < cap)
-    cap = cfg.match.max_matches_per_scan / T;
+  if (T > 0 && cfg.match.max_matches_per_scan / T < cap) cap = cfg.match.max_matches_per_scan / T;
   matcher.set_limit(cap);
-  matcher.set_mirror_check(cfg.match.reject_mirrored != 0);
 }
 
 // 5a. Heading votes (heading_votes.h): only matches at the best-supported headings go on.
@@ -339,8 +337,7 @@ void Localizer::Impl::vote_headings(const LocalizerConfig& cfg, const MapView& m
 void Localizer::Impl::match_and_filter(const LocalizerConfig& cfg, const MapView& map, Clock* clock,
                                        LocalizeResult& out) {
   const QueryFields qf{q_inputs, q_alpha, q_chol, q_m, cfg.field.inducing_points};
-  const MatchFilterParams params{cfg.match.vertex_tie_tolerance, cfg.match.use_gsf, cfg.match.min_similarity,
-                                 cfg.match.fill_pairs};
+  const MatchFilterParams params{cfg.match.vertex_tie_tolerance, cfg.gsf.enabled, cfg.match.min_similarity, kFillPairs};
   const MatchFilterStats st = gsf.filter_matches(triangles, centroids, qf, matcher, index, map, cfg.triangle, headings,
                                                  params, clock, correspondences);
   out.match_candidates = st.match_candidates;
@@ -366,7 +363,7 @@ void Localizer::Impl::match_and_filter(const LocalizerConfig& cfg, const MapView
 uint32_t Localizer::Impl::select_correspondences(const LocalizerConfig& cfg, const MapView& map, LocalizeResult& out) {
   const uint32_t total = correspondences.candidates();
   const uint32_t V = std::max(cfg.match.max_correspondences, cfg.hypotheses.shift_vote_pairs);
-  vote_pairs = correspondences.select(V, centroids, map.instances, cfg.match.fill_pairs);
+  vote_pairs = correspondences.select(V, centroids, map.instances, kFillPairs);
   const uint32_t C = std::min(vote_pairs, cfg.match.max_correspondences);
   out.correspondences_dropped = total - C;
   out.vote_pairs = vote_pairs;
@@ -406,7 +403,6 @@ void Localizer::Impl::choose_answer(const LocalizerConfig& cfg, LocalizeResult& 
 // 9b. The answer's height from every correspondence it explains (answer_height.h): verification chose
 // x, y and yaw but cannot see height.
 void Localizer::Impl::settle_height(const LocalizerConfig& cfg, uint32_t C, LocalizeResult& out) {
-  if (!cfg.hypotheses.height_consensus) return;
   out.height_votes =
       consensus_height(correspondences.query_xyz(), correspondences.map_xyz(), correspondences.weights(), C,
                        cfg.hypotheses.tls_threshold, cfg.hypotheses.min_inliers, height_samples, &out.map_T_scan);

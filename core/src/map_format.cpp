@@ -116,7 +116,7 @@ Status check_contents(const MapView& m) {
       if (tri.label[k] != m.instances[tri.v[k]].label) return Status::CorruptData;
     }
     if (!all_finite(tri.side, 3) || !(tri.side[0] <= tri.side[1] && tri.side[1] <= tri.side[2]) || tri.side[0] < 0 ||
-        tri.orientation > kOrientationFlat)
+        tri.orientation < kOrientationCounterClockwise || tri.orientation > kOrientationFlat)
       return Status::CorruptData;
   }
   // CSR index over the triangles (stored in key order): strictly increasing keys, monotone offsets

@@ -148,7 +148,7 @@ uint32_t PoleExtraction::find_slice_segments(const Hosts& h, int32_t ring_cells,
       ++stats->segments_wide;
     } else {
       const uint32_t ring = ring_voxels(h, box, sc[2], ring_cells);
-      if (ring > config_.max_ring_voxels) {
+      if (ring > 0) {  // not isolated
         ++stats->segments_crowded;
       } else {
         mark = segments;
@@ -263,7 +263,7 @@ void PoleExtraction::judge_chain(const Hosts& h, uint32_t root, uint32_t* m, uin
   sum_chain(h, m, count, &shape);
   const uint8_t kind = segments_[root].kind;
   const float height = shape.hi[2] - shape.lo[2] + vs;
-  if (shape.levels < config_.min_levels || shape.points < config_.min_points || height < config_.min_height[kind]) {
+  if (shape.levels < config_.min_levels || height < config_.min_height[kind]) {
     ++stats->rejected_short;
     return;
   }

@@ -83,11 +83,6 @@ uint32_t PoseHypotheses::rank_shift_bins(uint32_t bins, const float* w, const Hy
     bin_rank_[k] = support_count >= c.min_inliers ? 2 : (bin_count_[k] >= c.min_inliers ? 1 : 0);
   };
   for (uint32_t k = 0; k < bins; ++k) {
-    if (!c.shift_vote_support) {
-      bin_support_[k] = bin_weight_[k];
-      rank(k, bin_count_[k]);
-      continue;
-    }
     float mx = 0.0f, my = 0.0f;
     for (uint32_t e = bin_begin_[k]; e < bin_begin_[k + 1]; ++e) {
       mx += vote_t_[2 * vote_order_[e]];

@@ -75,7 +75,7 @@ double w2_squared_diag(const float* m1, const float* v1, const float* m2, const 
 }
 
 ObservedW2 w2_squared_diag_observed(const float* mq, const float* vq, const float* mm, const float* vm, uint32_t g,
-                                    const float* w, float max_var, float normalize_mass, float cov_weight) {
+                                    const float* w, float max_var, float cov_weight) {
   ObservedW2 r;
   const double tw = trace_weights(w) * cov_weight;
   double wd[kNumClasses];
@@ -85,23 +85,10 @@ ObservedW2 w2_squared_diag_observed(const float* mq, const float* vq, const floa
     const float* a = mq + s * kNumClasses;
     const float* b = mm + s * kNumClasses;
     double acc = 0.0;
-    if (normalize_mass > 0.0f) {
-      double sa = 0.0, sb = 0.0;
-      for (int d = 0; d < kNumClasses; ++d) {
-        sa += a[d] > 0 ? a[d] : 0;
-        sb += b[d] > 0 ? b[d] : 0;
-      }
-      if (sa < normalize_mass || sb < normalize_mass) continue;
-      for (int d = 0; d < kNumClasses; ++d) {
-        const double x = (a[d] > 0 ? a[d] : 0) / sa, y = (b[d] > 0 ? b[d] : 0) / sb;
-        acc += wd[d] * (x - y) * (x - y);
-      }
-    } else {
-      // The hot path of the GSF filter (mean term only): branch-free so it vectorises.
-      for (int d = 0; d < kNumClasses; ++d) {
-        const double x = double(a[d]) - double(b[d]);
-        acc += wd[d] * x * x;
-      }
+    // The hot path of the GSF filter (mean term only): branch-free so it vectorises.
+    for (int d = 0; d < kNumClasses; ++d) {
+      const double x = double(a[d]) - double(b[d]);
+      acc += wd[d] * x * x;
     }
     if (tw != 0.0) {
       const double e = std::sqrt(double(vq[s] > 0 ? vq[s] : 0)) - std::sqrt(double(vm[s] > 0 ? vm[s] : 0));

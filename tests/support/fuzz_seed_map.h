@@ -65,6 +65,7 @@ inline std::vector<uint64_t> fuzz_seed_map(size_t* bytes) {
     t[k].side[1] = 3.6f;
     t[k].side[2] = 5.6f + k;
     for (int j = 0; j < 3; ++j) t[k].label[j] = kPole;
+    t[k].orientation = kOrientationCounterClockwise;
   }
   // Format v5: triangles in key order, one key each.
   static uint64_t keys[2] = {triangle_key(t[0], p.side_bin), triangle_key(t[1], p.side_bin)};

@@ -67,7 +67,7 @@ int cmd_localize(int argc, char** argv) {
   }
   LocalizerConfig cfg = default_config();
   cfg.classes = labels.config_table();
-  cfg.match.use_gsf = args.get("mode") == "gsf";
+  cfg.gsf.enabled = args.get("mode") == "gsf";
   std::vector<uint64_t> workspace(Localizer::required_bytes(cfg) / 8 + 2);
   port::SteadyClock clock;
   Localizer loc;

@@ -15,6 +15,7 @@ int cmd_build_map(int argc, char** argv);
 int cmd_localize(int argc, char** argv);
 int cmd_evaluate(int argc, char** argv);
 int cmd_demo(int argc, char** argv);
+int cmd_params(int argc, char** argv);
 
 // A map file in 16-byte aligned memory (as load_map requires): memory-mapped read-only where the platform
 // allows, else read into a buffer (port/mapped_file.h). load_map then uses it in place.

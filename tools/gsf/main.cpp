@@ -1,4 +1,4 @@
-// gsf: the host command-line tool. Subcommands: simulate, build-map, localize, evaluate, inspect, demo.
+// gsf: the host command-line tool. Subcommands: simulate, build-map, localize, evaluate, inspect, demo, params.
 #include <cstdio>
 #include <cstring>
 #include <string>
@@ -20,6 +20,7 @@ const Command kCommands[] = {
     {"evaluate", gsf::cli::cmd_evaluate, "localize a query sequence with ground truth and report metrics"},
     {"inspect", gsf::cli::cmd_inspect, "print a map's header, counts and memory budget"},
     {"demo", gsf::cli::cmd_demo, "simulate -> build map -> evaluate all modes, on the built-in default"},
+    {"params", gsf::cli::cmd_params, "list the localizer's parameters (--markdown: docs/parameters.md)"},
 };
 
 void print_help(FILE* f) {

@@ -1,5 +1,6 @@
 #include "pipeline.h"
 
+#include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
@@ -17,6 +18,37 @@ LocalizerConfig default_config() {
   return c;
 }
 
+std::string number_text(double x) {
+  if (std::isinf(x)) return x > 0 ? "inf" : "-inf";
+  char buf[40];
+  std::snprintf(buf, sizeof buf, "%.9g", x);
+  return buf;
+}
+
+std::string value_text(const ParamInfo& p, double v) {
+  if (p.type != ParamType::F32) return number_text(v);
+  char buf[32];
+  std::snprintf(buf, sizeof buf, "%.7g", v);  // the float's shortest decimal (0.06, not 0.0599999987)
+  return buf;
+}
+
+std::string range_text(const ParamInfo& p) {
+  if (p.type == ParamType::Bool) return "0 or 1";
+  std::string r = (p.lo_open ? "(" : "[") + number_text(p.lo) + ", " + number_text(p.hi) +
+                  (p.hi_open || std::isinf(p.hi) ? ")" : "]");
+  if (p.type != ParamType::F32) r = "a whole number in " + r;
+  return r;
+}
+
+std::string describe(const ConfigCheck& check, const LocalizerConfig& config) {
+  if (check.status == Status::Ok || check.param == nullptr) return "ok";
+  const std::string value =
+      check.param->name + std::string(" = ") + value_text(*check.param, get_parameter(config, *check.param));
+  if (check.rule) return value + ": " + check.param->name + " " + check.rule;
+  return value + ": outside " + range_text(*check.param);
+}
+
+// `--set name=value`: the names, types and ranges are the parameter list's (gsf/parameters.h).
 bool apply_override(LocalizerConfig* c, const std::string& a, std::string* error) {
   const auto eq = a.find('=');
   if (eq == std::string::npos) {
@@ -24,92 +56,22 @@ bool apply_override(LocalizerConfig* c, const std::string& a, std::string* error
     return false;
   }
   const std::string k = a.substr(0, eq), v = a.substr(eq + 1);
+  const ParamInfo* p = find_parameter(k.c_str());
+  if (p == nullptr) {
+    *error = "unknown config name '" + k + "' (gsf params lists them)";
+    return false;
+  }
   char* end = nullptr;
   const double x = std::strtod(v.c_str(), &end);
   if (v.empty() || *end != '\0') {
     *error = "override '" + a + "': value is not a number";
     return false;
   }
-  struct F {
-    const char* name;
-    float* f;
-    uint32_t* u;
-  };
-  uint32_t verify_enabled = c->verify.enabled ? 1 : 0;
-  // One value for the thin vertical classes (instance_clustering.h).
-  float thin_vertical_tolerance = c->cluster.vertical_tolerance[kPole];
-  const F fields[] = {
-      {"cluster.vertical_tolerance", &thin_vertical_tolerance, nullptr},
-      {"gsf.tau", &c->gsf.tau, nullptr},
-      {"gsf.observed_variance", &c->gsf.observed_variance, nullptr},
-      {"gsf.normalize_mass", &c->gsf.normalize_mass, nullptr},
-      {"gsf.covariance_weight", &c->gsf.covariance_weight, nullptr},
-      {"gsf.yaw_bins", nullptr, &c->gsf.yaw_bins},
-      {"match.min_similarity", &c->match.min_similarity, nullptr},
-      {"match.fill_pairs", nullptr, &c->match.fill_pairs},
-      {"match.reject_mirrored", nullptr, &c->match.reject_mirrored},
-      {"match.vertex_tie_tolerance", &c->match.vertex_tie_tolerance, nullptr},
-      {"match.max_correspondences", nullptr, &c->match.max_correspondences},
-      {"match.max_matches_per_triangle", nullptr, &c->match.max_matches_per_triangle},
-      {"match.max_matches_per_scan", nullptr, &c->match.max_matches_per_scan},
-      {"match.max_candidates", nullptr, &c->match.max_candidates},
-      {"match.heading_bins", nullptr, &c->match.heading_bins},
-      {"match.heading_sample_triangles", nullptr, &c->match.heading_sample_triangles},
-      {"hypotheses.max_hypotheses", nullptr, &c->hypotheses.max_hypotheses},
-      {"hypotheses.max_peeled", nullptr, &c->hypotheses.max_peeled},
-      {"hypotheses.shift_headings", nullptr, &c->hypotheses.shift_headings},
-      {"hypotheses.heading_cliques", nullptr, &c->hypotheses.heading_cliques},
-      {"hypotheses.heading_separation_deg", &c->hypotheses.heading_separation_deg, nullptr},
-      {"hypotheses.shift_bin", &c->hypotheses.shift_bin, nullptr},
-      {"hypotheses.shift_vote_support", nullptr, &c->hypotheses.shift_vote_support},
-      {"hypotheses.shift_vote_pairs", nullptr, &c->hypotheses.shift_vote_pairs},
-      {"hypotheses.height_consensus", nullptr, &c->hypotheses.height_consensus},
-      {"hypotheses.max_tilt_deg", &c->hypotheses.max_tilt_deg, nullptr},
-      {"hypotheses.consistency_eps", &c->hypotheses.consistency_eps, nullptr},
-      {"hypotheses.consistency_z_weight", &c->hypotheses.consistency_z_weight, nullptr},
-      {"hypotheses.tls_threshold", &c->hypotheses.tls_threshold, nullptr},
-      {"hypotheses.min_inliers", nullptr, &c->hypotheses.min_inliers},
-      {"verify.enabled", nullptr, &verify_enabled},
-      {"verify.max_points", nullptr, &c->verify.max_points},
-      {"confidence.min_probability", &c->confidence.min_probability, nullptr},
-      {"verify.rarity_exponent", &c->verify.rarity_exponent, nullptr},
-      {"verify.refine_top", nullptr, &c->verify.refine_top},
-      {"verify.full_top", nullptr, &c->verify.full_top},
-      {"verify.coarse_divisor", nullptr, &c->verify.coarse_divisor},
-      {"verify.refine_rounds", nullptr, &c->verify.refine_rounds},
-      {"verify.search_divisor", nullptr, &c->verify.search_divisor},
-      {"verify.polish_divisor", nullptr, &c->verify.polish_divisor},
-      {"verify.refine_step_m", &c->verify.refine_step_m, nullptr},
-      {"verify.refine_step_deg", &c->verify.refine_step_deg, nullptr},
-      {"verify.disagree_weight", &c->verify.disagree_weight, nullptr},
-      {"field.length_scale", &c->field.length_scale, nullptr},
-      {"field.radius", &c->field.radius, nullptr},
-      {"field.grid_spacing", &c->field.grid_spacing, nullptr},
-      {"field.noise_variance", &c->field.noise_variance, nullptr},
-      {"field.inducing_points", nullptr, &c->field.inducing_points},
-      {"field.grid_nx", nullptr, &c->field.grid_nx},
-      {"field.grid_ny", nullptr, &c->field.grid_ny},
-      {"triangle.relative_side_tolerance", &c->triangle.relative_side_tolerance, nullptr},
-      {"triangle.max_side", &c->triangle.max_side, nullptr},
-      {"triangle.min_side", &c->triangle.min_side, nullptr},
-      {"triangle.neighbours", nullptr, &c->triangle.neighbours},
-      {"triangle.map_neighbours", nullptr, &c->triangle.map_neighbours},
-      {"voxel.voxel_size", &c->voxel.voxel_size, nullptr},
-  };
-  for (const F& f : fields)
-    if (k == f.name) {
-      if (f.f) *f.f = static_cast<float>(x);
-      else if (x < 0 || x != static_cast<double>(static_cast<uint32_t>(x))) {
-        *error = "override '" + a + "' needs a whole number";
-        return false;
-      } else *f.u = static_cast<uint32_t>(x);
-      c->verify.enabled = verify_enabled != 0;
-      if (k == "cluster.vertical_tolerance")
-        for (int cls : {kPole, kTrunk, kTrafficSign}) c->cluster.vertical_tolerance[cls] = thin_vertical_tolerance;
-      return true;
-    }
-  *error = "unknown config name '" + k + "'";
-  return false;
+  if (set_parameter(c, *p, x) != Status::Ok) {
+    *error = "override '" + a + "': " + k + " must be " + range_text(*p);
+    return false;
+  }
+  return true;
 }
 
 bool apply_overrides(LocalizerConfig* c, const std::string& list, std::string* error) {
@@ -117,6 +79,11 @@ bool apply_overrides(LocalizerConfig* c, const std::string& list, std::string* e
   std::string item;
   while (std::getline(ss, item, ','))
     if (!item.empty() && !apply_override(c, item, error)) return false;
+  const ConfigCheck check = check_config(*c);  // the rules between parameters
+  if (check.status != Status::Ok) {
+    *error = "config: " + describe(check, *c);
+    return false;
+  }
   return true;
 }
 

@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "gsf/config.h"
+#include "gsf/parameters.h"
 #include "gsf/port/logit_synthesis.h"
 #include "gsf/port/scan_source.h"
 #include "gsf/port/semantic_kitti.h"
@@ -16,9 +17,17 @@
 namespace gsf::cli {
 
 LocalizerConfig default_config();
-// Applies "name=value" overrides (e.g. gsf.tau=0.1); false with a message for unknown names/values.
+// Applies a "name=value" override (e.g. gsf.tau=0.1) through the parameter list (gsf/parameters.h);
+// false with a message for an unknown name, a value that is no number, or one outside its range.
 bool apply_override(LocalizerConfig* config, const std::string& assignment, std::string* error);
+// A comma list of them, then check_config() over the result (the rules between parameters).
 bool apply_overrides(LocalizerConfig* config, const std::string& comma_list, std::string* error);
+// A parameter's range as text ("(0, 1000]", "a whole number in [1, 4096]", "0 or 1"), a number as the
+// docs print it, and a failed check as "name = value: why".
+std::string range_text(const ParamInfo& param);
+std::string number_text(double x);
+std::string value_text(const ParamInfo& param, double value);
+std::string describe(const ConfigCheck& check, const LocalizerConfig& config);
 
 enum class LogitMode { None, Synthetic };
 bool parse_logit_mode(const std::string& s, LogitMode* out);

@@ -505,7 +505,7 @@ int init_localizer_mode(const EvalOptions& o, const std::string& mode, float min
   }
   lm->cfg.confidence.min_probability = min_confidence;
   lm->cfg.classes = labels.config_table();
-  lm->cfg.match.use_gsf = mode != "instance";
+  lm->cfg.gsf.enabled = mode != "instance";  // the GSF-off (Outram) column
   lm->cfg.refine.enabled = mode == "gsf+refine";
   const size_t need = Localizer::required_bytes(lm->cfg);
   lm->workspace.assign(need / 8 + 2, 0);

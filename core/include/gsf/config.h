@@ -1,5 +1,7 @@
 // LocalizerConfig: every capacity and tuning value of the query pipeline, one sub-struct per stage.
-// Defaults are the evaluated settings (docs/results.md); units in comments. The map builder records the
+// Defaults are the evaluated settings (docs/results.md); units in comments. Each settable value is in
+// the one parameter list (core/src/parameters.def; gsf/parameters.h: names, units, ranges, docs; the
+// table is docs/parameters.md). The map builder records the
 // values that must agree between map and localizer in MapParams (map_params_from).
 #pragma once
 #include <cstdint>
@@ -22,33 +24,30 @@ namespace gsf {
 // Coarse matching and correspondence selection. Every cap ranks before it cuts (never storage order)
 // and the localizer reports how many candidates each cap dropped.
 struct MatchConfig {
-  bool use_gsf = true;                      // false: instance-only Outram behaviour (ablation)
   uint32_t max_matches_per_triangle = 256;  // best map triangles kept per query triangle (by side residual)
   // Work budget of one scan: the per-triangle cap shrinks to max_matches_per_scan / query triangles
   // (at least 1) when that is smaller, so a lattice's thousands of equally good matches per triangle
   // cannot make the GSF filter and the correspondences cost triangles x 256; still ranked, then capped,
-  // and counted in match_dropped. 0: no scan budget (the default before 2026-12-02). 65,536: the
-  // suite's p95 query time halves (87.7 -> 47.4 ms held out, 66.4 -> 38.2 ms seeds 1-5) for -0.1
-  // points of GSF success (instance-only +0.3 / +0.4); a true pair lost by one triangle's cap still
-  // comes from the other triangles it is a vertex of. 32,768 (map format v6): p95 -15% again, the
-  // slowest world 52 -> 44 ms held out, success within 0.2 points either way (docs/results.md).
+  // and counted in match_dropped. 65,536: the suite's p95 query time halves (87.7 -> 47.4 ms held out,
+  // 66.4 -> 38.2 ms seeds 1-5) for -0.1 points of GSF success (instance-only +0.3 / +0.4); a true pair
+  // lost by one triangle's cap still comes from the other triangles it is a vertex of. 32,768 (map
+  // format v6): p95 -15% again, the slowest world 52 -> 44 ms held out, success within 0.2 points either
+  // way (docs/results.md).
   uint32_t max_matches_per_scan = 32768;
+  // A map triangle whose bird's-eye sense contradicts the query triangle's is never a match (a mirror
+  // image: same sides; triangle.h, TriangleOrientation): vehicles are upright, so their scans map to the
+  // map by turns about the vertical, which keep the sense.
   float vertex_tie_tolerance = 0.06f;  // relative; query sides closer than this are tried in both orders
-  // 1: a map triangle whose bird's-eye sense contradicts the query triangle's is no match (a mirror
-  // image: same sides; triangle.h, TriangleOrientation). Vehicles are upright, so their scans map to the
-  // map by turns about the vertical, which keep the sense. 0: sides alone (before 2026-12-02).
-  uint32_t reject_mirrored = 1;
   // Heading votes (localizer.cpp, step 5a): the best `heading_bins` yaw bins (gsf.yaw_bins of them,
   // each with its two neighbours) by the votes of an even sample of `heading_sample_triangles` query
   // triangles' matches; matches at other headings are dropped and counted. 0 = off.
   uint32_t heading_bins = 6;
   uint32_t heading_sample_triangles = 256;
-  float min_similarity = 0.3f;  // with GSF: a triangle match survives if all three omegas reach this
-  // When the surviving matches give fewer than fill_pairs pairs, the matches below min_similarity fill
-  // the set up to fill_pairs, ranked after every surviving pair (localizer.cpp, step 6). A far, sparsely
-  // seen instance's field compares poorly even with itself, and the gate then dropped every true match
-  // of an approach road's scan. 0: the gate alone (before 2026-12-01).
-  uint32_t fill_pairs = 64;
+  // With GSF: a triangle match survives if all three omegas reach this. When the surviving matches give
+  // fewer than kFillPairs (64, gsf_filter.h) pairs, the matches below it fill the set up to that many,
+  // ranked after every surviving pair (localizer.cpp, step 6): a far, sparsely seen instance's field
+  // compares poorly even with itself, and the gate alone dropped every true match of an approach road's scan.
+  float min_similarity = 0.3f;
   uint32_t max_candidates = 24000;     // distinct (query, map) instance pairs accumulated (capacity)
   uint32_t max_correspondences = 512;  // vertices of the consistency graph (best by votes x weight)
   uint32_t max_field_points = 4096;    // semantic points gathered per query instance field
@@ -105,6 +104,8 @@ struct LocalizerConfig {
   ConfidenceConfig confidence;
 };
 
+// Ok, or InvalidArgument when a parameter is out of its range or breaks a rule with another one;
+// check_config() (parameters.h) says which parameter and why.
 Status validate(const LocalizerConfig& config);
 // The label set in effect: *config.classes, or the built-in SemanticKITTI table.
 const ClassTable& label_set(const LocalizerConfig& config);

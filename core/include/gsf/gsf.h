@@ -55,33 +55,32 @@ enum {
 // Name of a status code ("Ok", "InvalidArgument", ...); "Unknown" for other values. Never NULL.
 const char* gsf_status_string(int status) GSF_NOEXCEPT;
 
-// The commonly tuned values of gsf::LocalizerConfig; everything else keeps its C++ default. Names follow
-// the `gsf build-map/evaluate --set` names with '.' -> '_' (gsf_tau is gsf.tau). Flags are 0 or 1.
+// The user-facing parameters of gsf::LocalizerConfig (docs/parameters.md, "User-facing"); the expert ones
+// keep their C++ defaults. Names are the parameters' with '.' -> '_' (gsf_tau is gsf.tau); the ranges
+// and units are in docs/parameters.md. Flags are 0 or 1. c_api.cpp maps each from the parameter list
+// (core/src/parameters.def) and checks at compile time that this struct holds exactly those.
 typedef struct gsf_config {
   uint32_t struct_bytes;  // sizeof(gsf_config); set by gsf_config_default (catches stale layouts)
+  // Capacities: the workspace (gsf_workspace_bytes) and the worst-case work grow with them.
+  uint32_t max_scan_points;            // larger scans: GSF_STATUS_CAPACITY_EXCEEDED
+  uint64_t hypotheses_first_budget;    // branch-and-bound nodes of the first clique search
+  uint32_t voxel_max_voxels;           // voxels of a scan's layer
+  uint32_t cluster_max_instances;      // instances of a scan
+  uint32_t triangle_max_triangles;     // query triangles of a scan
+  uint32_t match_max_correspondences;  // vertices of the consistency graph
+  uint32_t hypotheses_max_hypotheses;  // pose hypotheses per query
   // Query side: may differ from the values the map was built with.
-  uint32_t max_scan_points;                // larger scans: GSF_STATUS_CAPACITY_EXCEEDED
   float voxel_min_range, voxel_max_range;  // m
-  uint32_t voxel_max_voxels;
-  uint32_t cluster_max_instances;
-  uint32_t match_use_gsf;  // 0: instance-only (no Gaussian semantic field filter)
-  float gsf_tau, match_min_similarity, gsf_observed_variance, gsf_normalize_mass;
-  float gsf_covariance_weight;
-  uint32_t gsf_yaw_bins, match_max_correspondences, match_max_matches_per_triangle;
-  float triangle_relative_side_tolerance;
-  uint64_t hypotheses_first_budget, hypotheses_next_budget;  // (placed for a struct without padding)
-  float hypotheses_consistency_eps;                          // m
-  float hypotheses_tls_threshold;                            // m
-  uint32_t hypotheses_min_inliers;
-  uint32_t hypotheses_max_hypotheses;  // pose hypotheses peeled per query
-  uint32_t verify_enabled;             // whole-scan verification (needs the map's semantic layer)
-  uint32_t triangle_max_triangles;     // per scan (capacity)
-  uint32_t refine_enabled;             // uses the map's refinement layer (if any); grows the workspace
+  float gsf_tau, match_min_similarity;     // field similarity exp(-W2 / tau); the gate on it
+  float hypotheses_consistency_eps;        // m
+  float hypotheses_tls_threshold;          // m
+  uint32_t verify_enabled;                 // whole-scan verification (needs the map's semantic layer)
+  uint32_t refine_enabled;                 // uses the map's refinement layer (if any); grows the workspace
   // The decision rule: gsf_result.confident = confidence >= this (0..1; default 0.9, docs/confidence.md).
   float confidence_min_probability;
   // Map side: must equal the values the map was built with (else GSF_STATUS_CONFIG_MISMATCH at init).
-  float voxel_size;  // m
-  float field_length_scale, field_radius, field_grid_spacing, field_noise_variance;
+  float voxel_voxel_size;  // m
+  float field_radius, field_length_scale, field_noise_variance, field_grid_spacing;
   uint32_t field_inducing_points, field_grid_nx, field_grid_ny;
   uint32_t triangle_neighbours;
   // Label set of the scans' label ids (built-in class tables, gsf/class_table.h); the map records it, so
@@ -96,6 +95,10 @@ enum {
 
 // Fills the defaults (the evaluated settings, gsf::LocalizerConfig{}). No-op on NULL.
 void gsf_config_default(gsf_config* config) GSF_NOEXCEPT;
+// NULL when `config` is valid; else the name of its first value that is out of range or breaks a rule
+// with another: a parameter's name as in docs/parameters.md ("hypotheses.tls_threshold" for
+// hypotheses_tls_threshold), "struct_bytes", "label_set", or "config" for NULL. Static storage.
+const char* gsf_config_check(const gsf_config* config) GSF_NOEXCEPT;
 
 // A validated, zero-copy view of a map blob. Caller storage; fill it with gsf_map_load only.
 typedef struct gsf_map {

@@ -72,7 +72,7 @@ struct LocalizeResult {
   uint32_t below_gate_matches = 0;       // matches below the GSF gate that filled a short pair set
   uint32_t candidate_pairs_dropped = 0;  // pairs refused because match.max_candidates was full
   uint32_t correspondences_dropped = 0;  // pairs ranked out by match.max_correspondences
-  uint32_t mirrored_matches = 0;         // triangle matches refused as mirror images (match.reject_mirrored)
+  uint32_t mirrored_matches = 0;         // triangle matches refused as mirror images (triangle.h)
   uint32_t vote_pairs = 0;               // pairs the shift votes saw (hypotheses.shift_vote_pairs)
   uint32_t vote_pairs_dropped = 0;       // ... and pairs ranked out of them
   uint32_t clique_searches = 0;
@@ -130,8 +130,6 @@ class Localizer {
   bool initialized() const { return initialized_; }
   const LocalizerConfig& config() const { return config_; }
   size_t workspace_bytes() const { return arena_.used(); }
-  // Switch the GSF filter without re-init (ablation: off = instance-only Outram behaviour).
-  void set_use_gsf(bool on) { config_.match.use_gsf = on; }
 
  private:
   struct Impl;  // stage objects, bound into the arena (defined in localizer.cpp only)

@@ -9,7 +9,7 @@
 // of the map). Both caps count what they refused.
 //
 // Pairs come in two tiers: 1 from matches that passed the GSF filter, 0 from matches below it that
-// only fill a short set up to MatchConfig::fill_pairs. Every tier-1 pair ranks before every tier-0 pair, and a pair
+// only fill a short set up to kFillPairs (gsf_filter.h). Every tier-1 pair ranks before every tier-0 pair, and a pair
 // keeps only the votes and weight of its highest tier, so tier-0 votes never change how the tier-1 pairs rank.
 #pragma once
 #include <cstdint>

@@ -30,14 +30,18 @@
 namespace gsf {
 
 struct GsfFilterConfig {
+  // false: no field is fitted or compared, every match at a kept heading passes with omega 1 (the
+  // instance-only Outram pipeline: the evaluation's "instance" column).
+  bool enabled = true;
   uint32_t yaw_bins = 36;                   // rotation hypotheses are binned for probe caching (10 deg)
   uint32_t probe_cache_slots = 1024;        // cached query-field probes (instance, yaw bin)
   uint32_t similarity_cache_slots = 65536;  // cached omega per (query instance, map instance, yaw bin)
   float observed_variance = 0.6f;           // grid points where the query field's variance exceeds this
                                             // fraction of the prior are unobserved and not compared
-  float normalize_mass = 0.0f;              // >0: compare per-point class distributions (wasserstein.h)
-  float covariance_weight = 0.0f;           // weight of the W2 covariance term (1 = the paper's W2)
-  float tau = 0.2f;                         // omega = exp(-w2 / tau), w2 per compared grid point
+  // Weight of the W2 covariance term (wasserstein.h): 0 compares the means only (docs/gsf-field.md: the
+  // covariance term measures a sparse scan's density against a dense map); 1 = the paper's W2 (ablation).
+  float covariance_weight = 0.0f;
+  float tau = 0.2f;  // omega = exp(-w2 / tau), w2 per compared grid point
 };
 
 // The query instances' fitted fields (arrays owned by the localizer's arena).
@@ -49,12 +53,16 @@ struct QueryFields {
   uint32_t stride_m = 0;          // M
 };
 
-// How one scan's matches are found and gated (the localizer fills it from MatchConfig).
+// With fewer pairs than this from the matches that pass the gate, the matches below it fill the set
+// (tier 0, ranked after every pair that passed; correspondence_set.h).
+constexpr uint32_t kFillPairs = 64;
+
+// How one scan's matches are found and gated (the localizer fills it from MatchConfig and GsfFilterConfig).
 struct MatchFilterParams {
   float vertex_tie_tolerance = 0.06f;  // relative; query sides closer than this are tried in both orders
   bool use_gsf = true;                 // false: every match at a kept heading passes, with omega 1
   float min_similarity = 0.3f;         // a match passes when all three omegas reach this
-  uint32_t fill_pairs = 64;            // fewer pairs than this: matches below the gate fill the set (tier 0)
+  uint32_t fill_pairs = kFillPairs;    // fewer pairs than this: matches below the gate fill the set (tier 0)
 };
 
 // What one pass over a scan's matches saw (the localizer copies it into LocalizeResult).

@@ -10,14 +10,13 @@
 // map builder's world-frame layer of many accumulated scans). Steps, in voxel cells of the layer:
 //  1. Slices: per voxel level (z cell), 8-connected components of host voxels of one kind (pole hosts
 //     or trunk hosts). A slice segment is *thin* when the bounding box of its voxel centroids has a
-//     horizontal diagonal <= max_diameter[kind], and *isolated* when at most max_ring_voxels host
-//     voxels (either kind) of the same level lie outside it within ring_width of that box. A wall, a
-//     hedge or a canopy gives wide segments; a wall fragment or a pole beside a wall is not isolated.
+//     horizontal diagonal <= max_diameter[kind], and *isolated* when no host voxel (either kind) of the
+//     same level lies outside it within ring_width of that box. A wall, a hedge or a canopy gives wide
+//     segments; a wall fragment or a pole beside a wall is not isolated.
 //  2. Chains: thin isolated segments of the same kind are linked upward when a voxel of one has a voxel
 //     of the other up to max_gap higher (empty levels in between, as a sparse beam pattern leaves) and
 //     within link_radius horizontally. Linked segments form a chain (union-find).
-//  3. Acceptance per chain: >= min_levels distinct levels, >= min_points points, and a vertical extent (centroid span +
-//  one
+//  3. Acceptance per chain: >= min_levels distinct levels and a vertical extent (centroid span + one
 //     voxel) >= min_height[kind]; an axis fitted by least squares of horizontal position on height
 //     (x = a + b z, y = c + d z, every voxel weight 1) tilted <= max_tilt_deg from vertical; and the
 //     residuals about that axis within a box of diagonal <= max_diameter[kind] (thickness, so a slightly
@@ -62,10 +61,8 @@ struct PoleConfig {
   float max_diameter[2] = {0.8f, 1.2f};            // m, per kind: slice box diagonal and thickness about the axis
   float min_height[2] = {2.0f, 2.0f};              // m, per kind: vertical extent of a chain
   uint32_t min_levels = 4;                         // distinct voxel levels in a chain
-  uint32_t min_points = 0;                         // LiDAR points in a chain
   float max_tilt_deg = 12.0f;                      // axis from vertical
   float ring_width = 1.0f;                         // m, isolation ring around a slice segment
-  uint32_t max_ring_voxels = 0;                    // host voxels tolerated in that ring
   float link_radius = 0.6f;                        // m, horizontal offset of linked voxels of stacked segments
   float max_gap = 1.2f;                            // m, empty height bridged between stacked segments
   float stability[2] = {1.0f, 1.0f};               // instance stability per kind (stability_weight(kPole/kTrunk))
@@ -100,7 +97,7 @@ struct PoleStats {
   uint32_t segments_wide = 0;     // not thin
   uint32_t segments_crowded = 0;  // thin but not isolated
   uint32_t chains = 0;            // linked thin isolated segments
-  uint32_t rejected_short = 0;    // too few levels or points, or too low
+  uint32_t rejected_short = 0;    // too few levels, or too low
   uint32_t rejected_tilt = 0;
   uint32_t rejected_thick = 0;
   uint32_t dropped_capacity = 0;  // accepted but not among the best max_instances

@@ -42,19 +42,17 @@ struct HypothesisConfig {
   // share one wrong heading, and the shift votes then never see the true one. 0 = off.
   uint32_t heading_cliques = 3;
   float heading_separation_deg = 15.0f;
-  float shift_bin = 2.0f;  // m; translation vote bins
-  // 1: shift-vote bins are ranked by their support, the weight of the votes within tls_threshold of
-  // the mean of the bin's own votes (they may lie in a neighbouring bin): a translation whose votes
-  // straddle a bin edge is then not outranked by a lattice's other shifts, and bins with fewer
-  // supporting votes than min_inliers but enough of their own still follow. 0: each bin on its own
-  // weight (before 2026-12-01).
-  uint32_t shift_vote_support = 1;
+  // m; translation vote bins. Bins are ranked by their support, the weight of the votes within
+  // tls_threshold (<= shift_bin) of the mean of the bin's own votes (they may lie in a neighbouring
+  // bin): a translation whose votes straddle a bin edge is then not outranked by a lattice's other
+  // shifts, and bins with fewer supporting votes than min_inliers but enough of their own still follow.
+  float shift_bin = 2.0f;
   // Pairs the shift votes see: the consistency graph's max_correspondences best pairs and the next ones
   // by the same ranking (correspondence_set.h), up to this many. In a lattice the graph's 512 can hold
   // only 2-10 true pairs of the 5,000-10,000 candidates, because every lattice shift gathers as many
   // triangle votes as the truth; a translation vote over all of them still finds the true shift among
-  // its peaks. Votes cost a sort per heading; a bin's fit reads only the bins around it. 0: the graph's
-  // pairs only (before 2026-12-02).
+  // its peaks. Votes cost a sort per heading; a bin's fit reads only the bins around it. At most
+  // max_correspondences: the graph's pairs only.
   uint32_t shift_vote_pairs = 8192;
   uint64_t first_budget = 200000;  // branch-and-bound nodes for the first (maximum) clique
   uint64_t next_budget = 20000;    // nodes for each further clique
@@ -73,11 +71,9 @@ struct HypothesisConfig {
   // road's grade (<= ~10%, 5.7 deg) plus mounting; clique poses of few mid-height centroids came out
   // tilted 8-12 deg at the right place. 0 disables.
   float max_tilt_deg = 8.0f;
-  // 1: the answer's height is the weighted median vertical offset of every correspondence that the
+  // The answer's height is then the weighted median vertical offset of every correspondence that the
   // answer places within tls_threshold in x and y (answer_height.h), not its hypothesis's own (for a
-  // shift vote, the mean of a few votes, each as high as the part of a trunk the scan saw). 0: the
-  // hypothesis's height (before 2026-12-01).
-  uint32_t height_consensus = 1;
+  // shift vote, the mean of a few votes, each as high as the part of a trunk the scan saw).
 };
 
 struct PoseHypothesis {

@@ -38,8 +38,7 @@ struct TriangleConfig {
 // one, and a clique of such matches fits an upside-down pose. The matcher rejects a match whose senses
 // are both known and disagree (triangle_matcher.h). A triangle whose apex lies within
 // kOrientationMinHeight of its longest side's line has no reliable sense (centroids are ~0.3 m noisy).
-enum TriangleOrientation : uint8_t {
-  kOrientationUnknown = 0,  // not recorded (maps built before 2026-12-02: the record's padding byte)
+enum TriangleOrientation : uint8_t {  // 0 is no sense: load_map refuses a record holding it
   kOrientationCounterClockwise = 1,
   kOrientationClockwise = 2,
   kOrientationFlat = 3,  // near-collinear: either sense

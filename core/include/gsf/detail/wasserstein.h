@@ -31,15 +31,12 @@ struct ObservedW2 {
   double w2 = 0.0;    // summed over compared grid points
   uint32_t used = 0;  // grid points compared
 };
-// Diagonal W2 over the grid points where var_query(s) <= max_query_var.
-// normalize_mass > 0: compare class *distributions*: each grid point's mean vector is divided by its
-// total mass, and points where either field's mass is below normalize_mass are not compared. A single
-// scan's field is sparser than the map's, and the GP mean shrinks towards the zero prior between data;
-// normalising removes that density effect and leaves the semantic composition. cov_weight scales the
-// covariance term (1 = the paper's W2; 0 = mean term only).
+// Diagonal W2 over the grid points where var_query(s) <= max_query_var. cov_weight scales the
+// covariance term (1 = the paper's W2; 0 = mean term only; the localizer's is
+// GsfFilterConfig::covariance_weight, default 0).
 ObservedW2 w2_squared_diag_observed(const float* mean_query, const float* var_query, const float* mean_map,
                                     const float* var_map, uint32_t g, const float* weights, float max_query_var,
-                                    float normalize_mass = 0.0f, float cov_weight = 1.0f);
+                                    float cov_weight);
 
 class W2Exact {
  public:
