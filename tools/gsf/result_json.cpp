@@ -71,6 +71,11 @@ void write_result_diagnostics(JsonWriter& j, const LocalizeResult& x, const Quer
   j.field("verified", x.verified);
   j.field("chosen_hypothesis", x.chosen_hypothesis);
   j.field("height_votes", x.height_votes);
+  if (x.prior_used) {  // a position prior (docs/vehicle-modes.md)
+    j.field("prior_outside_matches", x.prior_outside_matches);
+    j.field("prior_dropped_hypotheses", x.prior_dropped_hypotheses);
+  }
+  if (x.tracked) j.field("tracked", true);
   {
     const ConfidenceEvidence& e = x.confidence_evidence;  // confidence.h
     j.key("confidence_evidence");
