@@ -162,6 +162,36 @@ TEST_CASE("A prior 100 m off never gives a confident answer; one off the map giv
   CHECK(out.prior_outside_matches > 0);
 }
 
+// A lattice car park of identical columns: a prior away from the truth can hold a copy of the scene, which
+// the local probes cannot tell from the truth; a thin margin over the rivals sends the answer to a global
+// check, and no answer is confident.
+TEST_CASE("On a lattice, priors 30-100 m off never give a confident answer; right ones keep theirs") {
+  const auto& w = gsf_test::tiny_lattice_world();
+  Ready r(w);
+  uint32_t confident_wrong = 0, right_free = 0, right_prior = 0, checked = 0;
+  for (uint32_t k = 0; k < w.queries.size(); ++k) {
+    const auto& q = w.queries[k];
+    LocalizeResult free, near;
+    right_free +=
+        r.loc.localize(q.view(), &free) == Status::Ok && free.confident && gsf_test::pose_ok(free.map_T_scan, q.truth);
+    const Status s = r.loc.localize(q.view(), prior_near(q.truth, 8.0, 15.0f, k), &near);
+    right_prior += s == Status::Ok && near.confident && gsf_test::pose_ok(near.map_T_scan, q.truth);
+    confident_wrong += s == Status::Ok && near.confident && !gsf_test::pose_ok(near.map_T_scan, q.truth);
+    checked += near.prior_global_check;
+    for (double off : {30.0, 45.0, 60.0, 100.0}) {
+      LocalizeResult out;
+      if (r.loc.localize(q.view(), prior_near(q.truth, off, 15.0f, k), &out) != Status::Ok) continue;
+      INFO("query " << k << ", prior " << off << " m off: confidence " << out.confidence);
+      CHECK(!out.confident);
+      confident_wrong += out.confident;
+      checked += out.prior_global_check;
+    }
+  }
+  INFO(right_free << " answered right without a prior, " << right_prior << " with one; " << checked << " checked");
+  CHECK(confident_wrong == 0);
+  CHECK(right_prior >= right_free);
+}
+
 TEST_CASE("A heading in the prior keeps the right answer; the opposite heading gives no confident one") {
   const auto& w = tiny_world();
   Ready r(w);

@@ -74,6 +74,8 @@ void write_result_diagnostics(JsonWriter& j, const LocalizeResult& x, const Quer
   if (x.prior_used) {  // a position prior (docs/vehicle-modes.md)
     j.field("prior_outside_matches", x.prior_outside_matches);
     j.field("prior_dropped_hypotheses", x.prior_dropped_hypotheses);
+    j.field("prior_global_check", x.prior_global_check);
+    j.field("prior_contradicted", x.prior_contradicted);
   }
   if (x.tracked) j.field("tracked", true);
   {

@@ -94,6 +94,8 @@ struct LocalizeResult {
   uint32_t prior_outside_matches = 0;     // map triangle candidates refused as outside the prior
   uint32_t prior_dropped_hypotheses = 0;  // hypotheses outside the prior's disc or heading
   bool tracked = false;                   // the result of track(): no instances, triangles or hypotheses
+  bool prior_global_check = false;        // a global search checked the prior's answer (thin margin)
+  bool prior_contradicted = false;        // ... and gave another pose: confidence <= 1 - its confidence
 };
 
 class Localizer {
@@ -117,7 +119,9 @@ class Localizer {
   Status localize(const ScanView& scan, LocalizeResult* out);
   // The same with a position prior (position_prior.h): only map triangles near the prior are matched and
   // only hypotheses inside it are answers. InvalidArgument for an invalid prior (validate()); NoSolution
-  // when no hypothesis lies inside it. A wrong prior gives a wrong answer at low confidence or none.
+  // when no hypothesis lies inside it. A wrong prior gives a wrong answer at low confidence or none: a
+  // confident answer with a thin margin over its rivals is checked by a global search (then the call costs
+  // a one-shot localize more; prior_global_check), and loses its confidence when that answers elsewhere.
   Status localize(const ScanView& scan, const PositionPrior& prior, LocalizeResult* out);
 
   // Tracking (detail/tracker.h): the pose of `scan` near `predicted_map_frame_T_scan` (the map's frame,
@@ -154,7 +158,11 @@ class Localizer {
  private:
   struct Impl;  // stage objects, bound into the arena (defined in localizer.cpp only)
   static Status bind_workspace(Arena& arena, const LocalizerConfig& config, Impl& impl, Budget* parts);
-  Status localize_in(const ScanView& scan, const PositionPrior* prior, LocalizeResult* out);
+  // scan_ready: the last call built this scan's voxels, instances, fields and triangles; start at matching.
+  Status localize_in(const ScanView& scan, const PositionPrior* prior, LocalizeResult* out, bool scan_ready = false);
+  void check_outside_prior(const ScanView& scan, LocalizeResult& out);
+  // A prior's confident answer whose z_rival is below this is checked by a global search (localize.cpp).
+  static constexpr float kPriorGlobalCheckZ = 4.0f;
   LocalizerConfig config_{};
   MapView map_{};
   Arena arena_;
