@@ -54,6 +54,7 @@ struct TrackRun {
   port::ScanSource& src;
   LabelSet& labels;
   port::ScanBuffer& buf;
+  const ScanLabelErrors& label_errors;  // simulated network errors on the scans' labels (none by default)
 };
 
 void judge_scan(const LocalizeResult& r, const Eigen::Isometry3d& truth, ScanRecord* rec) {
@@ -74,7 +75,8 @@ ScanRecord run_scan(const TrackRun& t, uint32_t i, Vehicle* v) {
   Eigen::Isometry3d truth;
   t.src.pose(i, &truth);
   LocalizeResult r;
-  const Status rs = read_scan(t.src, i, t.buf, t.o.logits, 2000000u + rec.frame, t.labels.config_table());
+  const Status rs =
+      read_scan(t.src, i, t.buf, t.o.logits, 2000000u + rec.frame, t.labels.config_table(), &t.label_errors);
   if (rs != Status::Ok) r.status = rs;
   if (rs == Status::Ok && v->have_pose) {
     const Eigen::Isometry3d predicted =
@@ -219,8 +221,11 @@ int run_tracking(const EvalOptions& o) {
   }
   LabelSet labels;
   LocalizerConfig cfg = default_config();
+  ScanLabelErrors label_errors;
+  std::string note;
   if (!resolve_label_set(o.classes, o.dataset, o.sequence, &labels, &err) ||
-      !apply_overrides(&cfg, o.overrides, &err)) {
+      !apply_overrides(&cfg, o.overrides, &err) ||
+      !resolve_scan_label_errors(o.label_errors, labels, o.sequence, &label_errors, &note, &err)) {
     std::fprintf(stderr, "gsf evaluate: %s\n", err.c_str());
     return 2;
   }
@@ -242,7 +247,7 @@ int run_tracking(const EvalOptions& o) {
     return 1;
   }
   port::OwnedScanBuffer buf(kMaxScanPoints, true);
-  const TrackRun run{o, map, loc, *src, labels, buf.buffer()};
+  const TrackRun run{o, map, loc, *src, labels, buf.buffer(), label_errors};
   std::vector<ScanRecord> recs;
   uint32_t stretches = 0;
   for (uint32_t k = 0; k < meta.stretches.size() && (o.limit == 0 || recs.size() < o.limit); ++k, ++stretches) {
@@ -257,6 +262,7 @@ int run_tracking(const EvalOptions& o) {
   if (o.progress) std::fprintf(stderr, "\n");
   const TrackSummary sum = summarize_tracking(recs);
   print_tracking(sum, stretches, o);
+  if (label_errors.rates.any()) std::printf("  labels: %s\n", describe(label_errors).c_str());
   if (!o.json_out.empty()) write_tracking_json(o.json_out, o, sum, recs);
   return 0;
 }
