@@ -36,11 +36,16 @@ expect 2 "object-confusion must be a number in 0..1" -- "$gsf" build-map --datas
 expect 2 "thin-miss must be a number in 0..1" -- "$gsf" localize --map m --dataset d --thin-miss x
 expect 2 "noise-seed must be a whole number" -- "$gsf" evaluate --map m --dataset d --noise-seed -3
 expect 1 "cannot open map file" -- "$gsf" evaluate --map "$tmp/none.gsfmap" --dataset "$tmp"
+# Vehicle modes (docs/vehicle-modes.md): priors and tracking options.
+expect 2 "prior must be x,y,radius" -- "$gsf" localize --map m --dataset d --prior 1,2
+expect 2 "prior: invalid" -- "$gsf" localize --map m --dataset d --prior 1,2,-5
+expect 2 "need --prior-sigma" -- "$gsf" evaluate --map m --dataset d --prior-bias 100
+expect 2 "odometry-noise must be in" -- "$gsf" evaluate --map m --dataset d --mode track --odometry-noise 2
 expect 1 "cannot open sequence" -- "$gsf" build-map --dataset "$tmp/nothing" --out "$tmp/m.gsfmap"
 printf 'not a map' > "$tmp/bad.gsfmap"
 expect 1 "not a valid map" -- "$gsf" inspect --map "$tmp/bad.gsfmap"
 
-"$gsf" simulate --preset tiny --out "$tmp/ds" --quiet >/dev/null || fail "simulate"
+"$gsf" simulate --preset tiny --out "$tmp/ds" --stretches 2 --stretch-scans 10 --quiet >/dev/null || fail "simulate"
 built=$("$gsf" build-map --dataset "$tmp/ds" --sequence 00 --out "$tmp/map.gsfmap" --quiet) || fail "build-map"
 echo "$built" | grep -Eq "peak RSS [1-9][0-9]* MB" || fail "build-map summary lacks its peak RSS: $built"
 echo "$built" | grep -q "origin 0.000, -2.000, 2.000 m in frame 'local'" || fail "build-map summary lacks the origin: $built"
@@ -55,6 +60,14 @@ echo "$built" | grep -q "origin 0.000, -2.000, 2.000 m in frame 'local'" || fail
 "$gsf" localize --map "$tmp/map.gsfmap" --dataset "$tmp/ds" --sequence 01 --frame 3 > "$tmp/one.json" || fail "localize"
 "$gsf" evaluate --map "$tmp/map.gsfmap" --dataset "$tmp/ds" --sequence 01 --json "$tmp/noisy.json" --mode gsf --limit 2 \
   --label-noise 0.1 --object-confusion 0.15 --noise-seed 7 --quiet >/dev/null || fail "evaluate --label-noise"
+"$gsf" evaluate --map "$tmp/map.gsfmap" --dataset "$tmp/ds" --mode track --json "$tmp/track.json" --quiet \
+  >/dev/null || fail "evaluate --mode track"
+"$gsf" evaluate --map "$tmp/map.gsfmap" --dataset "$tmp/ds" --sequence 01 --json "$tmp/prior.json" --mode gsf --limit 6 \
+  --prior-sigma 5 --prior-radius 20 --quiet >/dev/null || fail "evaluate --prior-sigma"
+xy=$(python3 -c "import json,sys; p=json.loads(open(sys.argv[1]).readline())['pose']; print(f'{p[3]+3},{p[7]-4}')" \
+  "$tmp/one.json") || fail "one.json"
+"$gsf" localize --map "$tmp/map.gsfmap" --dataset "$tmp/ds" --sequence 01 --frame 3 --prior "$xy,20" \
+  > "$tmp/one_prior.json" || fail "localize --prior"
 python3 - "$tmp" <<'PY' || exit 1
 import json, sys, os
 t = sys.argv[1]
@@ -123,6 +136,18 @@ assert r["label_errors"] == {"label_noise": 0, "object_confusion": 0, "thin_miss
 noisy = json.load(open(f"{t}/noisy.json"))["label_errors"]
 assert abs(noisy["label_noise"] - 0.1) < 1e-6 and abs(noisy["object_confusion"] - 0.15) < 1e-6, noisy
 assert noisy["noise_seed"] == 7, noisy
+# Tracking over the stretches of sequence 02 and a prior around the truth.
+tr = json.load(open(f"{t}/track.json"))
+ts = tr["summary"]
+assert tr["mode"] == "track" and ts["scans"] == 20 == len(tr["scans"]), ts
+assert ts["tracked"] > 0 and ts["confident_wrong"] == 0 and ts["tracked_precise"] >= ts["tracked"] - 1, ts
+assert all(s["how"] in ("one-shot", "track", "recovery") for s in tr["scans"])
+pr = json.load(open(f"{t}/prior.json"))
+assert pr["prior"]["radius_m"] == 20 and pr["modes"]["gsf"]["summary"]["successes"] >= 5, pr["prior"]
+assert all(q["diagnostics"]["prior_outside_matches"] > 0 for q in pr["modes"]["gsf"]["queries"])
+one_prior = json.loads(open(f"{t}/one_prior.json").read().splitlines()[0])
+assert one_prior["status"] == "Ok" and one_prior["diagnostics"]["prior_outside_matches"] > 0, one_prior["status"]
+assert max(abs(a - b) for a, b in zip(one_prior["pose"], one["pose"])) < 0.5
 print("cli ok:", g["successes"], "GSF successes,", i["successes"], "instance-only")
 PY
 echo "1 passed, 0 failed"

@@ -106,7 +106,8 @@ static void test_sizes(void) {
   CHECK(gsf_workspace_bytes(&big) > ws);  // capacities drive the workspace
   gsf_config refine = cfg;
   refine.refine_enabled = 1;
-  CHECK(gsf_workspace_bytes(&refine) > ws);
+  // The refiner is bound for tracking's ICP either way (LocalizerConfig::track.refine, on by default).
+  CHECK(gsf_workspace_bytes(&refine) == ws);
   CHECK(cfg.confidence_min_probability > 0.5f && cfg.confidence_min_probability < 1.0f);  // the decision rule
   bad = cfg;
   bad.confidence_min_probability = 1.5f;  // not a probability
@@ -384,6 +385,59 @@ static void test_end_to_end(const void* blob, size_t bytes) {
   free(storage);
 }
 
+// The vehicle modes through the C API: a prior around the truth gives the right pose, bad priors and
+// predictions are refused, tracking from 1 m off returns the pose within 0.3 m / 1 deg, confident, and
+// from 30 m off a loss (not confident); none of it allocates.
+static void test_vehicle_modes(const void* blob, size_t bytes) {
+  gsf_config cfg;
+  gsf_config_default(&cfg);
+  const size_t sb = gsf_localizer_storage_bytes(), wb = gsf_workspace_bytes(&cfg);
+  void* storage = block(sb);
+  void* ws = block(wb);
+  void* copy = block(bytes);
+  memcpy(copy, blob, bytes);
+  gsf_map map;
+  gsf_localizer* loc = NULL;
+  gsf_test_query q;
+  CHECK_STATUS(gsf_map_load(copy, bytes, &map), GSF_STATUS_OK);
+  CHECK_STATUS(gsf_localizer_init(storage, sb, &cfg, &map, ws, wb, &loc), GSF_STATUS_OK);
+  CHECK_STATUS(gsf_test_tiny_query(GOOD_QUERY, &q), GSF_STATUS_OK);
+  gsf_position_prior prior = {q.truth[3] + 8.0, q.truth[7] - 6.0, 20.0f, 0, 0.0f, 180.0f};
+  gsf_result r;
+  double m, deg, predicted[12];
+  const uint64_t before = gsf_test_allocations();
+  CHECK_STATUS(gsf_localize_with_prior(loc, q.xyzi, 4, q.count, q.labels, q.logits, GSF_NUM_CLASSES, &prior, &r),
+               GSF_STATUS_OK);
+  pose_error(r.map_frame_T_scan, q.truth, &m, &deg);
+  CHECK(m < 0.5 && deg < 2.0);
+  prior.radius_m = -1.0f;
+  CHECK_STATUS(gsf_localize_with_prior(loc, q.xyzi, 4, q.count, q.labels, q.logits, GSF_NUM_CLASSES, &prior, &r),
+               GSF_STATUS_INVALID_ARGUMENT);
+  CHECK_STATUS(gsf_localize_with_prior(loc, q.xyzi, 4, q.count, q.labels, q.logits, GSF_NUM_CLASSES, NULL, &r),
+               GSF_STATUS_INVALID_ARGUMENT);
+  memcpy(predicted, q.truth, sizeof(predicted));
+  predicted[3] += 0.8;
+  predicted[7] -= 0.6;
+  CHECK_STATUS(gsf_track(loc, q.xyzi, 4, q.count, q.labels, q.logits, GSF_NUM_CLASSES, predicted, &r), GSF_STATUS_OK);
+  pose_error(r.map_frame_T_scan, q.truth, &m, &deg);
+  CHECK(m < 0.3 && deg < 1.0);
+  CHECK(r.confident == 1);
+  predicted[3] += 30.0;
+  CHECK_STATUS(gsf_track(loc, q.xyzi, 4, q.count, q.labels, q.logits, GSF_NUM_CLASSES, predicted, &r), GSF_STATUS_OK);
+  CHECK(r.confident == 0);
+  predicted[3] = NAN;
+  CHECK_STATUS(gsf_track(loc, q.xyzi, 4, q.count, q.labels, q.logits, GSF_NUM_CLASSES, predicted, &r),
+               GSF_STATUS_INVALID_ARGUMENT);
+  CHECK_STATUS(gsf_track(loc, q.xyzi, 4, q.count, q.labels, q.logits, GSF_NUM_CLASSES, NULL, &r),
+               GSF_STATUS_INVALID_ARGUMENT);
+  CHECK_STATUS(gsf_track(NULL, q.xyzi, 4, q.count, q.labels, q.logits, GSF_NUM_CLASSES, predicted, &r),
+               GSF_STATUS_INVALID_ARGUMENT);
+  CHECK(gsf_test_allocations() == before);
+  free(copy);
+  free(ws);
+  free(storage);
+}
+
 int main(void) {
   size_t bytes = 0;
   const void* blob = gsf_test_tiny_map(&bytes);
@@ -400,6 +454,7 @@ int main(void) {
   }
   test_end_to_end(blob, bytes);
   test_pose_frames(blob, bytes);
+  test_vehicle_modes(blob, bytes);
   printf("test_c_api: %d checks, %d failed\n", g_checks, g_failures);
   return g_failures == 0 ? 0 : 1;
 }

@@ -593,7 +593,10 @@ TEST_CASE("The per-stage budget is the layout itself: its parts sum to required_
     CHECK(b.poles == 0);  // SemanticKITTI has pole and trunk classes: no geometric poles
     for (size_t stage : {b.voxel, b.cluster, b.field, b.triangle, b.match, b.gsf_cache, b.correspondence, b.clique})
       CHECK(stage > 0);
-    CHECK((b.refine > 0) == refine);
+    CHECK((b.refine > 0) == (refine || cfg.track.refine));  // tracking's ICP shares the refiner
+    LocalizerConfig no_track = cfg;
+    no_track.track.refine = false;
+    CHECK((Localizer::budget(no_track).refine > 0) == refine);
     // Growing one stage's capacity grows that stage's part and nothing else.
     // The graph's capacity grows the clique stage; the selection holds the shift votes' pairs, which
     // are more than the graph's, so it grows with those.

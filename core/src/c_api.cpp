@@ -283,3 +283,64 @@ int gsf_localize(gsf_localizer* localizer, const float* xyz_stride, uint32_t str
 }
 
 }  // extern "C"
+
+// ---- Vehicle modes: a position prior and tracking. ----
+namespace {
+
+gsf::ScanView scan_view(const float* xyz_stride, uint32_t stride, uint32_t count, const uint32_t* labels,
+                        const float* logits, uint32_t logit_dim) {
+  gsf::ScanView scan;
+  scan.points = xyz_stride;
+  scan.stride = stride;
+  scan.count = count;
+  scan.labels = labels;
+  scan.logits = logits;
+  scan.logit_dim = logit_dim;
+  return scan;
+}
+
+}  // namespace
+
+extern "C" {
+
+int gsf_localize_with_prior(gsf_localizer* localizer, const float* xyz_stride, uint32_t stride, uint32_t count,
+                            const uint32_t* labels, const float* logits, uint32_t logit_dim,
+                            const gsf_position_prior* prior, gsf_result* out) noexcept {
+  gsf::LocalizeResult r;
+  if (localizer == nullptr || prior == nullptr || prior->has_heading > 1) {
+    r.status = Status::InvalidArgument;
+  } else if (Handle* h = live_handle(localizer)) {
+    gsf::PositionPrior p;
+    p.x = prior->x;
+    p.y = prior->y;
+    p.radius_m = prior->radius_m;
+    p.has_heading = prior->has_heading != 0;
+    p.heading_deg = prior->heading_deg;
+    p.heading_tolerance_deg = prior->heading_tolerance_deg;
+    h->localizer.localize(scan_view(xyz_stride, stride, count, labels, logits, logit_dim), p, &r);
+  } else {
+    r.status = Status::NotInitialized;
+  }
+  if (out != nullptr) fill(r, out);
+  return code(r.status);
+}
+
+int gsf_track(gsf_localizer* localizer, const float* xyz_stride, uint32_t stride, uint32_t count,
+              const uint32_t* labels, const float* logits, uint32_t logit_dim,
+              const double predicted_map_frame_T_scan[12], gsf_result* out) noexcept {
+  gsf::LocalizeResult r;
+  if (localizer == nullptr || predicted_map_frame_T_scan == nullptr) {
+    r.status = Status::InvalidArgument;
+  } else if (Handle* h = live_handle(localizer)) {
+    Eigen::Isometry3d predicted = Eigen::Isometry3d::Identity();
+    for (int row = 0; row < 3; ++row)
+      for (int col = 0; col < 4; ++col) predicted.matrix()(row, col) = predicted_map_frame_T_scan[row * 4 + col];
+    h->localizer.track(scan_view(xyz_stride, stride, count, labels, logits, logit_dim), predicted, &r);
+  } else {
+    r.status = Status::NotInitialized;
+  }
+  if (out != nullptr) fill(r, out);
+  return code(r.status);
+}
+
+}  // extern "C"

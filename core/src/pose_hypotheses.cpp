@@ -491,4 +491,18 @@ uint32_t PoseHypotheses::gather_votes(const Run& r, const Eigen::Vector3d& t, do
   return g;
 }
 
+uint32_t PoseHypotheses::retain(const uint8_t* keep) {
+  uint32_t renumber[kMaxHypotheses + 1] = {};  // 1 + old index -> 1 + new index (0: dropped or none)
+  uint32_t kept = 0;
+  for (uint32_t h = 0; h < count_; ++h) {
+    if (!keep[h]) continue;
+    if (kept != h) hyps_[kept] = hyps_[h];
+    renumber[h + 1] = ++kept;
+  }
+  for (uint32_t i = 0; i < max_n_; ++i) owner_[i] = owner_[i] <= count_ ? renumber[owner_[i]] : 0;
+  const uint32_t dropped = count_ - kept;
+  count_ = kept;
+  return dropped;
+}
+
 }  // namespace gsf

@@ -75,6 +75,16 @@ Status Refiner::refine(const VoxelLayer& layer, const Eigen::Isometry3d& initial
   return Status::Ok;
 }
 
+Status Refiner::refine(const VoxelLayer& layer, const Eigen::Isometry3d& initial, Eigen::Isometry3d* out,
+                       RefineStats* stats, uint32_t points, uint32_t iterations) {
+  const RefineConfig bound = config_;
+  if (points > 0 && points < config_.max_points) config_.max_points = points;
+  if (iterations > 0 && iterations < config_.iterations) config_.iterations = iterations;
+  const Status s = refine(layer, initial, out, stats);
+  config_ = bound;
+  return s;
+}
+
 // Query points: long-term voxels, deterministic stride subsample, into query_. Returns how many.
 uint32_t Refiner::pick_query_points(const VoxelLayer& layer) {
   uint32_t eligible = 0;

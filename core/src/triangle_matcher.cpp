@@ -3,6 +3,8 @@
 #include <cmath>
 
 #include "gsf/detail/bounded_hash_map.h"
+#include "gsf/map_format.h"
+#include "gsf/position_prior.h"
 
 namespace gsf {
 namespace {
@@ -86,6 +88,7 @@ TriangleMatchStats TriangleMatcher::match(const Triangle& q, const TriangleIndex
     uint8_t label[3];
     if (!order_sides(q, o, tie_tolerance, side, label)) continue;
     ++st.orders;
+    if (region_) set_vertex_ranges(q, o);
     search_order(q, o, side, label, index, map, config, &st);
   }
   sort_best_first();
@@ -139,6 +142,10 @@ void TriangleMatcher::offer_range(const Triangle& q, uint8_t o, const float side
       residual = rel > residual ? rel : residual;
     }
     if (!ok) continue;
+    if (region_ && !in_region(m)) {
+      ++outside_;
+      continue;
+    }
     if (mirror_check_ && orientations_contradict(q.orientation, m.orientation, flip)) {
       ++st->mirrored;
       continue;
@@ -154,6 +161,23 @@ void TriangleMatcher::offer_range(const Triangle& q, uint8_t o, const float side
     c.order = o;
     offer(c);
   }
+}
+
+// The bird's-eye range from the sensor of the query vertex each matched position takes in order o.
+void TriangleMatcher::set_vertex_ranges(const Triangle& q, uint8_t o) {
+  for (int j = 0; j < 3; ++j) {
+    const float* c = query_centroids_ + 3 * size_t(query_vertex(q, o, j));
+    range_[j] = std::sqrt(c[0] * c[0] + c[1] * c[1]);
+  }
+}
+
+// Every vertex of map triangle m near enough the prior to be seen from a sensor inside it.
+bool TriangleMatcher::in_region(const Triangle& m) const {
+  for (int j = 0; j < 3; ++j) {
+    const float* p = map_instances_[m.v[j]].centroid;
+    if (!region_->reaches(p[0], p[1], range_[j])) return false;
+  }
+  return true;
 }
 
 // Best first (heap sort: repeatedly move the worst to the end).

@@ -1,5 +1,8 @@
 // gsf evaluate --map MAP --dataset DIR --sequence 01 --json OUT.json [--mode gsf|instance|scan-context|all]
 // [--min-confidence P] [--svg DIR [--png]] [--label-noise P] [--object-confusion P] [--thin-miss P] [--noise-seed N]
+// [--prior-sigma S [--prior-bias B] [--prior-radius R] [--prior-seed N]] | --mode track [--odometry-noise F]
+#include <algorithm>
+#include <cmath>
 #include <cstdio>
 #include <sstream>
 
@@ -27,13 +30,44 @@ bool parse_modes(const std::string& s, std::vector<std::string>* modes) {
   return !modes->empty();
 }
 
+// --prior-* and --odometry-noise into o. False with *error on a bad value.
+bool parse_vehicle_mode_options(const Args& args, EvalOptions* o, std::string* error) {
+  if (args.has("prior-sigma")) {
+    PriorDraw& p = o->prior;
+    long long seed = 1;
+    p.enabled = true;
+    if (!args.get_double("prior-sigma", &p.sigma, error) || !args.get_double("prior-bias", &p.bias, error) ||
+        !args.get_int("prior-seed", &seed, error))
+      return false;
+    p.seed = static_cast<uint64_t>(seed);
+    p.radius = std::max(5.0, 3.0 * p.sigma);
+    if (args.has("prior-radius") && !args.get_double("prior-radius", &p.radius, error)) return false;
+    if (!(p.sigma >= 0) || !(p.bias >= 0) || !(p.radius > 0) || !std::isfinite(p.radius)) {
+      *error = "--prior-sigma and --prior-bias must be >= 0, --prior-radius > 0";
+      return false;
+    }
+  } else if (args.has("prior-bias") || args.has("prior-radius")) {
+    *error = "--prior-bias and --prior-radius need --prior-sigma";
+    return false;
+  }
+  if (!args.get_double("odometry-noise", &o->odometry_noise, error)) return false;
+  if (!(o->odometry_noise >= 0 && o->odometry_noise <= 1)) {
+    *error = "--odometry-noise must be in [0, 1]";
+    return false;
+  }
+  return true;
+}
+
 int cmd_evaluate(int argc, char** argv) {
   std::vector<OptionSpec> specs = {
       {"map", "map file (gsf build-map)", "", false, true},
       {"dataset", "dataset root with the query sequence", "", false, true},
       {"sequence", "query sequence", "01"},
       {"map-sequence", "mapping sequence (Scan Context peer database)", "00"},
-      {"mode", "comma list of instance (GSF off, Outram), gsf, gsf+refine, scan-context, or all", "all"},
+      {"mode",
+       "comma list of instance (GSF off, Outram), gsf, gsf+refine, scan-context, or all; or track (tracking over the "
+       "10 Hz stretches of sequence 02, gsf simulate --stretches)",
+       "all"},
       {"json", "write per-mode summaries and per-query results here", ""},
       {"svg", "directory for the pictures (map + trajectory, correspondences, reliability diagram)", ""},
       {"png",
@@ -51,6 +85,15 @@ int cmd_evaluate(int argc, char** argv) {
        "auto"},
       {"set", "config overrides name=value[,name=value] (see pipeline.cpp), e.g. gsf.tau=0.1", ""},
       {"quiet", "no progress on stderr", "", true},
+      {"prior-sigma",
+       "localize with a position prior drawn around each query's truth: N(0, S^2) m per axis (docs/vehicle-modes.md)",
+       ""},
+      {"prior-bias", "with --prior-sigma: the prior's centre also B m off the truth (a wrong prior when B > radius)",
+       "0"},
+      {"prior-radius", "with --prior-sigma: the prior's radius in m (default 3 x sigma, at least 5)", ""},
+      {"prior-seed", "with --prior-sigma: seed of the priors' draws", "1"},
+      {"odometry-noise", "--mode track: odometry error as a share of the distance travelled (and 10 deg/m x it of yaw)",
+       "0.02"},
   };
   for (const OptionSpec& o : label_error_option_specs()) specs.push_back(o);
   if (wants_help(argc, argv)) {
@@ -81,7 +124,9 @@ int cmd_evaluate(int argc, char** argv) {
   o.overrides = args.get("set");
   o.classes = args.get("classes");
   if (!parse_label_error_options(args, &o.label_errors, &err)) return usage_error("evaluate", err);
-  if (!parse_modes(args.get("mode"), &o.modes)) return usage_error("evaluate", "bad --mode '" + args.get("mode") + "'");
+  if (args.get("mode") == "track") o.modes = {"track"};
+  else if (!parse_modes(args.get("mode"), &o.modes))
+    return usage_error("evaluate", "bad --mode '" + args.get("mode") + "'");
   if (!parse_logit_mode(args.get("logits"), &o.logits))
     return usage_error("evaluate", "--logits must be synthetic or none");
   long long lim;
@@ -93,6 +138,11 @@ int cmd_evaluate(int argc, char** argv) {
       return usage_error("evaluate", "--min-confidence must be in [0, 1]");
   }
   o.limit = static_cast<uint32_t>(lim);
+  if (!parse_vehicle_mode_options(args, &o, &err)) return usage_error("evaluate", err);
+  if (args.get("mode") == "track") {
+    if (!args.has("sequence")) o.sequence = "02";  // the simulator's stretches
+    return run_tracking(o);
+  }
   return run_evaluation(o);
 }
 

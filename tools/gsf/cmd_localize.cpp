@@ -1,5 +1,6 @@
 // gsf localize --map MAP --dataset DIR --sequence 01 [--frame N] [--mode gsf|instance] [--label-noise P]
-// [--object-confusion P] [--thin-miss P] [--noise-seed N]: one JSON line per scan, the pose in the map's frame
+// [--object-confusion P] [--thin-miss P] [--noise-seed N] [--prior x,y,radius[,heading_deg,tolerance_deg]]: one JSON
+// line per scan, the pose in the map's frame
 // ("pose", with the map origin applied) and in the map-local frame.
 #include <cstdio>
 
@@ -12,6 +13,7 @@
 #include "label_error_options.h"
 #include "pipeline.h"
 #include "result_json.h"
+#include "vehicle_modes.h"
 
 namespace gsf::cli {
 
@@ -26,6 +28,10 @@ int cmd_localize(int argc, char** argv) {
       {"classes",
        "label set of the dataset's labels: auto, semantic-kitti, nuscenes or a class-table file (docs/data-formats.md)",
        "auto"},
+      {"prior",
+       "position prior x,y,radius[,heading_deg,tolerance_deg] in the map's frame (m, deg): only poses inside it "
+       "(docs/vehicle-modes.md)",
+       ""},
   };
   for (const OptionSpec& o : label_error_option_specs()) specs.push_back(o);
   if (wants_help(argc, argv)) {
@@ -41,6 +47,8 @@ int cmd_localize(int argc, char** argv) {
   LogitMode logits;
   if (!parse_logit_mode(args.get("logits"), &logits))
     return usage_error("localize", "--logits must be synthetic or none");
+  PositionPrior prior;
+  if (args.has("prior") && !parse_prior(args.get("prior"), &prior, &err)) return usage_error("localize", err);
   long long frame = -1;
   if (args.has("frame") && !args.get_int("frame", &frame, &err)) return usage_error("localize", err);
   // Usage errors first: the label set and the label errors need only the dataset's folder.
@@ -83,7 +91,8 @@ int cmd_localize(int argc, char** argv) {
     found = true;
     LocalizeResult r;
     s = read_scan(*src, i, buf.buffer(), logits, 2000000u + src->frame_id(i), cfg.classes, &label_errors);
-    if (s == Status::Ok) loc.localize(buf.buffer().view(), &r);
+    if (s == Status::Ok && args.has("prior")) loc.localize(buf.buffer().view(), prior, &r);
+    else if (s == Status::Ok) loc.localize(buf.buffer().view(), &r);
     else r.status = s;
     JsonWriter j;
     j.begin_object();

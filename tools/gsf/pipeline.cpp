@@ -217,6 +217,23 @@ Meta read_meta(const std::string& root) {
     const size_t c = s.find("\"cue_density\":", pos);
     if (c != std::string::npos) m.cue_density = std::strtof(s.c_str() + c + 14, nullptr);
   }
+  pos = s.find("\"stretches\": [");
+  if (pos != std::string::npos) {
+    const char* p = s.c_str() + pos + 14;
+    while (*p != '\0' && *p != '\n') {  // [[first, length], ...] on one line
+      if (*p++ != '[') continue;
+      char* end = nullptr;
+      const unsigned long first = std::strtoul(p, &end, 10);
+      if (end == p || *end != ',') break;
+      const unsigned long length = std::strtoul(end + 1, &end, 10);
+      m.stretches.push_back({uint32_t(first), uint32_t(length)});
+      p = end;
+    }
+  }
+  pos = s.find("\"stretch_in_repetitive_zone\": [");
+  if (pos != std::string::npos)
+    for (size_t i = pos + 31; i < s.size() && s[i] != ']'; ++i)
+      if (s[i] == '0' || s[i] == '1') m.stretch_in_zone.push_back(s[i] == '1');
   return m;
 }
 

@@ -4,6 +4,7 @@
 #include <cstdint>
 #include <memory>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "gsf/config.h"
@@ -88,6 +89,9 @@ struct Meta {
   std::vector<bool> query_near_zone;  // within 60 m of the zone, not inside (simulator meta.json)
   std::string zone_type;              // "row", "lattice", "hall", "avenue"; empty if not recorded
   float cue_density = -1;             // -1: legacy row stuff or not recorded
+  // The 10 Hz stretches of sequence 02 (gsf simulate --stretches): first scan and length of each.
+  std::vector<std::pair<uint32_t, uint32_t>> stretches;
+  std::vector<bool> stretch_in_zone;
 };
 Meta read_meta(const std::string& dataset_root);
 

@@ -72,6 +72,13 @@ void write_stage_counts(JsonWriter& j, const LocalizeResult& x) {
   j.field("verified", x.verified);
   j.field("chosen_hypothesis", x.chosen_hypothesis);
   j.field("height_votes", x.height_votes);
+  if (x.prior_used) {  // a position prior (docs/vehicle-modes.md)
+    j.field("prior_outside_matches", x.prior_outside_matches);
+    j.field("prior_dropped_hypotheses", x.prior_dropped_hypotheses);
+    j.field("prior_global_check", x.prior_global_check);
+    j.field("prior_contradicted", x.prior_contradicted);
+  }
+  if (x.tracked) j.field("tracked", true);
 }
 
 // What the confidence is computed from (confidence.h).

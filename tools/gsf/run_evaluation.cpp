@@ -164,6 +164,15 @@ void write_json(const std::string& path, const EvalOptions& o, const MapView& ma
   j.field("zone_type", meta.zone_type);
   j.field("cue_density", static_cast<double>(meta.cue_density));
   write_label_errors_json(j, errors);
+  if (o.prior.enabled) {
+    j.key("prior");  // a position prior drawn around each query's truth (vehicle_modes.h draw_prior)
+    j.begin_object();
+    j.field("sigma_m", o.prior.sigma);
+    j.field("bias_m", o.prior.bias);
+    j.field("radius_m", o.prior.radius);
+    j.field("seed", static_cast<unsigned long long>(o.prior.seed));
+    j.end_object();
+  }
   j.key("modes");
   j.begin_object();
   for (size_t m = 0; m < runs.size(); ++m) {
@@ -608,10 +617,12 @@ std::vector<PictureInstance> picture_instances(const Localizer& loc) {
 // Localizes one query (already read into `scan`, or failed with `read_status`) in one mode; corr_buf is
 // scratch for the correspondences.
 void localize_query(LocalizerMode& lm, const ScanView& scan, Status read_status, const MapView& map,
-                    std::vector<Localizer::Correspondence>& corr_buf, QueryRecord r, ModeRun* run) {
+                    std::vector<Localizer::Correspondence>& corr_buf, const PositionPrior* prior, QueryRecord r,
+                    ModeRun* run) {
   LocalizeResult res;
-  if (read_status == Status::Ok) lm.loc->localize(scan, &res);
-  else res.status = read_status;
+  if (read_status != Status::Ok) res.status = read_status;
+  else if (prior) lm.loc->localize(scan, *prior, &res);
+  else lm.loc->localize(scan, &res);
   r.status = to_string(res.status);
   r.has_pose = res.status == Status::Ok;
   r.answered = r.has_pose && res.confident;  // the library's decision rule
@@ -811,7 +822,10 @@ int run_evaluation(const EvalOptions& o) {
     const QueryRecord blank = new_record(*src, q, meta, map);
     const Status rs =
         read_scan(*src, q, buf.buffer(), o.logits, 2000000u + src->frame_id(q), labels.config_table(), &label_errors);
-    for (LocalizerMode& lm : locs) localize_query(lm, buf.buffer().view(), rs, map, corr, blank, &runs[lm.run]);
+    // --prior-sigma: every mode gets the same prior, drawn around the query's truth (map frame).
+    const PositionPrior prior = draw_prior(o.prior, blank.truth, q);
+    const PositionPrior* p = o.prior.enabled ? &prior : nullptr;
+    for (LocalizerMode& lm : locs) localize_query(lm, buf.buffer().view(), rs, map, corr, p, blank, &runs[lm.run]);
     if (o.progress && (q % 10 == 0 || q + 1 == nq)) std::fprintf(stderr, "\r  evaluate: %u / %u queries", q + 1, nq);
   }
   if (o.progress && !locs.empty()) std::fprintf(stderr, "\n");
@@ -821,6 +835,10 @@ int run_evaluation(const EvalOptions& o) {
         return rc;
   const std::vector<ModeSummary> sums = summarize_runs(runs, min_confidence);
   print_header(map, meta, sums, nq, label_errors);
+  if (o.prior.enabled)
+    std::printf(
+        "position prior: drawn around each query's truth, sigma %.1f m, bias %.1f m, radius %.1f m, seed %llu\n\n",
+        o.prior.sigma, o.prior.bias, o.prior.radius, static_cast<unsigned long long>(o.prior.seed));
   print_table(sums, runs);
   if (!sums.empty()) {
     print_calibration(sums);

@@ -5,6 +5,7 @@
 #include <vector>
 
 #include "pipeline.h"
+#include "vehicle_modes.h"
 
 namespace gsf::cli {
 
@@ -26,6 +27,8 @@ struct EvalOptions {
   std::string classes = "auto";    // label set (pipeline.h resolve_label_set)
   std::string overrides;           // config overrides (name=value,...) applied to every localizer mode
   LabelErrorOptions label_errors;  // simulated network errors on the query scans' labels (none by default)
+  PriorDraw prior;                 // a position prior around each query's truth (--prior-sigma)
+  double odometry_noise = 0.02;    // --mode track: odometry noise (vehicle_modes.h noisy_odometry)
 };
 
 // Returns the process exit code.

@@ -14,6 +14,7 @@
 #include "gsf/detail/pole_extraction.h"
 #include "gsf/detail/pose_hypotheses.h"
 #include "gsf/detail/refine.h"
+#include "gsf/detail/tracker.h"
 #include "gsf/detail/triangle.h"
 #include "gsf/detail/voxel_layer.h"
 #include "gsf/map_format.h"
@@ -102,6 +103,7 @@ struct LocalizerConfig {
   VerifyConfig verify;
   RefineConfig refine;  // off by default (the "gsf+refine" evaluation row turns it on)
   ConfidenceConfig confidence;
+  TrackConfig track;  // Localizer::track (tracker.h, docs/vehicle-modes.md)
 };
 
 // Ok, or InvalidArgument when a parameter is out of its range or breaks a rule with another one;

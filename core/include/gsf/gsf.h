@@ -162,6 +162,35 @@ typedef struct gsf_result {
 int gsf_localize(gsf_localizer* localizer, const float* xyz_stride, uint32_t stride, uint32_t count,
                  const uint32_t* labels, const float* logits, uint32_t logit_dim, gsf_result* out) GSF_NOEXCEPT;
 
+// ---- Vehicle modes (docs/vehicle-modes.md): a position prior at start-up, tracking after the fix. ----
+
+// Where the vehicle roughly is (e.g. a GNSS fix), in the map's frame (gsf_map_info.frame).
+typedef struct gsf_position_prior {
+  double x, y;                  // m: centre of the disc in the map's frame
+  float radius_m;               // m, > 0: the sensor lies within this of (x, y)
+  uint32_t has_heading;         // 0 or 1
+  float heading_deg;            // yaw of the scan's x axis from the map's x axis, counter-clockwise
+  float heading_tolerance_deg;  // [0, 180]
+} gsf_position_prior;
+
+// gsf_localize with a position prior: only map triangles near the prior are matched and only poses inside
+// it are answers. GSF_STATUS_INVALID_ARGUMENT for a NULL or invalid prior (non-finite, radius <= 0,
+// tolerance outside [0, 180]); GSF_STATUS_NO_SOLUTION when nothing inside the prior fits. A wrong prior
+// gives a wrong pose at low confidence (confident = 0) or none.
+int gsf_localize_with_prior(gsf_localizer* localizer, const float* xyz_stride, uint32_t stride, uint32_t count,
+                            const uint32_t* labels, const float* logits, uint32_t logit_dim,
+                            const gsf_position_prior* prior, gsf_result* out) GSF_NOEXCEPT;
+
+// Tracking: the pose of the scan near a predicted pose (row-major 3x4 [R | t] in the map's frame, as
+// gsf_result.map_frame_T_scan: e.g. the last pose times odometry), without the global search; bounded
+// work. out->confident = 0 is a loss: localize the next scan with gsf_localize(_with_prior) again. Only
+// confidence, confident, refined and the poses of *out are filled (the search's counts are 0).
+// GSF_STATUS_INVALID_ARGUMENT for a NULL or non-finite prediction; GSF_STATUS_UNSUPPORTED for a map
+// without a semantic layer.
+int gsf_track(gsf_localizer* localizer, const float* xyz_stride, uint32_t stride, uint32_t count,
+              const uint32_t* labels, const float* logits, uint32_t logit_dim,
+              const double predicted_map_frame_T_scan[12], gsf_result* out) GSF_NOEXCEPT;
+
 #ifdef __cplusplus
 }  // extern "C"
 #endif

@@ -13,6 +13,7 @@
 #include "gsf/detail/arena.h"
 #include "gsf/map_format.h"
 #include "gsf/platform.h"
+#include "gsf/position_prior.h"
 #include "gsf/scan.h"
 #include "gsf/status.h"
 
@@ -88,6 +89,13 @@ struct LocalizeResult {
   bool budget_exhausted = false;    // the first clique search ran out of nodes; its best clique is used
   bool capacity_truncated = false;  // some stage hit a Config capacity and kept a deterministic subset
   StageTimes times;
+  // Vehicle modes (docs/vehicle-modes.md).
+  bool prior_used = false;                // localize() was given a position prior
+  uint32_t prior_outside_matches = 0;     // map triangle candidates refused as outside the prior
+  uint32_t prior_dropped_hypotheses = 0;  // hypotheses outside the prior's disc or heading
+  bool tracked = false;                   // the result of track(): no instances, triangles or hypotheses
+  bool prior_global_check = false;        // a global search checked the prior's answer (thin margin)
+  bool prior_contradicted = false;        // ... and gave another pose: confidence <= 1 - its confidence
 };
 
 class Localizer {
@@ -109,6 +117,20 @@ class Localizer {
 
   // One-shot global localization of one scan. Always fills `out` (status inside as well as returned).
   Status localize(const ScanView& scan, LocalizeResult* out);
+  // The same with a position prior (position_prior.h): only map triangles near the prior are matched and
+  // only hypotheses inside it are answers. InvalidArgument for an invalid prior (validate()); NoSolution
+  // when no hypothesis lies inside it. A wrong prior gives a wrong answer at low confidence or none: a
+  // confident answer with a thin margin over its rivals is checked by a global search (then the call costs
+  // a one-shot localize more; prior_global_check), and loses its confidence when that answers elsewhere.
+  Status localize(const ScanView& scan, const PositionPrior& prior, LocalizeResult* out);
+
+  // Tracking (detail/tracker.h): the pose of `scan` near `predicted_map_frame_T_scan` (the map's frame,
+  // as LocalizeResult::map_frame_T_scan: e.g. the last pose times odometry), by a pattern search of
+  // whole-scan verification, ICP against the map's refinement layer (config.track.refine) and the
+  // confidence's probes. Bounded work, no global search. Loss = !out->confident: fall back to
+  // localize(). InvalidArgument for a non-finite prediction, Unsupported for a map without a semantic
+  // layer.
+  Status track(const ScanView& scan, const Eigen::Isometry3d& predicted_map_frame_T_scan, LocalizeResult* out);
 
   // The correspondences the last localize() passed to the max clique (for pictures and debugging):
   // copies up to `max` into `out`, returns how many there were.
@@ -134,6 +156,11 @@ class Localizer {
  private:
   struct Impl;  // stage objects, bound into the arena (defined in localizer.cpp only)
   static Status bind_workspace(Arena& arena, const LocalizerConfig& config, Impl& impl, Budget* parts);
+  // scan_ready: the last call built this scan's voxels, instances, fields and triangles; start at matching.
+  Status localize_in(const ScanView& scan, const PositionPrior* prior, LocalizeResult* out, bool scan_ready = false);
+  void check_outside_prior(const ScanView& scan, LocalizeResult& out);
+  // A prior's confident answer whose z_rival is below this is checked by a global search (localize.cpp).
+  static constexpr float kPriorGlobalCheckZ = 4.0f;
   LocalizerConfig config_{};
   MapView map_{};
   Arena arena_;

@@ -54,6 +54,12 @@ class AnswerSelector {
   // The verification weights of the last choose() (the stability weights given here before any).
   const float* verify_weights() const { return verify_weights_; }
   void set_verify_weights(const float* weights);
+  // For poses scored outside choose() (tracking): this scan's verification weights and the voxels'
+  // compact copy, as choose() prepares them. Returns whether the copy was made.
+  bool prepare(const VoxelLayer& voxels, const float* weights, const VerifyConfig& vc) {
+    chosen_ = UINT32_MAX;
+    return prepare_scoring(voxels, weights, vc, true);
+  }
   // After choose() with verification: the answer at the pose verification scored it (its pattern-refined
   // pose when it was refined), its rivals (best first, fully scored, at another place or heading) at
   // theirs, and the compact points verification read (0 when it read the voxels).

@@ -112,6 +112,9 @@ class PoseHypotheses {
   const PoseHypothesis& operator[](uint32_t i) const { return hyps_[i]; }
   // 1 for correspondences in hypothesis h's clique (h < size()); n entries.
   bool in_clique(uint32_t h, uint32_t i) const { return i < max_n_ && owner_[i] == h + 1; }
+  // Keeps the hypotheses h with keep[h] != 0 (size() entries), in their order; a correspondence whose
+  // clique was dropped belongs to none. Returns how many were dropped (a position prior's filter).
+  uint32_t retain(const uint8_t* keep);
 
  private:
   struct Run;  // one generate() call: its inputs, config, thresholds and stats (pose_hypotheses.cpp)

@@ -53,6 +53,10 @@ class Refiner {
   Status set_map(const RefineLayerView& layer);
   Status refine(const VoxelLayer& query, const Eigen::Isometry3d& initial, Eigen::Isometry3d* refined,
                 RefineStats* stats);
+  // The same on a smaller budget (tracking, whose start is already close): at most `points` query points
+  // and `iterations` iterations (each capped by the config's; 0 keeps the config's).
+  Status refine(const VoxelLayer& query, const Eigen::Isometry3d& initial, Eigen::Isometry3d* refined,
+                RefineStats* stats, uint32_t points, uint32_t iterations);
   // Which classes are long-term (stability 1) from this label set (not copied); nullptr (the default):
   // stability_weight().
   void set_classes(const ClassTable* table) { classes_ = table; }

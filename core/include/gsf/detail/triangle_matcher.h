@@ -21,6 +21,11 @@
 // sense contradicts the query's in the order tried is no candidate (counted in `mirrored`), before the
 // cap: in a symmetric hall or lattice half the candidates are mirror twins, and a clique of them fits an
 // upside-down pose that crowds out the true one. Maps without recorded senses are never rejected.
+//
+// Position prior (position_prior.h): with a region set, a candidate whose map vertices do not all lie
+// within the prior's disc + the range of the query vertex each would match is no candidate (counted in
+// outside_region()), before the cap, so the cap ranks the candidates near the prior only. Three loads
+// and compares per candidate that passed labels and sides; no memory.
 #pragma once
 #include <cstdint>
 
@@ -30,6 +35,9 @@
 #include "gsf/status.h"
 
 namespace gsf {
+
+struct MapInstance;
+struct PriorRegion;
 
 // The query vertex orders tried: order k maps matched position j to canonical query vertex kOrders[k][j].
 constexpr uint8_t kTriangleVertexOrders[6][3] = {{0, 1, 2}, {2, 1, 0}, {1, 0, 2}, {0, 2, 1}, {1, 2, 0}, {2, 0, 1}};
@@ -68,6 +76,17 @@ class TriangleMatcher {
   }
   // Refuse mirror-image candidates from the next match() on (default on).
   void set_mirror_check(bool on) { mirror_check_ = on; }
+  // Restrict the next match() calls to map triangles near a position prior (nullptr: the whole map, the
+  // default). map_instances: the map's; query_centroids: the query instances' (scan frame, xyz each).
+  // The pointers must stay valid while the region is set. Resets outside_region().
+  void set_region(const PriorRegion* region, const MapInstance* map_instances, const float* query_centroids) {
+    region_ = region;
+    map_instances_ = map_instances;
+    query_centroids_ = query_centroids;
+    outside_ = 0;
+  }
+  // Candidates refused as outside the region since set_region (all match() calls).
+  uint32_t outside_region() const { return outside_; }
   const RankedTriangleMatch& match_at(uint32_t i) const { return heap_[i]; }
   // The query triangle's vertex (instance id) at matched position j for the order of match i.
   static uint32_t query_vertex(const Triangle& q, uint8_t order, int j) { return q.v[kTriangleVertexOrders[order][j]]; }
@@ -82,11 +101,18 @@ class TriangleMatcher {
                    uint32_t end, const Triangle* map, const TriangleConfig& config, TriangleMatchStats* st);
   void offer(const RankedTriangleMatch& m);
   void sort_best_first();
+  void set_vertex_ranges(const Triangle& q, uint8_t order);
+  bool in_region(const Triangle& m) const;
   RankedTriangleMatch* heap_ = nullptr;  // max-heap on (residual, tie) while collecting; sorted after
   uint32_t cap_ = 0;
   uint32_t limit_ = 0;  // <= cap_: what match() keeps (set_limit)
   uint32_t size_ = 0;
   bool mirror_check_ = true;
+  const PriorRegion* region_ = nullptr;  // set_region
+  const MapInstance* map_instances_ = nullptr;
+  const float* query_centroids_ = nullptr;
+  float range_[3] = {};  // bird's-eye range of the query vertex at matched position j (order being searched)
+  uint32_t outside_ = 0;
 };
 
 }  // namespace gsf

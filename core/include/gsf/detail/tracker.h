@@ -1,0 +1,70 @@
+// Internal (gsf/detail): a pipeline stage or building block, not part of the stable interface; it may
+// change between versions. The stable interface is localizer.h, config.h, map_format.h, scan.h, status.h,
+// platform.h, class_table.h, georeference.h and the C API gsf.h.
+// Tracking: the pose of a scan near a predicted pose (the last pose and odometry), without the global
+// search (docs/vehicle-modes.md). Three steps, each bounded:
+//   1. a bird's-eye pattern search of whole-scan verification around the prediction (semantic_grid.h:
+//      verify_pose_refined, steps of search_step_m / search_step_deg halved each round), which takes a
+//      prediction a few metres and degrees off to within about a cell of the map's semantic layer;
+//   2. point-to-plane ICP against the map's refinement layer from there (refine.h), for centimetres,
+//      when the map has that layer (accepted only within its correction limit, as for one-shot);
+//   3. the confidence's probe statistic at the result (confidence.h): the shifted and turned probes,
+//      no rivals (there are no other hypotheses). The inlier factor is left out: tracking forms no
+//      instances; it guards one-shot answers in a map of somewhere else, and a tracked pose follows a
+//      confident one.
+// Loss is "not confident": the caller falls back to one-shot localization. A prediction far off ends
+// where the pattern search can reach (a few metres), which the probes judge as any wrong pose: no peak.
+#pragma once
+#include <cstdint>
+
+#include <Eigen/Geometry>
+
+#include "gsf/detail/confidence.h"
+#include "gsf/detail/refine.h"
+#include "gsf/detail/semantic_grid.h"
+#include "gsf/detail/voxel_layer.h"
+#include "gsf/platform.h"
+
+namespace gsf {
+
+struct VerifyConfig;
+
+struct TrackConfig {
+  // Bind the refiner (RefineConfig, its workspace) even when one-shot refinement is off, so track() can
+  // refine; off: track() uses the pattern search alone.
+  bool refine = true;
+  uint32_t search_rounds = 4;    // pattern-search rounds around the prediction (steps halved each round)
+  float search_step_m = 1.0f;    // m, first round's move; reaches about 2 x (1 + 1/2 + ...) = 3.75 m
+  float search_step_deg = 2.0f;  // deg, first round's turn; reaches about 7.5 deg
+  // ICP's budget (at most RefineConfig's max_points / iterations): the search leaves it within a cell.
+  uint32_t icp_points = 1000;
+  uint32_t icp_iterations = 6;
+};
+
+// What track() found.
+struct TrackOutcome {
+  Eigen::Isometry3d map_T_scan = Eigen::Isometry3d::Identity();
+  PoseVerification verification;  // the result's whole-scan verification (the pattern search's pose)
+  bool refined = false;           // ICP ran and its result was accepted
+  ConfidenceEvidence evidence;
+  double confidence = 0.0;
+  uint64_t search_ns = 0, refine_ns = 0, probe_ns = 0;  // the three steps' times (0 without a clock)
+};
+
+// The scan as verification reads it (answer_selection.h prepares the compact points and weights).
+struct TrackScan {
+  const VerifyPoint* points;
+  uint32_t n;
+  const VoxelLayer& voxels;
+  const float* weights;  // this scan's verification weights
+};
+
+// The three steps above. refiner: nullptr (or without a map layer) skips step 2. clock: optional.
+TrackOutcome track_pose(const TrackScan& scan, const SemanticGridView& grid, const Eigen::Isometry3d& predicted,
+                        const TrackConfig& config, const VerifyConfig& verify, Refiner* refiner,
+                        AnswerConfidence& confidence, Clock* clock = nullptr);
+
+// P of a tracked pose: the confidence model's factors without the inlier factor (see above).
+double tracking_probability(const ConfidenceEvidence& evidence);
+
+}  // namespace gsf

@@ -1,0 +1,50 @@
+#include "gsf/detail/tracker.h"
+
+#include "gsf/config.h"
+
+namespace gsf {
+
+double tracking_probability(const ConfidenceEvidence& evidence) {
+  ConfidenceEvidence e = evidence;
+  e.inlier_share = 1.0f;  // the inlier factor at its ceiling (s(a_i + b_i) = 1 - 6e-11): left out
+  return confidence_probability(e);
+}
+
+TrackOutcome track_pose(const TrackScan& scan, const SemanticGridView& grid, const Eigen::Isometry3d& predicted,
+                        const TrackConfig& tc, const VerifyConfig& vc, Refiner* refiner, AnswerConfidence& confidence,
+                        Clock* clock) {
+  TrackOutcome o;
+  uint64_t t = clock ? clock->now_ns() : 0;
+  auto lap = [&](uint64_t* ns) {
+    const uint64_t n = clock ? clock->now_ns() : 0;
+    *ns = n - t;
+    t = n;
+  };
+  const float lambda = vc.disagree_weight;
+  // 1. Pattern search of the verification score around the prediction (coarse rounds on a sample).
+  Eigen::Isometry3d searched = predicted;
+  o.verification = verify_pose_refined(scan.points, scan.n, grid, predicted, vc.max_points, scan.weights,
+                                       tc.search_rounds, tc.search_step_m, tc.search_step_deg, &searched,
+                                       vc.search_divisor, vc.polish_divisor, nullptr, lambda);
+  o.map_T_scan = searched;
+  lap(&o.search_ns);
+  // 2. ICP from there for the last decimetres (the score is flat within a semantic cell).
+  if (refiner != nullptr) {
+    Eigen::Isometry3d refined;
+    RefineStats rs;
+    if (refiner->refine(scan.voxels, searched, &refined, &rs, tc.icp_points, tc.icp_iterations) == Status::Ok &&
+        rs.accepted) {
+      o.map_T_scan = refined;
+      o.refined = true;
+    }
+  }
+  lap(&o.refine_ns);
+  // 3. The probes at the result: is it a peak in position and heading?
+  const AnswerConfidence::Answer a{o.map_T_scan, nullptr, 0, 0, 0};
+  o.evidence = confidence.measure(scan.points, scan.n, grid, scan.weights, lambda, a, vc.max_points);
+  o.confidence = tracking_probability(o.evidence);
+  lap(&o.probe_ns);
+  return o;
+}
+
+}  // namespace gsf

@@ -1,0 +1,233 @@
+// The position prior (position_prior.h) on the simulator's tiny world, against the simulator's truth:
+// a prior around the truth keeps the right answers and restricts the search; a prior elsewhere never
+// gives a confident answer; invalid priors are refused.
+#include <catch2/catch.hpp>
+
+#include <cmath>
+#include <limits>
+#include <vector>
+
+#include "gsf/localizer.h"
+#include "tiny_world.h"
+
+using namespace gsf;
+using gsf_test::tiny_world;
+
+namespace {
+
+struct Ready {
+  std::vector<uint64_t> words;
+  Localizer loc;
+  explicit Ready(const gsf_test::TinyWorld& w) : words(Localizer::required_bytes(w.config) / 8 + 2) {
+    REQUIRE(loc.init(w.config, w.map, words.data(), words.size() * 8) == Status::Ok);
+  }
+};
+
+// A disc of `radius` whose centre lies `offset` metres from the truth, in a direction that turns with k.
+PositionPrior prior_near(const Eigen::Isometry3d& truth, double offset, float radius, uint32_t k) {
+  const double a = 0.7 * k + 0.3;
+  PositionPrior p;
+  p.x = truth.translation().x() + offset * std::cos(a);
+  p.y = truth.translation().y() + offset * std::sin(a);
+  p.radius_m = radius;
+  return p;
+}
+
+double yaw_deg(const Eigen::Isometry3d& T) { return std::atan2(T.linear()(1, 0), T.linear()(0, 0)) * 180.0 / M_PI; }
+
+}  // namespace
+
+TEST_CASE("Invalid priors are refused: non-finite centre, radius or heading, radius <= 0, tolerance beyond 180") {
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  PositionPrior ok;
+  ok.radius_m = 10.0f;
+  CHECK(validate(ok) == Status::Ok);
+  PositionPrior p = ok;
+  p.x = nan;
+  CHECK(validate(p) == Status::InvalidArgument);
+  p = ok;
+  p.y = std::numeric_limits<double>::infinity();
+  CHECK(validate(p) == Status::InvalidArgument);
+  for (float r : {-1.0f, 0.0f, float(nan), std::numeric_limits<float>::infinity()}) {
+    p = ok;
+    p.radius_m = r;
+    CHECK(validate(p) == Status::InvalidArgument);
+  }
+  p = ok;
+  p.has_heading = true;
+  p.heading_deg = float(nan);
+  CHECK(validate(p) == Status::InvalidArgument);
+  p.heading_deg = 10.0f;
+  for (float tol : {-1.0f, 181.0f, float(nan)}) {
+    p.heading_tolerance_deg = tol;
+    CHECK(validate(p) == Status::InvalidArgument);
+  }
+  p.heading_tolerance_deg = 180.0f;
+  CHECK(validate(p) == Status::Ok);
+
+  // The localizer refuses them before any work, with the status in the result too.
+  const auto& w = tiny_world();
+  Ready r(w);
+  LocalizeResult out;
+  out.inliers = 7;
+  PositionPrior bad = ok;
+  bad.radius_m = -5.0f;
+  CHECK(r.loc.localize(w.queries[0].view(), bad, &out) == Status::InvalidArgument);
+  CHECK(out.status == Status::InvalidArgument);
+  CHECK(out.inliers == 0);
+  bad = ok;
+  bad.x = nan;
+  CHECK(r.loc.localize(w.queries[0].view(), bad, &out) == Status::InvalidArgument);
+}
+
+TEST_CASE("A prior region holds poses in its disc and heading tolerance, across the +-180 deg wrap") {
+  PositionPrior p;
+  p.x = 100.0;
+  p.y = -50.0;
+  p.radius_m = 20.0f;
+  p.has_heading = true;
+  p.heading_deg = 175.0f;
+  p.heading_tolerance_deg = 10.0f;
+  MapGeoreference g = local_georeference();
+  g.origin[0] = 90.0;  // map-local = map frame - origin
+  g.origin[1] = -40.0;
+  const PriorRegion r = prior_region(p, g);
+  CHECK(r.cx == 10.0f);
+  CHECK(r.cy == -10.0f);
+  auto pose = [](double x, double y, double deg) {
+    Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
+    T.linear() = Eigen::AngleAxisd(deg * M_PI / 180.0, Eigen::Vector3d::UnitZ()).toRotationMatrix();
+    T.translation() = Eigen::Vector3d(x, y, 1.0);
+    return T;
+  };
+  CHECK(r.contains(pose(10.0 + 19.0, -10.0, -175.0), 0.0, 0.0));  // 10 deg from 175 across the wrap
+  CHECK(!r.contains(pose(10.0 + 21.0, -10.0, 175.0), 0.0, 0.0));  // outside the disc
+  CHECK(r.contains(pose(10.0 + 21.0, -10.0, 175.0), 2.0, 0.0));   // ... inside its slack
+  CHECK(!r.contains(pose(10.0, -10.0, 150.0), 0.0, 5.0));         // 25 deg off
+  CHECK(!r.contains(pose(10.0, -10.0, -5.0), 0.0, 5.0));          // turned round
+  // A map point is reachable from inside the disc when within radius + its query range + slack.
+  CHECK(r.reaches(10.0f + 20.0f + 30.0f + kPriorVertexSlackM - 0.1f, -10.0f, 30.0f));
+  CHECK(!r.reaches(10.0f + 20.0f + 30.0f + kPriorVertexSlackM + 0.1f, -10.0f, 30.0f));
+}
+
+TEST_CASE("A 20 m prior around the truth gives the same right answers from fewer candidates") {
+  const auto& w = tiny_world();
+  Ready r(w);
+  uint32_t right_free = 0, right_prior = 0, restricted = 0, fewer = 0;
+  for (uint32_t k = 0; k < w.queries.size(); ++k) {
+    const auto& q = w.queries[k];
+    LocalizeResult free, prior;
+    const bool free_ok = r.loc.localize(q.view(), &free) == Status::Ok && gsf_test::pose_ok(free.map_T_scan, q.truth);
+    const Status s = r.loc.localize(q.view(), prior_near(q.truth, 12.0, 20.0f, k), &prior);
+    const bool prior_ok = s == Status::Ok && gsf_test::pose_ok(prior.map_T_scan, q.truth);
+    INFO("query " << k << ": " << to_string(s) << ", confidence " << prior.confidence);
+    CHECK(prior.prior_used);
+    if (free_ok) CHECK(prior_ok);  // every right one-shot answer stays right
+    if (s == Status::Ok && prior.confident) CHECK(prior_ok);
+    right_free += free_ok;
+    right_prior += prior_ok;
+    restricted += prior.prior_outside_matches > 0;
+    fewer += prior.match_candidates < free.match_candidates;
+  }
+  CHECK(right_prior >= right_free);
+  CHECK(right_free * 10 >= w.queries.size() * 9);
+  CHECK(restricted == w.queries.size());  // the search itself was restricted on every scan
+  CHECK(fewer == w.queries.size());
+}
+
+TEST_CASE("A prior 100 m off never gives a confident answer; one off the map gives none at all") {
+  const auto& w = tiny_world();
+  Ready r(w);
+  uint32_t answered = 0, confident_wrong = 0;
+  for (uint32_t k = 0; k < w.queries.size(); ++k) {
+    const auto& q = w.queries[k];
+    LocalizeResult out;
+    const Status s = r.loc.localize(q.view(), prior_near(q.truth, 100.0, 20.0f, k), &out);
+    answered += s == Status::Ok;
+    if (s == Status::Ok) {
+      // Every answer lies in the disc (truth 100 m from its centre): wrong by construction.
+      CHECK(!gsf_test::pose_ok(out.map_T_scan, q.truth));
+      confident_wrong += out.confident;
+    } else {
+      CHECK(s == Status::NoSolution);
+    }
+  }
+  INFO(answered << " of " << w.queries.size() << " answered");
+  CHECK(confident_wrong == 0);
+  // 5 km from the map: no map triangle is within reach, so no candidate at all.
+  LocalizeResult out;
+  PositionPrior far = prior_near(w.queries[0].truth, 5000.0, 20.0f, 0);
+  CHECK(r.loc.localize(w.queries[0].view(), far, &out) == Status::NoSolution);
+  CHECK(out.triangle_matches == 0);
+  CHECK(out.prior_outside_matches > 0);
+}
+
+// A lattice car park of identical columns: a prior away from the truth can hold a copy of the scene, which
+// the local probes cannot tell from the truth; a thin margin over the rivals sends the answer to a global
+// check, and no answer is confident.
+TEST_CASE("On a lattice, priors 30-100 m off never give a confident answer; right ones keep theirs") {
+  const auto& w = gsf_test::tiny_lattice_world();
+  Ready r(w);
+  uint32_t confident_wrong = 0, right_free = 0, right_prior = 0, checked = 0;
+  for (uint32_t k = 0; k < w.queries.size(); ++k) {
+    const auto& q = w.queries[k];
+    LocalizeResult free, near;
+    right_free +=
+        r.loc.localize(q.view(), &free) == Status::Ok && free.confident && gsf_test::pose_ok(free.map_T_scan, q.truth);
+    const Status s = r.loc.localize(q.view(), prior_near(q.truth, 8.0, 15.0f, k), &near);
+    right_prior += s == Status::Ok && near.confident && gsf_test::pose_ok(near.map_T_scan, q.truth);
+    confident_wrong += s == Status::Ok && near.confident && !gsf_test::pose_ok(near.map_T_scan, q.truth);
+    checked += near.prior_global_check;
+    for (double off : {30.0, 45.0, 60.0, 100.0}) {
+      LocalizeResult out;
+      if (r.loc.localize(q.view(), prior_near(q.truth, off, 15.0f, k), &out) != Status::Ok) continue;
+      INFO("query " << k << ", prior " << off << " m off: confidence " << out.confidence);
+      CHECK(!out.confident);
+      confident_wrong += out.confident;
+      checked += out.prior_global_check;
+    }
+  }
+  INFO(right_free << " answered right without a prior, " << right_prior << " with one; " << checked << " checked");
+  CHECK(confident_wrong == 0);
+  CHECK(right_prior >= right_free);
+}
+
+TEST_CASE("A heading in the prior keeps the right answer; the opposite heading gives no confident one") {
+  const auto& w = tiny_world();
+  Ready r(w);
+  uint32_t checked = 0;
+  for (uint32_t k = 0; k < w.queries.size(); k += 3) {
+    const auto& q = w.queries[k];
+    PositionPrior p = prior_near(q.truth, 5.0, 20.0f, k);
+    p.has_heading = true;
+    p.heading_deg = float(yaw_deg(q.truth) + 8.0);
+    p.heading_tolerance_deg = 15.0f;
+    LocalizeResult right, turned;
+    REQUIRE(r.loc.localize(q.view(), p, &right) == Status::Ok);
+    CHECK(gsf_test::pose_ok(right.map_T_scan, q.truth));
+    p.heading_deg = float(yaw_deg(q.truth) + 180.0);
+    p.heading_tolerance_deg = 30.0f;
+    const Status s = r.loc.localize(q.view(), p, &turned);
+    CHECK(!(s == Status::Ok && turned.confident));
+    if (s == Status::Ok) CHECK(std::fabs(std::remainder(yaw_deg(turned.map_T_scan) - p.heading_deg, 360.0)) <= 35.0);
+    ++checked;
+  }
+  CHECK(checked >= 5);
+}
+
+TEST_CASE("Without a prior nothing changes: localize(scan) and the prior-free fields") {
+  const auto& w = tiny_world();
+  Ready a(w), b(w);
+  for (uint32_t k = 0; k < 4; ++k) {
+    LocalizeResult x, y;
+    a.loc.localize(w.queries[k].view(), &x);
+    // A localizer that ran with a prior before: the region does not stick.
+    b.loc.localize(w.queries[k].view(), prior_near(w.queries[k].truth, 100.0, 10.0f, k), &y);
+    b.loc.localize(w.queries[k].view(), &y);
+    CHECK(x.map_T_scan.matrix() == y.map_T_scan.matrix());
+    CHECK(x.confidence == y.confidence);
+    CHECK(x.match_candidates == y.match_candidates);
+    CHECK(!y.prior_used);
+    CHECK(y.prior_outside_matches == 0);
+  }
+}

@@ -1,0 +1,46 @@
+// Zero heap allocations after init in the vehicle modes: localize with a position prior (right and
+// wrong) and track (near and far predictions), over every query of the tiny world (counting allocator).
+#include <catch2/catch.hpp>
+
+#include <cmath>
+#include <vector>
+
+#include "alloc_counter.h"
+#include "gsf/localizer.h"
+#include "tiny_world.h"
+
+using namespace gsf;
+
+TEST_CASE("localize with a prior and track never allocate after init") {
+  const auto& w = gsf_test::tiny_world();
+  std::vector<uint64_t> ws(Localizer::required_bytes(w.config) / 8 + 2);
+  Localizer loc;
+  REQUIRE(loc.init(w.config, w.map, ws.data(), ws.size() * 8) == Status::Ok);
+  LocalizeResult r;
+  uint32_t calls = 0, ok = 0, confident = 0;
+  gsf_test::AllocationScope scope;
+  for (const auto& q : w.queries) {
+    for (double off : {5.0, 100.0}) {
+      PositionPrior p;
+      p.x = q.truth.translation().x() + off;
+      p.y = q.truth.translation().y();
+      p.radius_m = 20.0f;
+      p.has_heading = off < 50.0;
+      p.heading_deg = float(std::atan2(q.truth.linear()(1, 0), q.truth.linear()(0, 0)) * 180.0 / M_PI);
+      p.heading_tolerance_deg = 20.0f;
+      ok += loc.localize(q.view(), p, &r) == Status::Ok;
+      ++calls;
+    }
+    for (double off : {1.0, 30.0}) {
+      Eigen::Isometry3d predicted = q.truth;
+      predicted.translation().y() += off;
+      ok += loc.track(q.view(), predicted, &r) == Status::Ok;
+      confident += r.confident;
+      ++calls;
+    }
+  }
+  const uint64_t allocations = scope.allocations();
+  CHECK(allocations == 0);
+  CHECK(ok > calls / 2);  // the calls did real work
+  CHECK(confident > 0);
+}
