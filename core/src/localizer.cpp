@@ -6,6 +6,7 @@
 
 #include "gsf/detail/answer_height.h"
 #include "gsf/detail/answer_selection.h"
+#include "gsf/detail/arena.h"
 #include "gsf/detail/confidence.h"
 #include "gsf/detail/correspondence_set.h"
 #include "gsf/detail/fixed_vector.h"
@@ -188,14 +189,16 @@ Status Localizer::init(const LocalizerConfig& config, const MapView& map, void* 
   config_ = config;
   map_ = map;
   clock_ = clock;
-  arena_ = Arena(buffer, bytes);
-  void* mem = arena_.allocate_bytes(sizeof(Impl), kImplAlign);
+  Arena arena(buffer, bytes);
+  void* mem = arena.allocate_bytes(sizeof(Impl), kImplAlign);
+  workspace_used_ = arena.used();
   if (!mem) return Status::BufferTooSmall;
   Impl& im = *new (mem) Impl();
-  s = bind_workspace(arena_, config, im, nullptr);
+  s = bind_workspace(arena, config, im, nullptr);
+  workspace_used_ = arena.used();
   if (s != Status::Ok) return s;
   if (config.refine.enabled || config.track.refine) {
-    s = im.refiner.set_map(map.refine_layer());
+    s = im.refiner.set_map(refine_layer_view(map));
     // A refinement layer of another cell fails one-shot refinement; tracking then goes without ICP.
     if (s != Status::Ok && config.refine.enabled) return s;
     im.track_refine = s == Status::Ok && map.counts.refine_points > 0;
@@ -215,7 +218,7 @@ Status Localizer::init(const LocalizerConfig& config, const MapView& map, void* 
   im.index.offsets = map.index_offsets;
   im.index.key_count = map.counts.index_keys;
   im.index.triangle_count = map.counts.triangles;
-  im.semantic = map.semantic_grid();
+  im.semantic = semantic_grid_view(map);
   im.answer.forget();
   impl_ = &im;
   initialized_ = true;

@@ -4,6 +4,8 @@
 #include <cstring>
 
 #include "gsf/detail/crc32.h"
+#include "gsf/detail/refine_layer.h"
+#include "gsf/detail/semantic_grid.h"
 #include "gsf/detail/triangle_index.h"
 #include "gsf/semantic_classes.h"
 
@@ -131,11 +133,11 @@ Status check_contents(const MapView& m) {
   // Refinement layer: present exactly when it has points, with a cell size; then structurally valid.
   if ((m.counts.refine_points == 0) != (m.counts.refine_tiles == 0)) return Status::CorruptData;
   if (m.counts.refine_points > 0 && !(m.params.refine_cell > 0.0f)) return Status::CorruptData;
-  const Status rs = m.refine_layer().validate();
+  const Status rs = refine_layer_view(m).validate();
   if (rs != Status::Ok) return rs;
   if (m.counts.semantic_tiles > 0 && m.params.semantic_tile_cells == 0) return Status::CorruptData;
   if (m.counts.semantic_tiles == 0 && m.counts.semantic_palette != 0) return Status::CorruptData;
-  return m.semantic_grid().validate(d);
+  return semantic_grid_view(m).validate(d);
 }
 
 }  // namespace

@@ -7,6 +7,8 @@
 #include <type_traits>
 #include <utility>
 
+#include "gsf/detail/gaussian_field.h"
+#include "gsf/detail/pose_hypotheses.h"
 #include "gsf/detail/triangle.h"
 
 namespace gsf {

@@ -6,6 +6,7 @@
 #include <cstring>
 #include <vector>
 
+#include "gsf/detail/semantic_grid.h"
 #include "gsf/detail/triangle.h"
 #include "gsf/map_format.h"
 #include "gsf/semantic_classes.h"

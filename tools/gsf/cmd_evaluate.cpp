@@ -58,7 +58,9 @@ bool parse_vehicle_mode_options(const Args& args, EvalOptions* o, std::string* e
   return true;
 }
 
-int cmd_evaluate(int argc, char** argv) {
+namespace {
+
+std::vector<OptionSpec> evaluate_option_specs() {
   std::vector<OptionSpec> specs = {
       {"map", "map file (gsf build-map)", "", false, true},
       {"dataset", "dataset root with the query sequence", "", false, true},
@@ -96,6 +98,60 @@ int cmd_evaluate(int argc, char** argv) {
        "0.02"},
   };
   for (const OptionSpec& o : label_error_option_specs()) specs.push_back(o);
+  return specs;
+}
+
+// The options into *o, in the order the command line is checked; false with *error on a usage error.
+bool parse_eval_options(const Args& args, EvalOptions* o, std::string* error) {
+  o->map_path = args.get("map");
+  o->dataset = args.get("dataset");
+  o->sequence = args.get("sequence");
+  o->map_sequence = args.get("map-sequence");
+  o->json_out = args.get("json");
+  o->svg_dir = args.get("svg");
+  o->png = args.flag("png");
+  if (o->png && o->svg_dir.empty()) {
+    *error = "--png needs --svg DIR";
+    return false;
+  }
+  if (o->png && find_rsvg_convert().empty())
+    std::fprintf(stderr,
+                 "gsf evaluate: --png: rsvg-convert not found on PATH (Debian: apt-get install librsvg2-bin); the "
+                 "SVGs will be written, the PNGs not\n");
+  o->progress = !args.flag("quiet");
+  o->overrides = args.get("set");
+  o->classes = args.get("classes");
+  if (!parse_label_error_options(args, &o->label_errors, error)) return false;
+  if (args.get("mode") == "track") {
+    o->modes = {"track"};
+  } else if (!parse_modes(args.get("mode"), &o->modes)) {
+    *error = "bad --mode '" + args.get("mode") + "'";
+    return false;
+  }
+  if (!parse_logit_mode(args.get("logits"), &o->logits)) {
+    *error = "--logits must be synthetic or none";
+    return false;
+  }
+  long long lim;
+  if (!args.get_int("limit", &lim, error) || lim < 0) {
+    if (error->empty()) *error = "--limit must be >= 0";
+    return false;
+  }
+  if (args.has("min-confidence")) {
+    if (!args.get_double("min-confidence", &o->min_confidence, error)) return false;
+    if (!(o->min_confidence >= 0 && o->min_confidence <= 1)) {
+      *error = "--min-confidence must be in [0, 1]";
+      return false;
+    }
+  }
+  o->limit = static_cast<uint32_t>(lim);
+  return parse_vehicle_mode_options(args, o, error);
+}
+
+}  // namespace
+
+int cmd_evaluate(int argc, char** argv) {
+  const std::vector<OptionSpec> specs = evaluate_option_specs();
   if (wants_help(argc, argv)) {
     std::printf("%s", usage_text("evaluate",
                                  "Localize a query sequence with ground truth; report success rate "
@@ -108,37 +164,7 @@ int cmd_evaluate(int argc, char** argv) {
   std::string err;
   if (!args.parse(argc, argv, 2, specs, &err)) return usage_error("evaluate", err);
   EvalOptions o;
-  o.map_path = args.get("map");
-  o.dataset = args.get("dataset");
-  o.sequence = args.get("sequence");
-  o.map_sequence = args.get("map-sequence");
-  o.json_out = args.get("json");
-  o.svg_dir = args.get("svg");
-  o.png = args.flag("png");
-  if (o.png && o.svg_dir.empty()) return usage_error("evaluate", "--png needs --svg DIR");
-  if (o.png && find_rsvg_convert().empty())
-    std::fprintf(stderr,
-                 "gsf evaluate: --png: rsvg-convert not found on PATH (Debian: apt-get install librsvg2-bin); the "
-                 "SVGs will be written, the PNGs not\n");
-  o.progress = !args.flag("quiet");
-  o.overrides = args.get("set");
-  o.classes = args.get("classes");
-  if (!parse_label_error_options(args, &o.label_errors, &err)) return usage_error("evaluate", err);
-  if (args.get("mode") == "track") o.modes = {"track"};
-  else if (!parse_modes(args.get("mode"), &o.modes))
-    return usage_error("evaluate", "bad --mode '" + args.get("mode") + "'");
-  if (!parse_logit_mode(args.get("logits"), &o.logits))
-    return usage_error("evaluate", "--logits must be synthetic or none");
-  long long lim;
-  if (!args.get_int("limit", &lim, &err) || lim < 0)
-    return usage_error("evaluate", err.empty() ? "--limit must be >= 0" : err);
-  if (args.has("min-confidence")) {
-    if (!args.get_double("min-confidence", &o.min_confidence, &err)) return usage_error("evaluate", err);
-    if (!(o.min_confidence >= 0 && o.min_confidence <= 1))
-      return usage_error("evaluate", "--min-confidence must be in [0, 1]");
-  }
-  o.limit = static_cast<uint32_t>(lim);
-  if (!parse_vehicle_mode_options(args, &o, &err)) return usage_error("evaluate", err);
+  if (!parse_eval_options(args, &o, &err)) return usage_error("evaluate", err);
   if (args.get("mode") == "track") {
     if (!args.has("sequence")) o.sequence = "02";  // the simulator's stretches
     return run_tracking(o);

@@ -327,67 +327,83 @@ void write_map_trajectory_svg(const EvalOptions& o, const MapView& map, const Mo
   if (svg.save(path)) written->push_back(path);
 }
 
-// One query's correspondences in one mode: its instances placed at the mode's estimated pose (the true
-// pose when it has none) over the map's instances, each correspondence a line from the placed query
-// instance to its map instance, green when the ground truth agrees (the pair is within 2 m under the true
-// pose), red when not, thick when in the clique. True pairs under a right pose are short green lines.
-void write_correspondence_svg(const EvalOptions& o, const MapView& map, const ModeRun& run, size_t q,
-                              std::vector<std::string>* written) {
-  const QueryRecord& r = run.records[q];
-  const std::vector<Localizer::Correspondence>& corr = run.corr[q];
-  const std::vector<PictureInstance> none;
-  const std::vector<PictureInstance>& inst = q < run.instances.size() ? run.instances[q] : none;
-  const Eigen::Isometry3d place = r.has_pose ? r.result.map_T_scan : r.truth_local;
-  auto placed = [&](const float* xyz) { return place * Eigen::Vector3d(xyz[0], xyz[1], xyz[2]); };
-  WorldBox box;
-  box.add(place.translation().x(), place.translation().y());
-  box.add(r.truth_local.translation().x(), r.truth_local.translation().y());
-  for (const auto& i : inst) box.add(placed(i.xyz).x(), placed(i.xyz).y());
-  uint32_t n_true = 0, n_clique = 0, clique_true = 0;
+// A query instance's centroid (scan frame) placed by `place`.
+Eigen::Vector3d placed_at(const Eigen::Isometry3d& place, const float* xyz) {
+  return place * Eigen::Vector3d(xyz[0], xyz[1], xyz[2]);
+}
+
+// Each correspondence judged by the ground truth: true when the pair is within 2 m under the true pose.
+std::vector<bool> judge_correspondences(const MapView& map, const QueryRecord& r,
+                                        const std::vector<Localizer::Correspondence>& corr) {
   std::vector<bool> truthful(corr.size());
   for (size_t k = 0; k < corr.size(); ++k) {
     const float* m = map.instances[corr[k].map_instance].centroid;
     const Eigen::Vector3d qt =
         r.truth_local * Eigen::Vector3d(corr[k].query_xyz[0], corr[k].query_xyz[1], corr[k].query_xyz[2]);
     truthful[k] = (qt - Eigen::Vector3d(m[0], m[1], m[2])).norm() < 2.0;
-    n_true += truthful[k];
-    n_clique += corr[k].in_clique;
-    clique_true += corr[k].in_clique && truthful[k];
+  }
+  return truthful;
+}
+
+// What the correspondence picture shows, with a 12 m margin: both poses, the placed query instances and
+// both ends of every pair.
+WorldBox correspondence_box(const MapView& map, const QueryRecord& r, const Eigen::Isometry3d& place,
+                            const std::vector<PictureInstance>& inst,
+                            const std::vector<Localizer::Correspondence>& corr) {
+  WorldBox box;
+  box.add(place.translation().x(), place.translation().y());
+  box.add(r.truth_local.translation().x(), r.truth_local.translation().y());
+  for (const auto& i : inst) box.add(placed_at(place, i.xyz).x(), placed_at(place, i.xyz).y());
+  for (const auto& c : corr) {
+    const float* m = map.instances[c.map_instance].centroid;
     box.add(m[0], m[1]);
-    box.add(placed(corr[k].query_xyz).x(), placed(corr[k].query_xyz).y());
+    box.add(placed_at(place, c.query_xyz).x(), placed_at(place, c.query_xyz).y());
   }
   box.min_x -= 12, box.min_y -= 12, box.max_x += 12, box.max_y += 12;
-  const MapProjection p = fit_projection(box.min_x, box.min_y, box.max_x, box.max_y, 1400, 850);
-  const double w = p.px(box.max_x), h = p.py(box.min_y);
-  SvgPicture svg;
-  svg.rect(0, 0, w, h, "#fcfcfc", 1.0, "#bbbbbb");
-  std::vector<uint32_t> classes(kNumClasses, 0);
+  return box;
+}
+
+// The map's instances inside the box (dots) and the query's placed instances (rings); *classes counts
+// the instances drawn of each dense class.
+void draw_instance_layers(SvgPicture& svg, const MapProjection& p, const WorldBox& box, const MapView& map,
+                          const Eigen::Isometry3d& place, const std::vector<PictureInstance>& inst,
+                          std::vector<uint32_t>* classes) {
   for (uint32_t i = 0; i < map.counts.instances; ++i) {
     const auto& m = map.instances[i];
     if (!box.contains(m.centroid[0], m.centroid[1])) continue;
-    if (m.label < kNumClasses) ++classes[m.label];
+    if (m.label < kNumClasses) ++(*classes)[m.label];
     svg.circle(p.px(m.centroid[0]), p.py(m.centroid[1]), 3.5, class_colour(m.label), 0.5);
   }
   for (const auto& i : inst) {
-    const Eigen::Vector3d v = placed(i.xyz);
-    if (i.label < kNumClasses) ++classes[i.label];
+    const Eigen::Vector3d v = placed_at(place, i.xyz);
+    if (i.label < kNumClasses) ++(*classes)[i.label];
     svg.circle(p.px(v.x()), p.py(v.y()), 6, "none", 1.0, class_colour(i.label), 1.8);
   }
-  // The estimated pose (or the true one the instances are placed at): a dot with the heading.
+}
+
+// The estimated pose (or the true one the instances are placed at): a dot with the heading; the true
+// pose: a cross.
+void draw_pose_marks(SvgPicture& svg, const MapProjection& p, const Eigen::Isometry3d& place,
+                     const Eigen::Isometry3d& truth) {
   const Eigen::Vector3d o0 = place.translation(), o1 = place * Eigen::Vector3d(8, 0, 0);
   svg.line(p.px(o0.x()), p.py(o0.y()), p.px(o1.x()), p.py(o1.y()), "#000000", 2.5);
   svg.circle(p.px(o0.x()), p.py(o0.y()), 5.5, "#000000");
-  const Eigen::Vector3d t = r.truth_local.translation();
+  const Eigen::Vector3d t = truth.translation();
   svg.line(p.px(t.x()) - 8, p.py(t.y()) - 8, p.px(t.x()) + 8, p.py(t.y()) + 8, kRight, 2.5);
   svg.line(p.px(t.x()) - 8, p.py(t.y()) + 8, p.px(t.x()) + 8, p.py(t.y()) - 8, kRight, 2.5);
-  // False pairs outside the clique first (thin, faint: a lattice has hundreds), then true ones, then the
-  // clique's (thick). Round caps: a true pair under a right pose is a line of a metre or less, a green
-  // dash inside its query ring.
+}
+
+// Each pair a line from the placed query instance to its map instance. False pairs outside the clique
+// first (thin, faint: a lattice has hundreds), then true ones, then the clique's (thick). Round caps: a
+// true pair under a right pose is a line of a metre or less, a green dash inside its query ring.
+void draw_correspondence_lines(SvgPicture& svg, const MapProjection& p, const MapView& map,
+                               const Eigen::Isometry3d& place, const std::vector<Localizer::Correspondence>& corr,
+                               const std::vector<bool>& truthful) {
   for (int pass = 0; pass < 3; ++pass)
     for (size_t k = 0; k < corr.size(); ++k) {
       const int layer = corr[k].in_clique ? 2 : truthful[k] ? 1 : 0;
       if (layer != pass) continue;
-      const Eigen::Vector3d a = placed(corr[k].query_xyz);
+      const Eigen::Vector3d a = placed_at(place, corr[k].query_xyz);
       const float* m = map.instances[corr[k].map_instance].centroid;
       svg.line(p.px(a.x()), p.py(a.y()), p.px(m[0]), p.py(m[1]), truthful[k] ? kRight : kWrong,
                layer == 2   ? kCliqueWidth
@@ -395,6 +411,17 @@ void write_correspondence_svg(const EvalOptions& o, const MapView& map, const Mo
                             : 0.7,
                "", layer == 0 ? 0.4 : 0.95, true);
     }
+}
+
+// The picture's title and subtitle: the pairs (true, false, in the clique) and the outcome.
+void draw_correspondence_title(SvgPicture& svg, const ModeRun& run, const QueryRecord& r,
+                               const std::vector<Localizer::Correspondence>& corr, const std::vector<bool>& truthful) {
+  uint32_t n_true = 0, n_clique = 0, clique_true = 0;
+  for (size_t k = 0; k < corr.size(); ++k) {
+    n_true += truthful[k];
+    n_clique += corr[k].in_clique;
+    clique_true += corr[k].in_clique && truthful[k];
+  }
   char title[200], sub[300];
   std::snprintf(title, sizeof(title), "Correspondences of query frame %u, mode %s: the query's instances over the map",
                 r.frame, run.mode.c_str());
@@ -407,6 +434,11 @@ void write_correspondence_svg(const EvalOptions& o, const MapView& map, const Mo
                 corr.size(), n_true, corr.size() - n_true, n_clique, clique_true, outcome,
                 r.in_zone ? "; in the repetitive zone" : "");
   draw_title(svg, title, sub);
+}
+
+// The legends: the classes drawn (map dot, query ring), then the kinds of line and the pose marks.
+void draw_correspondence_legends(SvgPicture& svg, double w, double h, const std::vector<uint32_t>& classes,
+                                 bool has_pose) {
   draw_legends(svg, w, h,
                class_legend(classes,
                             [](const std::string& c, const std::string& label) {
@@ -424,9 +456,34 @@ void write_correspondence_svg(const EvalOptions& o, const MapView& map, const Mo
                    s.line(cx, cy, cx + 10, cy, "#000000", 2.5);
                    s.circle(cx - 2, cy, 5.5, "#000000");
                  },
-                 r.has_pose ? "estimated pose and heading" : "true pose (no estimate)"},
+                 has_pose ? "estimated pose and heading" : "true pose (no estimate)"},
                 legend_cross(kRight, 7, "true pose", 2.5)},
                "correspondences");
+}
+
+// One query's correspondences in one mode: its instances placed at the mode's estimated pose (the true
+// pose when it has none) over the map's instances, each correspondence a line from the placed query
+// instance to its map instance, green when the ground truth agrees (the pair is within 2 m under the true
+// pose), red when not, thick when in the clique. True pairs under a right pose are short green lines.
+void write_correspondence_svg(const EvalOptions& o, const MapView& map, const ModeRun& run, size_t q,
+                              std::vector<std::string>* written) {
+  const QueryRecord& r = run.records[q];
+  const std::vector<Localizer::Correspondence>& corr = run.corr[q];
+  const std::vector<PictureInstance> none;
+  const std::vector<PictureInstance>& inst = q < run.instances.size() ? run.instances[q] : none;
+  const Eigen::Isometry3d place = r.has_pose ? r.result.map_T_scan : r.truth_local;
+  const std::vector<bool> truthful = judge_correspondences(map, r, corr);
+  const WorldBox box = correspondence_box(map, r, place, inst, corr);
+  const MapProjection p = fit_projection(box.min_x, box.min_y, box.max_x, box.max_y, 1400, 850);
+  const double w = p.px(box.max_x), h = p.py(box.min_y);
+  SvgPicture svg;
+  svg.rect(0, 0, w, h, "#fcfcfc", 1.0, "#bbbbbb");
+  std::vector<uint32_t> classes(kNumClasses, 0);
+  draw_instance_layers(svg, p, box, map, place, inst, &classes);
+  draw_pose_marks(svg, p, place, r.truth_local);
+  draw_correspondence_lines(svg, p, map, place, corr, truthful);
+  draw_correspondence_title(svg, run, r, corr, truthful);
+  draw_correspondence_legends(svg, w, h, classes, r.has_pose);
   draw_scale_bar(svg, 0, h + 14, p.scale);
   const std::string path = o.svg_dir + "/correspondences_" + run.mode + ".svg";
   if (svg.save(path)) written->push_back(path);

@@ -10,14 +10,16 @@
 #include <Eigen/Geometry>
 
 #include "gsf/config.h"
-#include "gsf/detail/arena.h"
 #include "gsf/map_format.h"
 #include "gsf/platform.h"
 #include "gsf/position_prior.h"
 #include "gsf/scan.h"
+#include "gsf/stage_results.h"
 #include "gsf/status.h"
 
 namespace gsf {
+
+class Arena;  // detail/arena.h: the bump allocator init() binds the stages with
 
 struct StageTimes {  // nanoseconds from the Clock given at init (all zero without one)
   // match: index lookups and ranking (with the heading votes); gsf: the GSF filter and correspondence accumulation;
@@ -151,7 +153,7 @@ class Localizer {
 
   bool initialized() const { return initialized_; }
   const LocalizerConfig& config() const { return config_; }
-  size_t workspace_bytes() const { return arena_.used(); }
+  size_t workspace_bytes() const { return workspace_used_; }
 
  private:
   struct Impl;  // stage objects, bound into the arena (defined in localizer.cpp only)
@@ -163,7 +165,7 @@ class Localizer {
   static constexpr float kPriorGlobalCheckZ = 4.0f;
   LocalizerConfig config_{};
   MapView map_{};
-  Arena arena_;
+  size_t workspace_used_ = 0;  // bytes of the caller's buffer init() bound
   Impl* impl_ = nullptr;
   Clock* clock_ = nullptr;
   bool initialized_ = false;

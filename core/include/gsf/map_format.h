@@ -11,9 +11,6 @@
 #include <cstddef>
 #include <cstdint>
 
-#include "gsf/detail/refine_layer.h"
-#include "gsf/detail/semantic_grid.h"
-#include "gsf/detail/triangle.h"
 #include "gsf/georeference.h"
 #include "gsf/status.h"
 
@@ -120,7 +117,32 @@ struct MapInstance {
 };
 static_assert(sizeof(MapInstance) == 40, "on-disk layout");
 
-using MapTriangle = Triangle;  // triangle.h: sides sorted d01 <= d12 <= d20; stored in key order
+// A triangle of three instances (triangle.h builds them; there it is called Triangle). Sides sorted
+// d01 <= d12 <= d20; stored in index-key order.
+struct MapTriangle {
+  uint32_t v[3];
+  float side[3];
+  uint8_t label[3];
+  uint8_t orientation;  // TriangleOrientation (triangle.h): the bird's-eye sense of v0 -> v1 -> v2
+};
+static_assert(sizeof(MapTriangle) == 28, "on-disk layout (docs/map-format.md)");
+
+// The refinement layer (refine_layer.h: RefineLayerView reads these): points with normals, quantised in
+// their grid cell, grouped by tile.
+struct MapRefineTile {
+  uint32_t key;          // semantic_tile_key(tx, ty), strictly increasing over the section
+  uint32_t first_point;  // the tile's points are first_point .. next tile's first_point - 1
+  int32_t z_base;        // z cell index of local z 0
+};
+static_assert(sizeof(MapRefineTile) == 12, "on-disk layout (docs/map-format.md)");
+
+struct MapRefinePoint {
+  uint16_t cell;      // (z - z_base) << 8 | (y - 16 ty) << 4 | (x - 16 tx), non-decreasing in a tile
+  uint8_t offset[3];  // position in the cell: (offset + 0.5) / 256 of the cell per axis
+  int8_t normal[3];   // round(127 n); all zero: no reliable normal
+};
+static_assert(sizeof(MapRefinePoint) == 8, "on-disk layout (docs/map-format.md)");
+
 static_assert(sizeof(MapHeader) == 256 && sizeof(SectionEntry) == 32, "on-disk layout (docs/map-format.md)");
 static_assert(offsetof(MapHeader, georef) == 32 && offsetof(MapHeader, params) == 88 &&
                   offsetof(MapHeader, counts) == 180 && offsetof(MapHeader, header_crc) == 244,
@@ -148,28 +170,6 @@ struct MapView {
   size_t total_bytes = 0;
 
   uint32_t grid_points() const { return params.grid_nx * params.grid_ny * params.grid_layers; }
-  SemanticGridView semantic_grid() const {
-    SemanticGridView g;
-    g.cell = params.semantic_cell;
-    g.tile_cells = params.semantic_tile_cells;
-    g.tile_count = counts.semantic_tiles;
-    g.palette_count = counts.semantic_palette;
-    g.tile_keys = semantic_tile_keys;
-    g.palette_offsets = semantic_palette_offsets;
-    g.palette = semantic_palette;
-    g.cells = semantic_cells;
-    g.neighbours = semantic_neighbours;
-    return g;
-  }
-  RefineLayerView refine_layer() const {
-    RefineLayerView r;
-    r.cell = params.refine_cell;
-    r.tile_count = counts.refine_tiles;
-    r.point_count = counts.refine_points;
-    r.tiles = refine_tiles;
-    r.points = refine_points;
-    return r;
-  }
 };
 
 // Bytes write_map() needs for these contents.

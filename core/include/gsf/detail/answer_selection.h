@@ -1,6 +1,6 @@
 // Internal (gsf/detail): a pipeline stage or building block, not part of the stable interface; it may
 // change between versions. The stable interface is localizer.h, config.h, map_format.h, scan.h, status.h,
-// platform.h, class_table.h, georeference.h and the C API gsf.h.
+// platform.h, class_table.h, georeference.h, stage_configs.h, stage_results.h and the C API gsf.h.
 // Choosing the answer among the pose hypotheses (after the max clique): whole-scan verification
 // against the map's semantic layer ranks them (coarse for all, full for the best, pattern-refined for
 // the leaders: each step ranks, then caps). It keeps what the confidence (confidence.h) compares: the
@@ -10,11 +10,11 @@
 
 #include <Eigen/Geometry>
 
-#include "gsf/config.h"
 #include "gsf/detail/arena.h"
 #include "gsf/detail/pose_hypotheses.h"
 #include "gsf/detail/semantic_grid.h"
 #include "gsf/detail/voxel_layer.h"
+#include "gsf/stage_configs.h"
 #include "gsf/status.h"
 
 namespace gsf {

@@ -1,6 +1,6 @@
 // Internal (gsf/detail): a pipeline stage or building block, not part of the stable interface; it may
 // change between versions. The stable interface is localizer.h, config.h, map_format.h, scan.h, status.h,
-// platform.h, class_table.h, georeference.h and the C API gsf.h.
+// platform.h, class_table.h, georeference.h, stage_configs.h, stage_results.h and the C API gsf.h.
 // Open-addressing hash map with a fixed slot count, for the per-scan voxel grid and dedup tables.
 //
 // Keys are uint64 (packed voxel coordinates, packed index pairs). Linear probing; slot count is a power

@@ -1,6 +1,6 @@
 // Internal (gsf/detail): a pipeline stage or building block, not part of the stable interface; it may
 // change between versions. The stable interface is localizer.h, config.h, map_format.h, scan.h, status.h,
-// platform.h, class_table.h, georeference.h and the C API gsf.h.
+// platform.h, class_table.h, georeference.h, stage_configs.h, stage_results.h and the C API gsf.h.
 // The answer's confidence: a calibrated probability that the chosen pose is right (translation < 5 m and
 // rotation < 10 deg from the truth), and the default decision rule built on it (docs/confidence.md).
 //
@@ -34,14 +34,11 @@
 
 #include "gsf/detail/arena.h"
 #include "gsf/detail/semantic_grid.h"
+#include "gsf/stage_configs.h"
+#include "gsf/stage_results.h"
 #include "gsf/status.h"
 
 namespace gsf {
-
-struct ConfidenceConfig {
-  // The default decision rule: LocalizeResult::confident = confidence >= min_probability.
-  float min_probability = 0.9f;
-};
 
 // The logistic factors of the probability (see above).
 struct ConfidenceModel {
@@ -52,19 +49,6 @@ struct ConfidenceModel {
 };
 // Fitted by bench/fit_confidence.py (docs/confidence.md).
 extern const ConfidenceModel kConfidenceModel;
-
-// What the confidence was computed from (LocalizeResult diagnostics).
-struct ConfidenceEvidence {
-  float z_rival = 0.0f;       // against the closest rival; without one, the closest probe of either kind
-  float z_shift = 0.0f;       // against the closest shifted probe
-  float z_turn = 0.0f;        // against the closest turned probe
-  uint32_t rivals = 0;        // rivals compared (at most AnswerConfidence::kMaxRivals)
-  uint32_t samples = 0;       // sampled voxels compared
-  uint32_t blocks = 0;        // scan blocks holding them
-  float inlier_share = 0.0f;  // the answer's inliers / the scan's instances
-  float known_share = 0.0f;   // share of the samples that landed on the map's semantic layer at the answer
-  float agreement = 0.0f;     // agree / (agree + disagree) at the answer (diagnostic, not in the model)
-};
 
 // P from the evidence (the model above).
 double confidence_probability(const ConfidenceEvidence& e, const ConfidenceModel& model = kConfidenceModel);

@@ -1,6 +1,6 @@
 // Internal (gsf/detail): a pipeline stage or building block, not part of the stable interface; it may
 // change between versions. The stable interface is localizer.h, config.h, map_format.h, scan.h, status.h,
-// platform.h, class_table.h, georeference.h and the C API gsf.h.
+// platform.h, class_table.h, georeference.h, stage_configs.h, stage_results.h and the C API gsf.h.
 // Correspondence accumulation and selection (between the GSF filter and the max clique). Every
 // triangle match that survives the filter adds its three vertex pairs (query instance, map instance):
 // a pair seen again gains a vote and keeps its best GSF similarity. Selection then keeps the pairs with

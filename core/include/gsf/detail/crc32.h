@@ -1,6 +1,6 @@
 // Internal (gsf/detail): a pipeline stage or building block, not part of the stable interface; it may
 // change between versions. The stable interface is localizer.h, config.h, map_format.h, scan.h, status.h,
-// platform.h, class_table.h, georeference.h and the C API gsf.h.
+// platform.h, class_table.h, georeference.h, stage_configs.h, stage_results.h and the C API gsf.h.
 // CRC-32 (IEEE 802.3, reflected, poly 0xEDB88320), as in zlib/PNG; used by the map format.
 #pragma once
 #include <cstddef>

@@ -1,6 +1,6 @@
 // Internal (gsf/detail): a pipeline stage or building block, not part of the stable interface; it may
 // change between versions. The stable interface is localizer.h, config.h, map_format.h, scan.h, status.h,
-// platform.h, class_table.h, georeference.h and the C API gsf.h.
+// platform.h, class_table.h, georeference.h, stage_configs.h, stage_results.h and the C API gsf.h.
 // Fixed-capacity vectors in the ETL style: FixedVector<T> is the capacity-erased view that functions
 // take by reference; StaticVector<T, N> owns inline storage; a FixedVector can also be bound to arena
 // memory at init. push_back on a full vector returns false and changes nothing (callers map it to

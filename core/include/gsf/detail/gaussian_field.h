@@ -1,6 +1,6 @@
 // Internal (gsf/detail): a pipeline stage or building block, not part of the stable interface; it may
 // change between versions. The stable interface is localizer.h, config.h, map_format.h, scan.h, status.h,
-// platform.h, class_table.h, georeference.h and the C API gsf.h.
+// platform.h, class_table.h, georeference.h, stage_configs.h, stage_results.h and the C API gsf.h.
 // The Gaussian semantic field (GSF, the middle layer of the scene graph): per instance, a sparse GP
 // f: R^2 or R^3 -> R^D from positions around the instance to class-probability vectors.
 //
@@ -16,27 +16,13 @@
 #include "gsf/detail/arena.h"
 #include "gsf/detail/voxel_layer.h"
 #include "gsf/semantic_classes.h"
+#include "gsf/stage_configs.h"
 #include "gsf/status.h"
 
 namespace gsf {
 
 constexpr uint32_t kMaxInducing = 96;
 constexpr uint32_t kMaxGridPoints = 128;
-
-struct FieldConfig {
-  float radius = 8.0f;            // m; semantic points within this distance train the field
-  uint32_t inducing_points = 32;  // M (Algorithm 1 target), <= kMaxInducing
-  float length_scale = 2.0f;      // m; Matern kappa
-  float signal_variance = 1.0f;   // s^2
-  float noise_variance = 0.05f;   // sigma_y^2
-  uint32_t input_dims = 2;        // 2 = bird's-eye (x, y) field, 3 = full 3-D inputs
-  uint32_t grid_nx = 6, grid_ny = 6;
-  float grid_spacing = 2.0f;   // m (6 x 6 at 2 m: as discriminative as 8 x 8 at 1.5 m, 1.8x cheaper)
-  uint32_t grid_layers = 1;    // heights (3-D fields only; 1 for bird's-eye)
-  float layer_spacing = 1.0f;  // m between layers
-  float grid_z0 = 0.0f;        // m; lowest layer height relative to the centroid
-  uint64_t seed = 7;           // Algorithm 1's random choice
-};
 
 Status validate(const FieldConfig& config);
 inline uint32_t grid_points(const FieldConfig& c) { return c.grid_nx * c.grid_ny * c.grid_layers; }

@@ -1,6 +1,6 @@
 // Internal (gsf/detail): a pipeline stage or building block, not part of the stable interface; it may
 // change between versions. The stable interface is localizer.h, config.h, map_format.h, scan.h, status.h,
-// platform.h, class_table.h, georeference.h and the C API gsf.h.
+// platform.h, class_table.h, georeference.h, stage_configs.h, stage_results.h and the C API gsf.h.
 // The GSF fine filter (paper Sec. III-B/C): the similarity omega in [0, 1] of a query instance's
 // Gaussian semantic field and a map instance's, under the yaw hypothesis of a triangle match.
 //
@@ -25,24 +25,10 @@
 #include "gsf/map_format.h"
 #include "gsf/platform.h"
 #include "gsf/semantic_classes.h"
+#include "gsf/stage_configs.h"
 #include "gsf/status.h"
 
 namespace gsf {
-
-struct GsfFilterConfig {
-  // false: no field is fitted or compared, every match at a kept heading passes with omega 1 (the
-  // instance-only Outram pipeline: the evaluation's "instance" column).
-  bool enabled = true;
-  uint32_t yaw_bins = 36;                   // rotation hypotheses are binned for probe caching (10 deg)
-  uint32_t probe_cache_slots = 1024;        // cached query-field probes (instance, yaw bin)
-  uint32_t similarity_cache_slots = 65536;  // cached omega per (query instance, map instance, yaw bin)
-  float observed_variance = 0.6f;           // grid points where the query field's variance exceeds this
-                                            // fraction of the prior are unobserved and not compared
-  // Weight of the W2 covariance term (wasserstein.h): 0 compares the means only (docs/gsf-field.md: the
-  // covariance term measures a sparse scan's density against a dense map); 1 = the paper's W2 (ablation).
-  float covariance_weight = 0.0f;
-  float tau = 0.2f;  // omega = exp(-w2 / tau), w2 per compared grid point
-};
 
 // The query instances' fitted fields (arrays owned by the localizer's arena).
 struct QueryFields {

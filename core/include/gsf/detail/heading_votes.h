@@ -1,6 +1,6 @@
 // Internal (gsf/detail): a pipeline stage or building block, not part of the stable interface; it may
 // change between versions. The stable interface is localizer.h, config.h, map_format.h, scan.h, status.h,
-// platform.h, class_table.h, georeference.h and the C API gsf.h.
+// platform.h, class_table.h, georeference.h, stage_configs.h, stage_results.h and the C API gsf.h.
 // Heading votes (before the GSF filter): the ranked index matches of an evenly spaced sample of query
 // triangles vote for the yaw bin that takes the query triangle onto the map triangle; only the
 // best-supported headings (each with its two neighbour bins) go on. True matches agree on one heading

@@ -1,6 +1,6 @@
 // Internal (gsf/detail): a pipeline stage or building block, not part of the stable interface; it may
 // change between versions. The stable interface is localizer.h, config.h, map_format.h, scan.h, status.h,
-// platform.h, class_table.h, georeference.h and the C API gsf.h.
+// platform.h, class_table.h, georeference.h, stage_configs.h, stage_results.h and the C API gsf.h.
 // The object layer (top of the scene graph): instances clustered inside instantiable classes.
 //
 // Connected components over the voxel layer: two voxels of the same instantiable class are connected
@@ -27,36 +27,10 @@
 #include "gsf/detail/arena.h"
 #include "gsf/detail/voxel_layer.h"
 #include "gsf/semantic_classes.h"
+#include "gsf/stage_configs.h"
 #include "gsf/status.h"
 
 namespace gsf {
-
-struct ClusterConfig {
-  ClassMask instance_classes = kDefaultInstanceClasses;
-  float tolerance[kNumClasses];  // m, per class; default 0.6 (car 1.0)
-  // m, per class: the vertical gap two voxels within tolerance horizontally may have and still connect,
-  // when larger than tolerance (otherwise the test is the sphere of radius tolerance). Default 2.0 for
-  // pole, trunk and traffic sign (beams 1.13 deg apart up to 100 m, nuScenes' 1.33 deg to 86 m; suite
-  // held out: 1.0 / 1.5 / 2.0 m gave 96.3 / 97.0 / 97.3% of all queries, docs/results.md), 0 (the
-  // sphere) for the others.
-  float vertical_tolerance[kNumClasses];
-  uint32_t min_voxels[kNumClasses];  // default 3 (car 8)
-  float max_extent[kNumClasses];     // m, horizontal bbox diagonal; default 2.5 (car 8, trunk 2.5)
-  uint32_t max_instances = 128;
-  ClusterConfig() {
-    for (int c = 0; c < kNumClasses; ++c) {
-      tolerance[c] = 0.6f;
-      vertical_tolerance[c] = 0.0f;
-      min_voxels[c] = 3;
-      max_extent[c] = 2.5f;
-    }
-    tolerance[kCar] = 1.0f;
-    min_voxels[kCar] = 8;
-    max_extent[kCar] = 8.0f;
-    max_extent[kTrafficSign] = 3.0f;
-    vertical_tolerance[kPole] = vertical_tolerance[kTrunk] = vertical_tolerance[kTrafficSign] = 2.0f;
-  }
-};
 
 struct Instance {
   float centroid[3];

@@ -1,6 +1,6 @@
 // Internal (gsf/detail): a pipeline stage or building block, not part of the stable interface; it may
 // change between versions. The stable interface is localizer.h, config.h, map_format.h, scan.h, status.h,
-// platform.h, class_table.h, georeference.h and the C API gsf.h.
+// platform.h, class_table.h, georeference.h, stage_configs.h, stage_results.h and the C API gsf.h.
 // Inlier selection by maximum clique (paper Eq. 6-7): correspondences i, j are consistent when
 // | |a_i - a_j| - |b_i - b_j| | <= eps; the largest mutually consistent set is the inlier set.
 //

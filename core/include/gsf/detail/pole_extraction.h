@@ -1,6 +1,6 @@
 // Internal (gsf/detail): a pipeline stage or building block, not part of the stable interface; it may
 // change between versions. The stable interface is localizer.h, config.h, map_format.h, scan.h, status.h,
-// platform.h, class_table.h, georeference.h and the C API gsf.h.
+// platform.h, class_table.h, georeference.h, stage_configs.h, stage_results.h and the C API gsf.h.
 // Geometric pole / trunk instances from host classes: for label sets that have no pole or trunk class
 // (nuScenes-lidarseg keeps them inside static.manmade and static.vegetation), find thin, tall,
 // vertical and isolated structures among the voxels of the "host" classes and return them as Instance
@@ -46,37 +46,10 @@
 #include "gsf/detail/instance_clustering.h"
 #include "gsf/detail/voxel_layer.h"
 #include "gsf/semantic_classes.h"
+#include "gsf/stage_configs.h"
 #include "gsf/status.h"
 
 namespace gsf {
-
-enum PoleKind : uint8_t { kPoleKind = 0, kTrunkKind = 1 };
-
-// The default hosts are the nuScenes-lidarseg situation. For a label set that has its own pole and
-// trunk classes (SemanticKITTI), set_hosts(semantic_kitti table) gives no hosts and no instances:
-// InstanceClustering already makes them from the labels.
-struct PoleConfig {
-  ClassMask pole_hosts = class_bit(kBuilding);     // e.g. nuScenes static.manmade
-  ClassMask trunk_hosts = class_bit(kVegetation);  // e.g. nuScenes static.vegetation
-  float max_diameter[2] = {0.8f, 1.2f};            // m, per kind: slice box diagonal and thickness about the axis
-  float min_height[2] = {2.0f, 2.0f};              // m, per kind: vertical extent of a chain
-  uint32_t min_levels = 4;                         // distinct voxel levels in a chain
-  float max_tilt_deg = 12.0f;                      // axis from vertical
-  float ring_width = 1.0f;                         // m, isolation ring around a slice segment
-  float link_radius = 0.6f;                        // m, horizontal offset of linked voxels of stacked segments
-  float max_gap = 1.2f;                            // m, empty height bridged between stacked segments
-  float stability[2] = {1.0f, 1.0f};               // instance stability per kind (stability_weight(kPole/kTrunk))
-  uint32_t max_instances = 64;
-
-  // Hosts and stabilities from a label set's table (pole_host_classes, trunk_host_classes,
-  // stability(kPole), stability(kTrunk)).
-  void set_hosts(const ClassTable& table) {
-    pole_hosts = table.pole_host_classes();
-    trunk_hosts = table.trunk_host_classes();
-    stability[kPoleKind] = table.stability(kPole);
-    stability[kTrunkKind] = table.stability(kTrunk);
-  }
-};
 
 // Per kept instance: how it was judged.
 struct PoleInfo {

@@ -1,6 +1,6 @@
 // Internal (gsf/detail): a pipeline stage or building block, not part of the stable interface; it may
 // change between versions. The stable interface is localizer.h, config.h, map_format.h, scan.h, status.h,
-// platform.h, class_table.h, georeference.h and the C API gsf.h.
+// platform.h, class_table.h, georeference.h, stage_configs.h, stage_results.h and the C API gsf.h.
 // Pose hypotheses from the correspondences: the consistency graph is built once, then cliques are
 // peeled one after another. Each maximum clique gives a weighted TLS pose (paper Eq. 8); every
 // correspondence that agrees with that pose is removed before the next search, so the next clique is a
@@ -23,58 +23,10 @@
 #include "gsf/detail/max_clique.h"
 #include "gsf/detail/pose_solver.h"
 #include "gsf/detail/semantic_grid.h"
+#include "gsf/stage_configs.h"
 #include "gsf/status.h"
 
 namespace gsf {
-
-struct HypothesisConfig {
-  // K: hypotheses per query. A 14 x 10 lattice has 140 shifts a heading and the shift votes share the
-  // slots among up to shift_headings headings; 96 left the true shift out in lattice zones (suite seeds
-  // 1-5, lattice zone 86.5% at 96, 97.0% at 192; docs/results.md). Verification scores each coarsely.
-  uint32_t max_hypotheses = 192;
-  uint32_t max_peeled = 8;      // of which from peeled maximum cliques; the rest from shift votes,
-                                // shared evenly by the headings
-  uint32_t shift_headings = 4;  // distinct clique headings whose translations are voted on
-  // Heading-diverse cliques: after peeling, while fewer than shift_headings distinct headings were found,
-  // up to this many more clique searches run with the consistency graph's edges at the found headings
-  // removed (pair directions within heading_separation_deg), so each finds a clique at another heading.
-  // In a symmetric layout (a lattice's 90 / 180 deg turns, a row's or avenue's 180) every large clique can
-  // share one wrong heading, and the shift votes then never see the true one. 0 = off.
-  uint32_t heading_cliques = 3;
-  float heading_separation_deg = 15.0f;
-  // m; translation vote bins. Bins are ranked by their support, the weight of the votes within
-  // tls_threshold (<= shift_bin) of the mean of the bin's own votes (they may lie in a neighbouring
-  // bin): a translation whose votes straddle a bin edge is then not outranked by a lattice's other
-  // shifts, and bins with fewer supporting votes than min_inliers but enough of their own still follow.
-  float shift_bin = 2.0f;
-  // Pairs the shift votes see: the consistency graph's max_correspondences best pairs and the next ones
-  // by the same ranking (correspondence_set.h), up to this many. In a lattice the graph's 512 can hold
-  // only 2-10 true pairs of the 5,000-10,000 candidates, because every lattice shift gathers as many
-  // triangle votes as the truth; a translation vote over all of them still finds the true shift among
-  // its peaks. Votes cost a sort per heading; a bin's fit reads only the bins around it. At most
-  // max_correspondences: the graph's pairs only.
-  uint32_t shift_vote_pairs = 8192;
-  uint64_t first_budget = 200000;  // branch-and-bound nodes for the first (maximum) clique
-  uint64_t next_budget = 20000;    // nodes for each further clique
-  float consistency_eps = 1.0f;    // m; | |a_i-a_j| - |b_i-b_j| | <= eps (Outram: 1.0 m)
-  // Weight of height differences in those distances. An instance centroid's height depends on how much
-  // of a pole or trunk one scan sees (near columns lose their tops); 1 = Outram's 3-D distances.
-  float consistency_z_weight = 1.0f;
-  float tls_threshold = 1.5f;    // m; residual truncation of the weighted TLS (paper Eq. 8)
-  uint32_t max_iterations = 50;  // GNC iterations
-  uint32_t min_inliers = 3;      // a clique or TLS solution with fewer is no hypothesis
-  float same_pose_m = 2.0f;      // hypotheses closer than this and same_pose_deg are one answer
-  float same_pose_deg = 5.0f;
-  // Upright prior: a hypothesis whose z axis leans more than this from the map's is re-solved upright
-  // (yaw and translation on its inliers, which are then recounted; fewer than min_inliers: dropped).
-  // A vehicle-mounted sensor is near level (Outram's own failures include upside-down poses). 8 deg: a
-  // road's grade (<= ~10%, 5.7 deg) plus mounting; clique poses of few mid-height centroids came out
-  // tilted 8-12 deg at the right place. 0 disables.
-  float max_tilt_deg = 8.0f;
-  // The answer's height is then the weighted median vertical offset of every correspondence that the
-  // answer places within tls_threshold in x and y (answer_height.h), not its hypothesis's own (for a
-  // shift vote, the mean of a few votes, each as high as the part of a trunk the scan saw).
-};
 
 struct PoseHypothesis {
   Eigen::Isometry3d map_T_scan = Eigen::Isometry3d::Identity();

@@ -1,6 +1,6 @@
 // Internal (gsf/detail): a pipeline stage or building block, not part of the stable interface; it may
 // change between versions. The stable interface is localizer.h, config.h, map_format.h, scan.h, status.h,
-// platform.h, class_table.h, georeference.h and the C API gsf.h.
+// platform.h, class_table.h, georeference.h, stage_configs.h, stage_results.h and the C API gsf.h.
 // Pose from correspondences, in double precision: weighted Kabsch (closed form) and the weighted
 // truncated least squares of paper Eq. 8,
 //     min_{R,t} sum_i w_i min(|b_i - R a_i - t|^2, c^2),

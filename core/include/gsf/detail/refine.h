@@ -1,6 +1,6 @@
 // Internal (gsf/detail): a pipeline stage or building block, not part of the stable interface; it may
 // change between versions. The stable interface is localizer.h, config.h, map_format.h, scan.h, status.h,
-// platform.h, class_table.h, georeference.h and the C API gsf.h.
+// platform.h, class_table.h, georeference.h, stage_configs.h, stage_results.h and the C API gsf.h.
 // Pose refinement against the map's point layer (paper Table IV "w/ rf"): point-to-plane ICP from the
 // global pose, on long-term structure only (stability weight 1: buildings, poles, fences, ground...).
 //
@@ -23,20 +23,10 @@
 #include "gsf/detail/arena.h"
 #include "gsf/detail/refine_layer.h"
 #include "gsf/detail/voxel_layer.h"
+#include "gsf/stage_configs.h"
 #include "gsf/status.h"
 
 namespace gsf {
-
-struct RefineConfig {
-  bool enabled = false;
-  uint32_t max_points = 2000;  // query points used (deterministic stride subsample)
-  uint32_t iterations = 10;
-  float radius_start = 1.5f;    // m, correspondence radius of the first iteration (<= 1.5 cell)
-  float radius_end = 0.5f;      // m, of the last
-  float cell = 1.0f;            // m, grid cell: must equal the map's (MapParams::refine_cell)
-  float max_correction = 3.0f;  // m, larger moves are rejected
-  uint32_t min_inliers = 100;
-};
 
 struct RefineStats {
   uint32_t query_points = 0, inliers = 0, iterations = 0;

@@ -1,6 +1,6 @@
 // Internal (gsf/detail): a pipeline stage or building block, not part of the stable interface; it may
 // change between versions. The stable interface is localizer.h, config.h, map_format.h, scan.h, status.h,
-// platform.h, class_table.h, georeference.h and the C API gsf.h.
+// platform.h, class_table.h, georeference.h, stage_configs.h, stage_results.h and the C API gsf.h.
 // The map's refinement layer (format v4): the points the refiner aligns a scan to, already sorted into
 // its grid and carrying their normals, so the localizer reads the layer in place (no grid or normals in
 // the workspace).
@@ -22,6 +22,7 @@
 #pragma once
 #include <cstdint>
 
+#include "gsf/map_format.h"
 #include "gsf/status.h"
 
 namespace gsf {
@@ -29,19 +30,7 @@ namespace gsf {
 constexpr uint32_t kRefineTileCells = 16;   // columns per tile side (4 bits each of the cell id)
 constexpr int32_t kRefineTileZCells = 256;  // z cells a tile spans above its z base (8 bits)
 
-struct MapRefineTile {
-  uint32_t key;          // semantic_tile_key(tx, ty), strictly increasing over the section
-  uint32_t first_point;  // the tile's points are first_point .. next tile's first_point - 1
-  int32_t z_base;        // z cell index of local z 0
-};
-static_assert(sizeof(MapRefineTile) == 12, "on-disk layout (docs/map-format.md)");
-
-struct MapRefinePoint {
-  uint16_t cell;      // (z - z_base) << 8 | (y - 16 ty) << 4 | (x - 16 tx), non-decreasing in a tile
-  uint8_t offset[3];  // position in the cell: (offset + 0.5) / 256 of the cell per axis
-  int8_t normal[3];   // round(127 n); all zero: no reliable normal
-};
-static_assert(sizeof(MapRefinePoint) == 8, "on-disk layout (docs/map-format.md)");
+// MapRefineTile and MapRefinePoint, the layer's records, are in map_format.h.
 
 // Integer cell coordinates of a map-local position.
 struct RefineCell {
@@ -69,6 +58,17 @@ struct RefineLayerView {
   // from 0 within point_count, cells non-decreasing in each tile, normals zero or near unit length.
   Status validate() const;
 };
+
+// The map's refinement layer (empty when the map has none).
+inline RefineLayerView refine_layer_view(const MapView& map) {
+  RefineLayerView r;
+  r.cell = map.params.refine_cell;
+  r.tile_count = map.counts.refine_tiles;
+  r.point_count = map.counts.refine_points;
+  r.tiles = map.refine_tiles;
+  r.points = map.refine_points;
+  return r;
+}
 
 // Tile coordinates and local cell id of a cell (false when the tile key is out of range).
 bool refine_tile_of(const RefineCell& c, int32_t* tx, int32_t* ty, uint32_t* key);

@@ -1,6 +1,6 @@
 // Internal (gsf/detail): a pipeline stage or building block, not part of the stable interface; it may
 // change between versions. The stable interface is localizer.h, config.h, map_format.h, scan.h, status.h,
-// platform.h, class_table.h, georeference.h and the C API gsf.h.
+// platform.h, class_table.h, georeference.h, stage_configs.h, stage_results.h and the C API gsf.h.
 // The map's compact semantic layer and the whole-scan verification of a pose hypothesis.
 //
 // Layer: a bird's-eye grid of `cell` metre cells grouped in square tiles of tile_cells x tile_cells,
@@ -31,7 +31,9 @@
 
 #include <Eigen/Geometry>
 
+#include "gsf/map_format.h"
 #include "gsf/semantic_classes.h"
+#include "gsf/stage_results.h"
 #include "gsf/status.h"
 
 namespace gsf {
@@ -69,13 +71,20 @@ struct SemanticGridView {
   Status validate(uint32_t num_classes) const;
 };
 
-struct PoseVerification {
-  float score = 0.0f;  // agree - disagree (stability-weighted)
-  float agree = 0.0f;
-  float disagree = 0.0f;
-  uint32_t scored = 0;   // sampled voxels that landed on a known cell
-  uint32_t unknown = 0;  // sampled voxels that landed outside the map's layer
-};
+// The map's semantic layer (empty when the map has none).
+inline SemanticGridView semantic_grid_view(const MapView& map) {
+  SemanticGridView g;
+  g.cell = map.params.semantic_cell;
+  g.tile_cells = map.params.semantic_tile_cells;
+  g.tile_count = map.counts.semantic_tiles;
+  g.palette_count = map.counts.semantic_palette;
+  g.tile_keys = map.semantic_tile_keys;
+  g.palette_offsets = map.semantic_palette_offsets;
+  g.palette = map.semantic_palette;
+  g.cells = map.semantic_cells;
+  g.neighbours = map.semantic_neighbours;
+  return g;
+}
 
 // The bird's-eye part of a query voxel that verification reads (12 B of the voxel's 96): a query scores
 // a few hundred poses on strided samples of its voxels, and this compact copy keeps them in cache.

@@ -1,6 +1,6 @@
 // Internal (gsf/detail): a pipeline stage or building block, not part of the stable interface; it may
 // change between versions. The stable interface is localizer.h, config.h, map_format.h, scan.h, status.h,
-// platform.h, class_table.h, georeference.h and the C API gsf.h.
+// platform.h, class_table.h, georeference.h, stage_configs.h, stage_results.h and the C API gsf.h.
 // Tracking: the pose of a scan near a predicted pose (the last pose and odometry), without the global
 // search (docs/vehicle-modes.md). Three steps, each bounded:
 //   1. a bird's-eye pattern search of whole-scan verification around the prediction (semantic_grid.h:
@@ -24,22 +24,9 @@
 #include "gsf/detail/semantic_grid.h"
 #include "gsf/detail/voxel_layer.h"
 #include "gsf/platform.h"
+#include "gsf/stage_configs.h"
 
 namespace gsf {
-
-struct VerifyConfig;
-
-struct TrackConfig {
-  // Bind the refiner (RefineConfig, its workspace) even when one-shot refinement is off, so track() can
-  // refine; off: track() uses the pattern search alone.
-  bool refine = true;
-  uint32_t search_rounds = 4;    // pattern-search rounds around the prediction (steps halved each round)
-  float search_step_m = 1.0f;    // m, first round's move; reaches about 2 x (1 + 1/2 + ...) = 3.75 m
-  float search_step_deg = 2.0f;  // deg, first round's turn; reaches about 7.5 deg
-  // ICP's budget (at most RefineConfig's max_points / iterations): the search leaves it within a cell.
-  uint32_t icp_points = 1000;
-  uint32_t icp_iterations = 6;
-};
 
 // What track() found.
 struct TrackOutcome {

@@ -1,6 +1,6 @@
 // Internal (gsf/detail): a pipeline stage or building block, not part of the stable interface; it may
 // change between versions. The stable interface is localizer.h, config.h, map_format.h, scan.h, status.h,
-// platform.h, class_table.h, georeference.h and the C API gsf.h.
+// platform.h, class_table.h, georeference.h, stage_configs.h, stage_results.h and the C API gsf.h.
 // Triangle descriptors over the object layer (Outram / STD style): each instance with its K nearest
 // instances forms triangles; the key is the labels in vertex order and the sorted, quantised side
 // lengths (permutation invariant).
@@ -14,23 +14,11 @@
 #include "gsf/detail/arena.h"
 #include "gsf/detail/bounded_hash_map.h"
 #include "gsf/detail/fixed_vector.h"
+#include "gsf/map_format.h"
+#include "gsf/stage_configs.h"
 #include "gsf/status.h"
 
 namespace gsf {
-
-struct TriangleConfig {
-  uint32_t neighbours = 10;  // K nearest instances per anchor (query scans)
-  // K of the map's triangles (0: neighbours). A map holds every instance seen from any scan of the drive,
-  // a query only those it sees, so a query triangle's vertices may not be among the map apex's K
-  // nearest; a larger map K keeps them there. Must be 0 or >= neighbours; the map records it.
-  uint32_t map_neighbours = 0;
-  uint32_t map_k() const { return map_neighbours == 0 ? neighbours : map_neighbours; }
-  float min_side = 0.5f;                  // m
-  float max_side = 50.0f;                 // m
-  float side_bin = 1.0f;                  // m, key quantisation
-  float relative_side_tolerance = 0.03f;  // match if |d_q - d_m| < tol * d_q on every side
-  uint32_t max_triangles = 4096;          // per scan (capacity)
-};
 
 // Bird's-eye turning sense of a triangle's vertices in canonical order (v0 -> v1 -> v2). A rotation about
 // the vertical keeps it and a mirror image reverses it, and the side lengths cannot tell the two apart: in
@@ -45,13 +33,7 @@ enum TriangleOrientation : uint8_t {  // 0 is no sense: load_map refuses a recor
 };
 constexpr float kOrientationMinHeight = 1.0f;  // m
 
-struct Triangle {  // also the on-disk map record (map_format.h)
-  uint32_t v[3];
-  float side[3];
-  uint8_t label[3];
-  uint8_t orientation;  // TriangleOrientation
-};
-static_assert(sizeof(Triangle) == 28, "map record layout");
+using Triangle = MapTriangle;  // the on-disk map record (map_format.h): v[3], side[3], label[3], orientation
 
 Status validate(const TriangleConfig& config);
 

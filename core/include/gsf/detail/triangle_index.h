@@ -1,6 +1,6 @@
 // Internal (gsf/detail): a pipeline stage or building block, not part of the stable interface; it may
 // change between versions. The stable interface is localizer.h, config.h, map_format.h, scan.h, status.h,
-// platform.h, class_table.h, georeference.h and the C API gsf.h.
+// platform.h, class_table.h, georeference.h, stage_configs.h, stage_results.h and the C API gsf.h.
 // The map's triangle hash index as plain CSR arrays (it lives in the map blob, format v5): the map's
 // triangles are stored sorted by key (triangle.h: labels, then quantised sides), the index holds the
 // sorted unique keys and offsets (key_count + 1) into the triangle array, so bucket k is the contiguous

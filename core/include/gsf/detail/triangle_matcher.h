@@ -1,6 +1,6 @@
 // Internal (gsf/detail): a pipeline stage or building block, not part of the stable interface; it may
 // change between versions. The stable interface is localizer.h, config.h, map_format.h, scan.h, status.h,
-// platform.h, class_table.h, georeference.h and the C API gsf.h.
+// platform.h, class_table.h, georeference.h, stage_configs.h, stage_results.h and the C API gsf.h.
 // Coarse matching of one query triangle against the map's triangle index, ranked and then capped.
 //
 // Every map triangle found under the 27 neighbouring keys (labels in vertex order, quantised sides +- 1

@@ -1,6 +1,6 @@
 // Internal (gsf/detail): a pipeline stage or building block, not part of the stable interface; it may
 // change between versions. The stable interface is localizer.h, config.h, map_format.h, scan.h, status.h,
-// platform.h, class_table.h, georeference.h and the C API gsf.h.
+// platform.h, class_table.h, georeference.h, stage_configs.h, stage_results.h and the C API gsf.h.
 // The metric-semantic layer (bottom of the scene graph): a scan voxelised into a bounded hash of voxels,
 // each with its centroid, point count, mean class-probability vector and argmax label; plus a coarse
 // 2-D column index for radius gathers (the neighbourhood each instance's field is trained on).
@@ -27,20 +27,10 @@
 #include "gsf/detail/bounded_hash_map.h"
 #include "gsf/scan.h"
 #include "gsf/semantic_classes.h"
+#include "gsf/stage_configs.h"
 #include "gsf/status.h"
 
 namespace gsf {
-
-struct VoxelConfig {
-  float voxel_size = 0.4f;  // m
-  float min_range = 2.5f;   // m; drops returns from the ego vehicle
-  float max_range = 80.0f;  // m
-  // 32k: the measured scans make 6k-14k voxels at 0.4 m (docs/memory.md); beyond it a scan's new voxels
-  // are dropped and counted, and localize() sets capacity_truncated.
-  uint32_t max_voxels = 32768;
-  float column_size = 2.0f;      // m; cell of the 2-D gather index
-  uint32_t max_columns = 16384;  // gather index cells (hash capacity)
-};
 
 struct Voxel {  // 96 B; what verification, clustering and refinement read sits in the first 20
   // centroid and label share the first 16 bytes: with the arena's 16-byte alignment they never straddle

@@ -1,0 +1,30 @@
+// What the stages hand the facade for its results (Localizer: LocalizeResult, score_pose): plain data,
+// defined here so that a public header never needs a stage's (gsf/detail) header.
+#pragma once
+#include <cstdint>
+
+namespace gsf {
+
+// Whole-scan verification of one pose against the map's semantic layer (semantic_grid.h).
+struct PoseVerification {
+  float score = 0.0f;  // agree - disagree (stability-weighted)
+  float agree = 0.0f;
+  float disagree = 0.0f;
+  uint32_t scored = 0;   // sampled voxels that landed on a known cell
+  uint32_t unknown = 0;  // sampled voxels that landed outside the map's layer
+};
+
+// What the confidence was computed from (confidence.h; LocalizeResult diagnostics).
+struct ConfidenceEvidence {
+  float z_rival = 0.0f;       // against the closest rival; without one, the closest probe of either kind
+  float z_shift = 0.0f;       // against the closest shifted probe
+  float z_turn = 0.0f;        // against the closest turned probe
+  uint32_t rivals = 0;        // rivals compared (at most AnswerConfidence::kMaxRivals)
+  uint32_t samples = 0;       // sampled voxels compared
+  uint32_t blocks = 0;        // scan blocks holding them
+  float inlier_share = 0.0f;  // the answer's inliers / the scan's instances
+  float known_share = 0.0f;   // share of the samples that landed on the map's semantic layer at the answer
+  float agreement = 0.0f;     // agree / (agree + disagree) at the answer (diagnostic, not in the model)
+};
+
+}  // namespace gsf
