@@ -48,7 +48,7 @@ for s in $scales; do
     $gsf build-map --dataset "$d/dataset" --out "$d/map.gsfmap" --quiet ${BUILD_MAP_ARGS:-} > "$d/build-map.txt"
   read -r wall user sys rss_kb < "$d/build-map.time"
   secs=$(awk -v u="$user" -v s="$sys" 'BEGIN {print u + s}')
-  rss=$((rss_kb / 1000))
+  rss=$((rss_kb * 1024 / 1000000))  # KiB -> MB (10^6 bytes, as build-map prints)
   scans=$(sed -n 's/.*labels): \([0-9]*\) scans.*/\1/p' "$d/build-map.txt")
   spill=$(sed -n 's/.*spill file peak \([0-9]*\) MB (its live slots at most \([0-9]*\) MB.*/\1 \2/p' "$d/build-map.txt")
   [ -n "$spill" ] || spill="- -"  # one tile, nothing spilled (or a gsf that does not report it)
