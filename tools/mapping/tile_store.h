@@ -3,12 +3,13 @@
 // memory; touching another one spills the least recently used tile's accumulators to a temporary file
 // (raw doubles, so reloading it on a revisit continues the same sums in the same order: a loop closes
 // exactly as in memory). Host side; uses the heap and one temporary file.
-// The file is a set of slots, one per spilled tile, with a quarter of headroom: a tile spilled again
-// overwrites its slot when it fits, else the slot goes to a free list (coalesced, reused first fit) and
-// the tile gets another. Before the file would grow past twice the slots it holds, it is compacted
-// (the slots moved down in offset order, the file truncated): its size never exceeds 2x (the config's
-// max_spill_ratio) the largest total of live slots (TileStoreStats::spill_live_peak_bytes), and the
-// compactions move at most the bytes the spills wrote, so the work stays linear in the spills.
+// The file is a set of slots, one per spilled tile: a tile spilled again overwrites its slot when it
+// fits, else the slot goes to a free list (coalesced, reused first fit) and the tile gets another, with
+// a quarter of headroom now that it was revisited. Before the file would grow past twice the slots it
+// holds, it is compacted (the slots moved down in offset order, the file truncated): its size never
+// exceeds 2x (the config's max_spill_ratio) the largest total of live slots
+// (TileStoreStats::spill_live_peak_bytes). A compaction moves less than the dead space that triggered
+// it, and freed slots made that: at 2 the moves are of the order of the bytes the spills wrote (linear).
 #pragma once
 #include <cmath>
 #include <cstdint>
@@ -52,7 +53,7 @@ struct TileStoreConfig {
   std::string spill_dir;
   // The spill file is compacted before it would grow past this multiple of its live slots (>= 1).
   // Freed slots are reused first, so at 2 it is rarely needed (the bound on fragmentation); 1 compacts
-  // whenever there is a hole.
+  // whenever there is a hole (tests; the moves are then no longer bounded by the spills' writes).
   double max_spill_ratio = 2.0;
 };
 
@@ -136,7 +137,7 @@ class TileStore {
   Tile* last_tile_ = nullptr;
   std::FILE* spill_file_ = nullptr;
   std::string spill_path_;
-  uint64_t spill_end_ = 0;             // end of the last slot (free space at the end is given back)
+  uint64_t spill_end_ = 0;             // end of the last slot (a slot freed at the end shortens it)
   uint64_t spill_file_size_ = 0;       // bytes the file spans (written since its last truncation)
   uint64_t live_bytes_ = 0;            // the tiles' slots
   std::map<uint64_t, uint64_t> free_;  // free slots below spill_end_: offset -> bytes, none adjacent
