@@ -10,8 +10,10 @@
 #include <cmath>
 #include <cstdio>
 #include <cstring>
+#include <filesystem>
 #include <fstream>
 #include <iterator>
+#include <map>
 #include <string>
 #include <vector>
 
@@ -243,6 +245,9 @@ TEST_CASE("A streaming build with tiny tiles and a two-tile budget spills and re
     CHECK(streamed.stats.tiles.peak_resident <= 2);
     CHECK(streamed.stats.tiles.spills > 0);
     CHECK(streamed.stats.tiles.reloads > 0);
+    // The spill file reuses freed slots: never more than twice the live slots it holds.
+    CHECK(streamed.stats.tiles.spill_live_peak_bytes > 0);
+    CHECK(streamed.stats.tiles.spill_peak_bytes <= 2 * streamed.stats.tiles.spill_live_peak_bytes);
     CHECK(streamed.stats.map_voxels == whole.stats.map_voxels);
     CHECK(streamed.stats.instances == whole.stats.instances);
     CHECK(same_bytes(streamed, whole));
@@ -261,11 +266,89 @@ TEST_CASE("A loop back into spilled tiles continues their sums: the same bytes a
   REQUIRE(streamed.build == Status::Ok);
   CHECK(during.spills > 0);
   CHECK(during.reloads > 0);  // the revisit read spilled tiles back before build()
+  CHECK(streamed.stats.tiles.spill_peak_bytes <= 2 * streamed.stats.tiles.spill_live_peak_bytes);
   CHECK(same_bytes(streamed, whole));
   // The revisit counts: its points are in the map (instances have more points than without the loop).
   const Built once = build(single_tile(), Eigen::Vector3d::Zero());
   REQUIRE(once.build == Status::Ok);
   CHECK_FALSE(same_bytes(once, whole));
+}
+
+namespace {
+
+// Adds `n` voxels (keys seeded by `seed`) to tile column `tx` of a 4-voxel-tile store, and the same
+// sums to `truth`.
+void grow_tile(mapping::TileStore* store, std::map<uint64_t, mapping::VoxelAccum>* truth, int tx, int n, int seed) {
+  for (int i = 0; i < n; ++i) {
+    // x within the tile column, y within tile row 0, z distinct per (seed, i).
+    const double x = (4 * tx + i % 4) * 0.5 + 0.25, y = (i / 4 % 4) * 0.5 + 0.25, z = (seed * 16 + i / 16) * 0.5 + 0.25;
+    const uint64_t key = mapping::voxel_key(x, y, z, 0.5);
+    Status s = Status::Ok;
+    mapping::VoxelAccum* a = store->accumulator(key, &s);
+    REQUIRE(a != nullptr);
+    mapping::VoxelAccum& t = (*truth)[key];
+    for (mapping::VoxelAccum* x : {a, &t}) {
+      x->sum[0] += 0.1 * (seed + 1);
+      x->prob[seed % kNumClasses] += 1.0 / 3.0;
+      x->count += 1;
+    }
+  }
+}
+
+// The size of the one spill file in `dir`.
+uint64_t spill_file_size(const std::string& dir) {
+  uint64_t bytes = 0;
+  for (const auto& entry : std::filesystem::directory_iterator(dir)) bytes += entry.file_size();
+  return bytes;
+}
+
+}  // namespace
+
+TEST_CASE("The spill file reuses freed slots and is compacted: never more than its ratio x its live slots") {
+  // 24 tiles spilled side by side, then every other one grown (reloaded, spilled again to a bigger slot)
+  // twice. At ratio 1 every hole left behind forces a compaction before the next append.
+  for (double ratio : {1.0, 2.0}) {
+    INFO("max_spill_ratio " << ratio);
+    char dir_name[] = "/tmp/gsf-test-spill-XXXXXX";
+    REQUIRE(mkdtemp(dir_name) != nullptr);
+    const std::string dir = dir_name;
+    std::map<uint64_t, mapping::VoxelAccum> truth;
+    {
+      mapping::TileStoreConfig c;
+      c.tile_voxels = 4;
+      c.max_resident_tiles = 1;
+      c.spill_dir = dir;
+      c.max_spill_ratio = ratio;
+      mapping::TileStore store(c);
+      uint64_t file_peak = 0;
+      for (int round = 0; round < 3; ++round)
+        for (int tx = 0; tx < 24; ++tx) {
+          if (round > 0 && tx % 2 == 0) continue;
+          grow_tile(&store, &truth, tx, round == 0 ? 8 : 16 * round, round);
+          file_peak = std::max(file_peak, spill_file_size(dir));  // one spill per tile touched
+        }
+      REQUIRE(store.spill_resident() == Status::Ok);
+      file_peak = std::max(file_peak, spill_file_size(dir));
+      const mapping::TileStoreStats& st = store.stats();
+      CHECK(st.spills == 24 + 2 * 12);
+      if (ratio == 1.0) CHECK(st.compactions > 0);
+      if (ratio == 1.0) CHECK(st.compaction_bytes > 0);
+      CHECK(st.spill_peak_bytes == file_peak);  // the stats report the file's size on disk
+      CHECK(double(st.spill_peak_bytes) <= ratio * double(st.spill_live_peak_bytes));
+      CHECK(st.spill_bytes == spill_file_size(dir));
+      // Every voxel's sums read back from the file exactly, wherever its slot moved.
+      std::vector<std::pair<uint64_t, mapping::VoxelAccum>> all;
+      for (uint64_t id : store.tile_ids())
+        REQUIRE(store.append_voxels(id, -1000, 1000, -1000, 1000, &all) == Status::Ok);
+      REQUIRE(all.size() == truth.size());
+      for (const auto& kv : all) {
+        REQUIRE(truth.count(kv.first) == 1);
+        CHECK(std::memcmp(&kv.second, &truth[kv.first], sizeof(mapping::VoxelAccum)) == 0);
+      }
+    }
+    CHECK(std::filesystem::is_empty(dir));  // the store removed its file
+    std::filesystem::remove(dir);
+  }
 }
 
 TEST_CASE("Whole-map capacities apply after the tiles, with the stages' ranking") {

@@ -165,12 +165,13 @@ void print_build_report(const BuildMapOptions& o, const mapping::MapBuildStats& 
       st.seconds_accumulate, st.seconds_cluster, st.seconds_fields, st.seconds_triangles, peak_rss_bytes() / 1e6);
   if (st.tiles.tiles > 1)
     std::printf(
-        "  tiles: %u of %.0f m, at most %u resident (peak %llu voxels), %llu spills, %llu reloads, %.0f MB "
-        "spill file\n",
+        "  tiles: %u of %.0f m, at most %u resident (peak %llu voxels), %llu spills, %llu reloads; spill file "
+        "peak %.0f MB (its live slots at most %.0f MB; %llu compactions moved %.0f MB)\n",
         st.tiles.tiles, o.options.tile_size, st.tiles.peak_resident,
         static_cast<unsigned long long>(st.tiles.peak_resident_voxels),
         static_cast<unsigned long long>(st.tiles.spills), static_cast<unsigned long long>(st.tiles.reloads),
-        st.tiles.spill_bytes / 1e6);
+        st.tiles.spill_peak_bytes / 1e6, st.tiles.spill_live_peak_bytes / 1e6,
+        static_cast<unsigned long long>(st.tiles.compactions), st.tiles.compaction_bytes / 1e6);
   if (o.options.triangle_min_detections > 0)
     std::printf(
         "  triangles over %u of %u instances (found by the query stages in >= %u of the scans' %llu detections)\n",

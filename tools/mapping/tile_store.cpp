@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <cstdlib>
 #include <cstring>
+#include <iterator>
 
 #include <unistd.h>
 
@@ -20,6 +21,7 @@ constexpr size_t kIoChunkRecords = 4096;
 TileStore::TileStore(const TileStoreConfig& config) : config_(config) {
   if (config_.tile_voxels < 0) config_.tile_voxels = 0;
   if (config_.tile_voxels == 0) config_.max_resident_tiles = 0;  // one tile: nothing to spill
+  if (!(config_.max_spill_ratio >= 1.0)) config_.max_spill_ratio = 1.0;
 }
 
 TileStore::~TileStore() {
@@ -163,31 +165,36 @@ Status TileStore::evict_one(const Tile* keep) {
   return Status::Ok;
 }
 
-Status TileStore::spill(Tile* tile) {
-  if (!spill_file_) {
-    if (config_.spill_dir.empty()) {
-      spill_file_ = std::tmpfile();
-    } else {
-      std::string path = config_.spill_dir + "/gsf-tiles-XXXXXX";
-      std::vector<char> name(path.begin(), path.end());
-      name.push_back('\0');
-      const int fd = mkstemp(name.data());
-      if (fd >= 0) {
-        spill_file_ = fdopen(fd, "w+b");
-        spill_path_ = name.data();
-        if (!spill_file_) close(fd);
-      }
+Status TileStore::open_spill_file() {
+  if (spill_file_) return Status::Ok;
+  if (config_.spill_dir.empty()) {
+    spill_file_ = std::tmpfile();
+  } else {
+    std::string path = config_.spill_dir + "/gsf-tiles-XXXXXX";
+    std::vector<char> name(path.begin(), path.end());
+    name.push_back('\0');
+    const int fd = mkstemp(name.data());
+    if (fd >= 0) {
+      spill_file_ = fdopen(fd, "w+b");
+      spill_path_ = name.data();
+      if (!spill_file_) close(fd);
     }
-    if (!spill_file_) return Status::IoError;
   }
+  return spill_file_ ? Status::Ok : Status::IoError;
+}
+
+Status TileStore::spill(Tile* tile) {
+  Status s = open_spill_file();
+  if (s != Status::Ok) return s;
   // A tile spilled again (after a revisit) overwrites its old copy when that slot is big enough, else
-  // it gets a new slot at the end with a quarter of headroom for the next revisit's growth (the old
-  // slot is then dead space).
+  // the old slot is freed and the tile takes another, with a quarter of headroom for the next revisit
+  // (a first spill takes none: most tiles are never revisited, their headroom would be dead space).
   const uint64_t count = tile->voxels.size();
   if (count > tile->spill_capacity) {
-    tile->spill_offset = spill_end_;
-    tile->spill_capacity = count + count / 4;
-    spill_end_ += tile->spill_capacity * kRecordBytes;
+    const bool revisited = tile->spill_capacity > 0;
+    release_slot(tile);
+    s = allocate_slot(tile, revisited ? count + count / 4 : count);
+    if (s != Status::Ok) return s;
   }
   if (fseeko(spill_file_, static_cast<off_t>(tile->spill_offset), SEEK_SET) != 0) return Status::IoError;
   std::vector<unsigned char> buf;
@@ -205,8 +212,105 @@ Status TileStore::spill(Tile* tile) {
   if (!buf.empty() && std::fwrite(buf.data(), 1, buf.size(), spill_file_) != buf.size()) return Status::IoError;
   tile->spill_count = count;
   tile->dirty = false;
+  if (std::fflush(spill_file_) != 0) return Status::IoError;  // the file's size is then spill_file_size_
+  spill_file_size_ = std::max(spill_file_size_, tile->spill_offset + count * kRecordBytes);
   stats_.spills++;
-  stats_.spill_bytes = spill_end_;
+  stats_.spill_bytes = spill_file_size_;
+  stats_.spill_peak_bytes = std::max(stats_.spill_peak_bytes, spill_file_size_);
+  return Status::Ok;
+}
+
+// The tile's slot (if any) to the free list, merged with free neighbours; free space reaching the
+// end of the slots shortens them instead.
+void TileStore::release_slot(Tile* tile) {
+  if (tile->spill_capacity == 0) return;
+  uint64_t at = tile->spill_offset, bytes = tile->spill_capacity * kRecordBytes;
+  live_bytes_ -= bytes;
+  tile->spill_capacity = 0;
+  tile->spill_count = 0;
+  auto next = free_.lower_bound(at);
+  if (next != free_.end() && next->first == at + bytes) {
+    bytes += next->second;
+    next = free_.erase(next);
+  }
+  if (next != free_.begin()) {
+    const auto prev = std::prev(next);
+    if (prev->first + prev->second == at) {
+      at = prev->first;
+      bytes += prev->second;
+      free_.erase(prev);
+    }
+  }
+  if (at + bytes == spill_end_) spill_end_ = at;
+  else free_.emplace(at, bytes);
+}
+
+// A slot of `capacity` records: the first free one that fits (lowest offset), else at the end of the
+// slots, after compacting the file if the end would pass max_spill_ratio x the live slots.
+Status TileStore::allocate_slot(Tile* tile, uint64_t capacity) {
+  const uint64_t bytes = capacity * kRecordBytes;
+  auto fit = free_.begin();
+  while (fit != free_.end() && fit->second < bytes) ++fit;
+  if (fit != free_.end()) {
+    tile->spill_offset = fit->first;
+    if (fit->second > bytes) free_.emplace(fit->first + bytes, fit->second - bytes);
+    free_.erase(fit);
+  } else {
+    if (double(spill_end_ + bytes) > config_.max_spill_ratio * double(live_bytes_ + bytes)) {
+      const Status s = compact();
+      if (s != Status::Ok) return s;
+    }
+    tile->spill_offset = spill_end_;
+    spill_end_ += bytes;
+  }
+  tile->spill_capacity = capacity;
+  live_bytes_ += bytes;
+  stats_.spill_live_peak_bytes = std::max(stats_.spill_live_peak_bytes, live_bytes_);
+  return Status::Ok;
+}
+
+// The live slots moved down in offset order (each keeps its headroom), the free list emptied and the
+// file truncated to the slots: it then holds exactly the live slots.
+Status TileStore::compact() {
+  std::vector<Tile*> slots;
+  for (auto& kv : tiles_)
+    if (kv.second.spill_capacity > 0) slots.push_back(&kv.second);
+  std::sort(slots.begin(), slots.end(), [](const Tile* a, const Tile* b) { return a->spill_offset < b->spill_offset; });
+  uint64_t at = 0;
+  for (Tile* t : slots) {
+    if (t->spill_offset != at) {
+      const Status s = move_bytes(t->spill_offset, at, t->spill_count * kRecordBytes);
+      if (s != Status::Ok) return s;
+      stats_.compaction_bytes += t->spill_count * kRecordBytes;
+      t->spill_offset = at;
+    }
+    at += t->spill_capacity * kRecordBytes;
+  }
+  free_.clear();
+  spill_end_ = at;
+  if (std::fflush(spill_file_) != 0 || ftruncate(fileno(spill_file_), static_cast<off_t>(at)) != 0)
+    return Status::IoError;
+  spill_file_size_ = at;
+  stats_.spill_bytes = at;
+  stats_.compactions++;
+  return Status::Ok;
+}
+
+// Copies `bytes` from offset `from` down to `to` (< from) chunk by chunk, front first: a chunk is read
+// before any later write can reach it, so overlapping ranges copy correctly.
+Status TileStore::move_bytes(uint64_t from, uint64_t to, uint64_t bytes) {
+  std::vector<unsigned char> buf(kIoChunkRecords * kRecordBytes);
+  if (std::fflush(spill_file_) != 0) return Status::IoError;
+  for (uint64_t done = 0; done < bytes;) {
+    const size_t n = static_cast<size_t>(std::min<uint64_t>(buf.size(), bytes - done));
+    if (fseeko(spill_file_, static_cast<off_t>(from + done), SEEK_SET) != 0 ||
+        std::fread(buf.data(), 1, n, spill_file_) != n)
+      return Status::IoError;
+    if (fseeko(spill_file_, static_cast<off_t>(to + done), SEEK_SET) != 0 ||
+        std::fwrite(buf.data(), 1, n, spill_file_) != n)
+      return Status::IoError;
+    done += n;
+  }
   return Status::Ok;
 }
 

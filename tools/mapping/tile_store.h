@@ -3,10 +3,18 @@
 // memory; touching another one spills the least recently used tile's accumulators to a temporary file
 // (raw doubles, so reloading it on a revisit continues the same sums in the same order: a loop closes
 // exactly as in memory). Host side; uses the heap and one temporary file.
+// The file is a set of slots, one per spilled tile: a tile spilled again overwrites its slot when it
+// fits, else the slot goes to a free list (coalesced, reused first fit) and the tile gets another, with
+// a quarter of headroom now that it was revisited. Before the file would grow past twice the slots it
+// holds, it is compacted (the slots moved down in offset order, the file truncated): its size never
+// exceeds 2x (the config's max_spill_ratio) the largest total of live slots
+// (TileStoreStats::spill_live_peak_bytes). A compaction moves less than the dead space that triggered
+// it, and freed slots made that: at 2 the moves are of the order of the bytes the spills wrote (linear).
 #pragma once
 #include <cmath>
 #include <cstdint>
 #include <cstdio>
+#include <map>
 #include <string>
 #include <unordered_map>
 #include <utility>
@@ -43,15 +51,23 @@ struct TileStoreConfig {
   uint32_t max_resident_tiles = 0;
   // Directory of the spill file (removed when the store is destroyed); empty: std::tmpfile().
   std::string spill_dir;
+  // The spill file is compacted before it would grow past this multiple of its live slots (>= 1).
+  // Freed slots are reused first, so at 2 it is rarely needed (the bound on fragmentation); 1 compacts
+  // whenever there is a hole (tests; the moves are then no longer bounded by the spills' writes).
+  double max_spill_ratio = 2.0;
 };
 
 struct TileStoreStats {
   uint32_t tiles = 0;
   uint64_t spills = 0;         // tiles written to the spill file (a dirty tile evicted)
   uint64_t reloads = 0;        // tiles read back from it
-  uint64_t spill_bytes = 0;    // size of the spill file (slots, with headroom for revisits)
+  uint64_t spill_bytes = 0;    // size of the spill file now (its slots and free space)
   uint32_t peak_resident = 0;  // most tiles in memory at once
   uint64_t peak_resident_voxels = 0;
+  uint64_t spill_peak_bytes = 0;       // the file's largest size (<= max_spill_ratio x the next)
+  uint64_t spill_live_peak_bytes = 0;  // the largest total of live slots (tiles' copies with headroom)
+  uint64_t compactions = 0;            // times the file was compacted
+  uint64_t compaction_bytes = 0;       // bytes they moved
 };
 
 class TileStore {
@@ -102,8 +118,14 @@ class TileStore {
   };
   Status make_resident(Tile* tile);
   Status evict_one(const Tile* keep);
+  Status open_spill_file();
   Status spill(Tile* tile);
   Status reload(Tile* tile);
+  // The spill file's slots: a free list (offset -> bytes, coalesced), first-fit allocation, compaction.
+  void release_slot(Tile* tile);
+  Status allocate_slot(Tile* tile, uint64_t capacity);
+  Status compact();
+  Status move_bytes(uint64_t from, uint64_t to, uint64_t bytes);
   template <typename Wanted>
   Status read_spilled(const Tile& tile, const Wanted& wanted, std::vector<std::pair<uint64_t, VoxelAccum>>* out);
 
@@ -115,7 +137,10 @@ class TileStore {
   Tile* last_tile_ = nullptr;
   std::FILE* spill_file_ = nullptr;
   std::string spill_path_;
-  uint64_t spill_end_ = 0;
+  uint64_t spill_end_ = 0;             // end of the last slot (a slot freed at the end shortens it)
+  uint64_t spill_file_size_ = 0;       // bytes the file spans (written since its last truncation)
+  uint64_t live_bytes_ = 0;            // the tiles' slots
+  std::map<uint64_t, uint64_t> free_;  // free slots below spill_end_: offset -> bytes, none adjacent
   TileStoreStats stats_;
 };
 
