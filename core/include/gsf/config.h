@@ -14,6 +14,7 @@
 #include "gsf/detail/pole_extraction.h"
 #include "gsf/detail/pose_hypotheses.h"
 #include "gsf/detail/refine.h"
+#include "gsf/detail/scan_window.h"
 #include "gsf/detail/tracker.h"
 #include "gsf/detail/triangle.h"
 #include "gsf/detail/voxel_layer.h"
@@ -104,6 +105,8 @@ struct LocalizerConfig {
   RefineConfig refine;  // off by default (the "gsf+refine" evaluation row turns it on)
   ConfidenceConfig confidence;
   TrackConfig track;  // Localizer::track (tracker.h, docs/vehicle-modes.md)
+  // Localizer::localize_sequence: several scans tied by odometry (scan_window.h, docs/vehicle-modes.md).
+  WindowConfig window;
 };
 
 // Ok, or InvalidArgument when a parameter is out of its range or breaks a rule with another one;
