@@ -146,15 +146,16 @@ WindowOutcome ScanWindow::combine(const WindowCandidate* own, uint32_t n_own, co
   // std::stable_sort may take).
   auto sort_by_score = [this, n] {
     for (uint32_t i = 1; i < n; ++i)
-      for (uint32_t k = i; k > 0 && scored_[k - 1].v.score < scored_[k].v.score; --k) std::swap(scored_[k - 1], scored_[k]);
+      for (uint32_t k = i; k > 0 && scored_[k - 1].v.score < scored_[k].v.score; --k)
+        std::swap(scored_[k - 1], scored_[k]);
   };
   sort_by_score();
   const uint32_t refine = std::min(n, vc.refine_rounds > 0 ? vc.refine_top : 0u);
   for (uint32_t k = 0; k < refine; ++k) {
     const PoseVerification at = scored_[k].v;
-    scored_[k].v = verify_pose_refined(points_, total, grid, scored_[k].pose, total, weights, vc.refine_rounds,
-                                       vc.refine_step_m, vc.refine_step_deg, &scored_[k].pose, vc.search_divisor,
-                                       vc.polish_divisor, &at, lambda);
+    scored_[k].v =
+        verify_pose_refined(points_, total, grid, scored_[k].pose, total, weights, vc.refine_rounds, vc.refine_step_m,
+                            vc.refine_step_deg, &scored_[k].pose, vc.search_divisor, vc.polish_divisor, &at, lambda);
   }
   sort_by_score();
   Eigen::Isometry3d rivals[kMaxRivals];

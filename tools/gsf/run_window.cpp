@@ -23,7 +23,7 @@ struct WindowRecord {
   uint32_t stretch = 0, index = 0, frame = 0, sequence_index = 0;
   bool in_zone = false;
   std::string status;
-  bool ok = false, success = false, answered = false, combined = false;
+  bool ok = false, success = false, answered = false, combined = false, checked = false, contradicted = false;
   PoseError error;
   double confidence = 0, single_confidence = 0, time_ms = 0;
   uint32_t window_scans = 0, candidates = 0;
@@ -67,8 +67,8 @@ WindowRecord run_window_scan(const WindowRun& t, uint32_t i, bool first, Eigen::
   LocalizeResult r;
   const Status rs =
       read_scan(t.src, i, t.buf, t.o.logits, 2000000u + rec.frame, t.labels.config_table(), &t.label_errors);
-  const Eigen::Isometry3d odometry = first ? Eigen::Isometry3d::Identity()
-                                           : noisy_odometry(*last_truth, truth, t.o.odometry_noise, t.o.prior.seed, i);
+  const Eigen::Isometry3d odometry =
+      first ? Eigen::Isometry3d::Identity() : noisy_odometry(*last_truth, truth, t.o.odometry_noise, t.o.prior.seed, i);
   if (first) t.loc.reset_sequence();
   if (rs == Status::Ok) t.loc.localize_sequence(t.buf.view(), odometry, &r);
   else r.status = rs;
@@ -79,6 +79,8 @@ WindowRecord run_window_scan(const WindowRun& t, uint32_t i, bool first, Eigen::
   rec.single_confidence = r.single_confidence;
   rec.answered = rec.ok && r.confident;
   rec.combined = r.window_combined;
+  rec.checked = r.window_checked;
+  rec.contradicted = r.window_contradicted;
   rec.sequence_index = r.sequence_index;
   rec.window_scans = r.window_scans;
   rec.candidates = r.window_candidates;
@@ -151,6 +153,8 @@ void write_window_record(JsonWriter& j, const WindowRecord& r) {
   j.field("answered", r.answered);
   j.field("success", r.success);
   j.field("combined", r.combined);
+  j.field("checked", r.checked);
+  j.field("contradicted", r.contradicted);
   j.field("sequence_index", r.sequence_index);
   j.key("window_ids");
   j.begin_array();
@@ -219,7 +223,8 @@ int run_window(const EvalOptions& o) {
   Status s;
   auto src = open_source(o.dataset, o.sequence, &s, &labels);
   if (s != Status::Ok || meta.stretches.empty()) {
-    std::fprintf(stderr, "gsf evaluate: --sequence-window needs the stretches of sequence %s (gsf simulate --stretches)\n",
+    std::fprintf(stderr,
+                 "gsf evaluate: --sequence-window needs the stretches of sequence %s (gsf simulate --stretches)\n",
                  o.sequence.c_str());
     return 1;
   }

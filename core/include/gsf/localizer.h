@@ -105,7 +105,9 @@ struct LocalizeResult {
   bool window_combined = false;  // the answer is the window's (this scan alone was not confident)
   uint32_t window_scans = 0;
   uint32_t window_ids[kMaxWindowScans] = {};
-  uint32_t window_candidates = 0;  // distinct poses the window scored
+  uint32_t window_candidates = 0;    // distinct poses the window scored
+  bool window_checked = false;       // a confident answer with a thin margin was checked by the window
+  bool window_contradicted = false;  // ... which put it elsewhere: replaced, or confidence <= 1 - the window's
 };
 
 class Localizer {
@@ -148,10 +150,13 @@ class Localizer {
   // candidate poses and this scan's are moved to this scan through the odometry and scored on all the
   // window's scans together, and the confidence comes from that combined evidence (window_combined,
   // window_scans, window_ids). The window's answer replaces the single scan's when its confidence is
-  // higher. `previous_T_scan`: this scan's pose in the previous scan's frame (odometry between the two
-  // calls' scans); ignored on the first call after init() or reset_sequence(). Every call (whatever its
-  // status) enters the scan into the window. InvalidArgument for a non-finite odometry (the window is
-  // reset). With window.scans = 1 this is localize(scan) with sequence numbers.
+  // higher. A confident answer with a thin margin over its rivals (z_rival < kWindowCheckZ) is checked
+  // by the window: if the combined scans put the scan elsewhere, the window's answer replaces it when more
+  // confident, else it keeps at most 1 - the window's confidence (window_checked, window_contradicted).
+  // `previous_T_scan`: this scan's pose in the previous scan's frame (odometry between the two calls' scans); ignored
+  // on the first call after init() or reset_sequence(). Every call (whatever its status) enters the scan into the
+  // window. InvalidArgument for a non-finite odometry (the window is reset). With window.scans = 1 this is
+  // localize(scan) with sequence numbers.
   Status localize_sequence(const ScanView& scan, const Eigen::Isometry3d& previous_T_scan, LocalizeResult* out);
   // Forgets the window: the next localize_sequence() starts a sequence (after a gap in the odometry).
   void reset_sequence();
@@ -184,6 +189,9 @@ class Localizer {
   Status localize_in(const ScanView& scan, const PositionPrior* prior, LocalizeResult* out, bool scan_ready = false);
   void check_outside_prior(const ScanView& scan, LocalizeResult& out);
   void apply_window(const WindowOutcome& window, LocalizeResult& out) const;
+  void check_with_window(const WindowOutcome& window, LocalizeResult& out) const;
+  // A sequence scan's confident answer whose z_rival is below this is checked by the window (localizer.cpp).
+  static constexpr float kWindowCheckZ = 4.0f;
   // A prior's confident answer whose z_rival is below this is checked by a global search (localize.cpp).
   static constexpr float kPriorGlobalCheckZ = 4.0f;
   LocalizerConfig config_{};

@@ -44,14 +44,14 @@ struct WindowCandidate {
 // What combine() found.
 struct WindowOutcome {
   static constexpr uint32_t kMaxScans = 4;
-  bool combined = false;  // false: fewer than two scans held, or no candidate
+  bool combined = false;                                         // false: fewer than two scans held, or no candidate
   Eigen::Isometry3d map_T_scan = Eigen::Isometry3d::Identity();  // the newest scan's pose (map-local)
-  PoseVerification verification;                                  // its score on the combined sample
+  PoseVerification verification;                                 // its score on the combined sample
   ConfidenceEvidence evidence;
   double confidence = 0.0;
-  float inlier_share = 0.0f;  // the answer's candidate's (the largest of the scans that offered it)
-  uint32_t candidates = 0;    // distinct candidates scored
-  uint32_t scans = 0;       // scans whose samples were combined (the newest included)
+  float inlier_share = 0.0f;     // the answer's candidate's (the largest of the scans that offered it)
+  uint32_t candidates = 0;       // distinct candidates scored
+  uint32_t scans = 0;            // scans whose samples were combined (the newest included)
   uint32_t ids[kMaxScans] = {};  // their sequence numbers, newest first
   uint32_t samples = 0;          // combined samples
 };
@@ -105,8 +105,8 @@ class ScanWindow {
   uint32_t pick_rivals(uint32_t n, float same_m, float same_deg, Eigen::Isometry3d* rivals) const;
 
   VerifyPoint* points_ = nullptr;  // scans x max_points: every held scan's sample, in the newest scan's frame
-  Scored* scored_ = nullptr;        // scans x candidates: the candidates of one combine()
-  Slot* slots_ = nullptr;           // scans: the held scans, oldest first
+  Scored* scored_ = nullptr;       // scans x candidates: the candidates of one combine()
+  Slot* slots_ = nullptr;          // scans: the held scans, oldest first
   uint32_t capacity_scans_ = 0, capacity_candidates_ = 0, max_points_ = 0;
   uint32_t held_ = 0, next_id_ = 0;
 };
