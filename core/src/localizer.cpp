@@ -719,7 +719,8 @@ Status Localizer::localize_sequence(const ScanView& scan, const Eigen::Isometry3
   if (out.window_combined) offer[n++] = WindowCandidate{out.map_T_scan, out.confidence_evidence.inlier_share};
   for (uint32_t k = 0; k < n_own && n < ScanWindow::kMaxCandidates; ++k) offer[n++] = own[k];
   im.window.set_candidates(offer, n);
-  out.times.total += now(clock_) - t0;
+  out.times.window = now(clock_) - t0;
+  out.times.total += out.times.window;
   return out.status;
 }
 

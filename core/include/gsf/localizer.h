@@ -22,9 +22,10 @@ namespace gsf {
 struct StageTimes {  // nanoseconds from the Clock given at init (all zero without one)
   // match: index lookups and ranking (with the heading votes); gsf: the GSF filter and correspondence accumulation;
   // clique: the hypotheses (cliques + TLS poses); pose: verification and the answer's height; confidence: the
-  // answer's comparisons with wrong poses (confidence.h).
+  // answer's comparisons with wrong poses (confidence.h); window: localize_sequence's step after the one-shot
+  // (entering the scan, combining or checking; in total too).
   uint64_t voxel = 0, cluster = 0, field = 0, triangle = 0, match = 0, gsf = 0, clique = 0, pose = 0, confidence = 0,
-           refine = 0, total = 0;
+           refine = 0, window = 0, total = 0;
 };
 
 // One pose hypothesis as the localizer saw it (diagnostics).
