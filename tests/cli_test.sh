@@ -41,6 +41,7 @@ expect 2 "prior must be x,y,radius" -- "$gsf" localize --map m --dataset d --pri
 expect 2 "prior: invalid" -- "$gsf" localize --map m --dataset d --prior 1,2,-5
 expect 2 "need --prior-sigma" -- "$gsf" evaluate --map m --dataset d --prior-bias 100
 expect 2 "odometry-noise must be in" -- "$gsf" evaluate --map m --dataset d --mode track --odometry-noise 2
+expect 2 "sequence-window must be 1..4" -- "$gsf" evaluate --map m --dataset d --sequence-window 5
 expect 1 "cannot open sequence" -- "$gsf" build-map --dataset "$tmp/nothing" --out "$tmp/m.gsfmap"
 printf 'not a map' > "$tmp/bad.gsfmap"
 expect 1 "not a valid map" -- "$gsf" inspect --map "$tmp/bad.gsfmap"
@@ -62,6 +63,8 @@ echo "$built" | grep -q "origin 0.000, -2.000, 2.000 m in frame 'local'" || fail
   --label-noise 0.1 --object-confusion 0.15 --noise-seed 7 --quiet >/dev/null || fail "evaluate --label-noise"
 "$gsf" evaluate --map "$tmp/map.gsfmap" --dataset "$tmp/ds" --mode track --json "$tmp/track.json" --quiet \
   >/dev/null || fail "evaluate --mode track"
+"$gsf" evaluate --map "$tmp/map.gsfmap" --dataset "$tmp/ds" --sequence-window 3 --json "$tmp/window.json" --quiet \
+  >/dev/null || fail "evaluate --sequence-window"
 "$gsf" evaluate --map "$tmp/map.gsfmap" --dataset "$tmp/ds" --sequence 01 --json "$tmp/prior.json" --mode gsf --limit 6 \
   --prior-sigma 5 --prior-radius 20 --quiet >/dev/null || fail "evaluate --prior-sigma"
 xy=$(python3 -c "import json,sys; p=json.loads(open(sys.argv[1]).readline())['pose']; print(f'{p[3]+3},{p[7]-4}')" \
@@ -114,6 +117,14 @@ assert g["zone_success_rate"] >= 5 / 6, g["zone_success_rate"]
 assert g["zone_success_rate"] >= i["zone_success_rate"], (g["zone_success_rate"], i["zone_success_rate"])
 assert modes["gsf+refine"]["summary"]["ate_m"] < g["ate_m"]
 assert json.load(open(f"{t}/inspect.json"))["instances"] > 50
+# Several scans: every stretch scan once, each listing the scans combined (newest first, itself first).
+w = json.load(open(f"{t}/window.json"))
+assert w["sequence_window"] == 3 and w["summary"]["all"]["scans"] == len(w["scans"]) == 20, w["summary"]
+for q in w["scans"]:
+    assert q["window_ids"][0] == q["sequence_index"] and len(q["window_ids"]) <= 3, q
+    assert q["combined"] == (len(q["window_ids"]) > 1), q
+    assert not q["answered"] or q["status"] == "Ok", q
+assert w["summary"]["all"]["confident_wrong"] == sum(q["answered"] and not q["success"] for q in w["scans"])
 one = json.loads(open(f"{t}/one.json").read().splitlines()[0])
 assert one["frame"] == 3 and len(one["pose"]) == 12
 # Two frames: "pose" is the map's frame, "pose_map_local" relative to the map origin (same rotation).

@@ -387,7 +387,7 @@ static void test_end_to_end(const void* blob, size_t bytes) {
 
 // The vehicle modes through the C API: a prior around the truth gives the right pose, bad priors and
 // predictions are refused, tracking from 1 m off returns the pose within 0.3 m / 1 deg, confident, and
-// from 30 m off a loss (not confident); none of it allocates.
+// from 30 m off a loss (not confident); a sequence reports its scans; none of it allocates.
 static void test_vehicle_modes(const void* blob, size_t bytes) {
   gsf_config cfg;
   gsf_config_default(&cfg);
@@ -432,6 +432,33 @@ static void test_vehicle_modes(const void* blob, size_t bytes) {
                GSF_STATUS_INVALID_ARGUMENT);
   CHECK_STATUS(gsf_track(NULL, q.xyzi, 4, q.count, q.labels, q.logits, GSF_NUM_CLASSES, predicted, &r),
                GSF_STATUS_INVALID_ARGUMENT);
+  // Several scans: a sequence of the same scan (odometry: standing still); the first call starts it.
+  {
+    const double still[12] = {1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0};
+    gsf_window_info info;
+    gsf_result alone;
+    CHECK_STATUS(gsf_localize(loc, q.xyzi, 4, q.count, q.labels, q.logits, GSF_NUM_CLASSES, &alone), GSF_STATUS_OK);
+    CHECK_STATUS(gsf_localize_sequence(loc, q.xyzi, 4, q.count, q.labels, q.logits, GSF_NUM_CLASSES, NULL, &r, &info),
+                 GSF_STATUS_OK);
+    CHECK(info.sequence_index == 0 && info.scans == 1 && info.ids[0] == 0 && info.combined == 0);
+    CHECK(info.single_confidence == alone.confidence);
+    CHECK(r.confidence >= alone.confidence || info.contradicted == 1);
+    CHECK_STATUS(gsf_localize_sequence(loc, q.xyzi, 4, q.count, q.labels, q.logits, GSF_NUM_CLASSES, still, &r, &info),
+                 GSF_STATUS_OK);
+    CHECK(info.sequence_index == 1);
+    CHECK(info.scans >= 1 && info.ids[0] == 1);
+    pose_error(r.map_frame_T_scan, q.truth, &m, &deg);
+    CHECK(m < 5.0 && deg < 10.0);
+    CHECK_STATUS(gsf_localize_sequence(loc, q.xyzi, 4, q.count, q.labels, q.logits, GSF_NUM_CLASSES, still, &r, NULL),
+                 GSF_STATUS_OK);
+    double bad[12];
+    memcpy(bad, still, sizeof(bad));
+    bad[3] = NAN;
+    CHECK_STATUS(gsf_localize_sequence(loc, q.xyzi, 4, q.count, q.labels, q.logits, GSF_NUM_CLASSES, bad, &r, &info),
+                 GSF_STATUS_INVALID_ARGUMENT);
+    CHECK_STATUS(gsf_localize_sequence(NULL, q.xyzi, 4, q.count, q.labels, q.logits, GSF_NUM_CLASSES, still, &r, &info),
+                 GSF_STATUS_INVALID_ARGUMENT);
+  }
   CHECK(gsf_test_allocations() == before);
   free(copy);
   free(ws);

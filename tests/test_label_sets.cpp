@@ -147,7 +147,7 @@ TEST_CASE("A map of one label set refuses a localizer of another, and the budget
   CHECK(b.poles >= PoleExtraction::required_bytes(effective_pole_config(w.config), w.config.voxel.max_voxels));
   CHECK(b.total == Localizer::required_bytes(w.config));
   CHECK(b.voxel + b.cluster + b.poles + b.field + b.triangle + b.match + b.gsf_cache + b.correspondence + b.clique +
-            b.refine + b.other ==
+            b.refine + b.window + b.other ==
         b.total);
   // init copies the table: the localizer keeps working after the caller's table is gone.
   ClassTable* temp = new ClassTable(w.classes);

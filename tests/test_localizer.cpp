@@ -583,7 +583,7 @@ TEST_CASE("The per-stage budget is the layout itself: its parts sum to required_
     cfg.refine.enabled = refine;
     const Localizer::Budget b = Localizer::budget(cfg);
     const size_t parts = b.voxel + b.cluster + b.poles + b.field + b.triangle + b.match + b.gsf_cache +
-                         b.correspondence + b.clique + b.refine;
+                         b.correspondence + b.clique + b.refine + b.window;
     INFO("refine " << refine << ": parts " << parts << ", other " << b.other << ", total " << b.total);
     CHECK(b.total == Localizer::required_bytes(cfg));
     CHECK(parts + b.other == b.total);

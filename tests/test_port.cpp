@@ -64,6 +64,47 @@ TEST_CASE("SemanticKITTI writer -> reader round trip is exact") {
   CHECK(v.logit_dim == static_cast<uint32_t>(kNumClasses));
 }
 
+// gsf simulate into a directory that held a longer dataset left its extra frames, which joined the new
+// sequence without poses (gsf build-map failed: NotFound). A writer now replaces the whole sequence.
+TEST_CASE("Writing a shorter sequence over a longer one leaves no stale frames") {
+  const std::string root = tmp("rewrite");
+  const float pts[8] = {5, 0, 0, 0, 6, 0, 0, 0};
+  const uint32_t labels[2] = {40, 40};
+  const uint8_t seg[2] = {24, 24};
+  const fs::path dir = fs::path(root) / "sequences" / "00";
+  {
+    SemanticKittiWriter w;
+    REQUIRE(w.open(root, "00") == Status::Ok);
+    std::vector<float> logits(2 * kNumClasses, 0.5f);
+    for (uint32_t f = 0; f < 6; ++f) REQUIRE(w.write_scan(f, pts, labels, logits.data(), 2) == Status::Ok);
+    REQUIRE(w.write_poses(std::vector<Eigen::Isometry3d>(6, Eigen::Isometry3d::Identity())) == Status::Ok);
+  }
+  write_bytes(dir / "velodyne" / "notes.txt", "kept");  // not a frame file: left alone
+  SemanticKittiWriter w;
+  REQUIRE(w.open(root, "00") == Status::Ok);
+  for (uint32_t f = 0; f < 4; ++f) REQUIRE(w.write_scan(f, pts, labels, nullptr, 2) == Status::Ok);
+  REQUIRE(w.write_poses(std::vector<Eigen::Isometry3d>(4, Eigen::Isometry3d::Identity())) == Status::Ok);
+  SemanticKittiSource src;
+  REQUIRE(src.open(root, "00") == Status::Ok);
+  CHECK(src.size() == 4);
+  Eigen::Isometry3d p;
+  for (uint32_t i = 0; i < src.size(); ++i) CHECK(src.pose(i, &p) == Status::Ok);
+  CHECK(!fs::exists(dir / "logits" / "000005.bin"));
+  CHECK(!fs::exists(dir / "labels" / "000004.label"));
+  CHECK(fs::exists(dir / "velodyne" / "notes.txt"));
+  // The same for the nuScenes-lidarseg layout.
+  {
+    NuScenesLidarsegWriter nw;
+    REQUIRE(nw.open(root, "01") == Status::Ok);
+    for (uint32_t f = 0; f < 5; ++f) REQUIRE(nw.write_scan(f, pts, seg, 2) == Status::Ok);
+  }
+  NuScenesLidarsegWriter nw;
+  REQUIRE(nw.open(root, "01") == Status::Ok);
+  REQUIRE(nw.write_scan(0, pts, seg, 2) == Status::Ok);
+  CHECK(!fs::exists(fs::path(root) / "sequences" / "01" / "velodyne" / "000004.bin"));
+  CHECK(!fs::exists(fs::path(root) / "sequences" / "01" / "lidarseg" / "000004.label"));
+}
+
 TEST_CASE("Malformed files give a status, count 0, and the source stays usable") {
   const std::string root = tmp("malformed");
   SemanticKittiWriter w;

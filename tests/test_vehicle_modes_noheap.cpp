@@ -44,3 +44,27 @@ TEST_CASE("localize with a prior and track never allocate after init") {
   CHECK(ok > calls / 2);  // the calls did real work
   CHECK(confident > 0);
 }
+
+TEST_CASE("localize_sequence (several scans) never allocates after init") {
+  const auto& w = gsf_test::tiny_lattice_world();
+  LocalizerConfig cfg = w.config;
+  cfg.window.scans = 4;
+  std::vector<uint64_t> ws(Localizer::required_bytes(cfg) / 8 + 2);
+  Localizer loc;
+  REQUIRE(loc.init(cfg, w.map, ws.data(), ws.size() * 8) == Status::Ok);
+  LocalizeResult r;
+  uint32_t combined = 0;
+  gsf_test::AllocationScope scope;
+  for (uint32_t k = 0; k < w.queries.size(); ++k) {
+    // Consecutive queries are metres apart: the odometry between them fills the window.
+    const Eigen::Isometry3d odo =
+        k == 0 ? Eigen::Isometry3d::Identity() : w.queries[k - 1].truth.inverse() * w.queries[k].truth;
+    loc.localize_sequence(w.queries[k].view(), odo, &r);
+    combined += r.window_combined;
+    if (k == w.queries.size() / 2) loc.reset_sequence();
+  }
+  const uint64_t allocations = scope.allocations();
+  CHECK(allocations == 0);
+  CHECK(r.sequence_index > 0);
+  INFO("window answers " << combined);
+}

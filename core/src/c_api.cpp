@@ -284,7 +284,9 @@ int gsf_localize(gsf_localizer* localizer, const float* xyz_stride, uint32_t str
 
 }  // extern "C"
 
-// ---- Vehicle modes: a position prior and tracking. ----
+// ---- Vehicle modes: a position prior, tracking and several scans. ----
+static_assert(GSF_MAX_WINDOW_SCANS == gsf::kMaxWindowScans, "gsf_window_info.ids holds every combined scan");
+
 namespace {
 
 gsf::ScanView scan_view(const float* xyz_stride, uint32_t stride, uint32_t count, const uint32_t* labels,
@@ -340,6 +342,36 @@ int gsf_track(gsf_localizer* localizer, const float* xyz_stride, uint32_t stride
     r.status = Status::NotInitialized;
   }
   if (out != nullptr) fill(r, out);
+  return code(r.status);
+}
+
+int gsf_localize_sequence(gsf_localizer* localizer, const float* xyz_stride, uint32_t stride, uint32_t count,
+                          const uint32_t* labels, const float* logits, uint32_t logit_dim,
+                          const double previous_T_scan[12], gsf_result* out, gsf_window_info* window) noexcept {
+  gsf::LocalizeResult r;
+  if (localizer == nullptr) {
+    r.status = Status::InvalidArgument;
+  } else if (Handle* h = live_handle(localizer)) {
+    Eigen::Isometry3d odometry = Eigen::Isometry3d::Identity();
+    if (previous_T_scan == nullptr) h->localizer.reset_sequence();  // the first scan of a sequence
+    else
+      for (int row = 0; row < 3; ++row)
+        for (int col = 0; col < 4; ++col) odometry.matrix()(row, col) = previous_T_scan[row * 4 + col];
+    h->localizer.localize_sequence(scan_view(xyz_stride, stride, count, labels, logits, logit_dim), odometry, &r);
+  } else {
+    r.status = Status::NotInitialized;
+  }
+  if (out != nullptr) fill(r, out);
+  if (window != nullptr) {
+    *window = gsf_window_info{};
+    window->sequence_index = r.sequence_index;
+    window->combined = r.window_combined ? 1u : 0u;
+    window->checked = r.window_checked ? 1u : 0u;
+    window->contradicted = r.window_contradicted ? 1u : 0u;
+    window->scans = r.window_scans;
+    for (uint32_t k = 0; k < GSF_MAX_WINDOW_SCANS; ++k) window->ids[k] = r.window_ids[k];
+    window->single_confidence = r.single_confidence;
+  }
   return code(r.status);
 }
 

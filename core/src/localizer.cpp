@@ -17,6 +17,7 @@
 #include "gsf/detail/pole_extraction.h"
 #include "gsf/detail/pose_hypotheses.h"
 #include "gsf/detail/refine.h"
+#include "gsf/detail/scan_window.h"
 #include "gsf/detail/semantic_grid.h"
 #include "gsf/detail/tracker.h"
 #include "gsf/detail/triangle.h"
@@ -46,6 +47,7 @@ struct Localizer::Impl {
   AnswerSelector answer;
   AnswerConfidence confidence;
   Refiner refiner;
+  ScanWindow window;  // several scans (localize_sequence); bound when window.scans > 1
   TriangleIndexView index;
   SemanticGridView semantic;
 
@@ -137,12 +139,18 @@ Status Localizer::bind_workspace(Arena& ar, const LocalizerConfig& config, Impl&
   if (im.hypotheses.bind(ar, C, config.hypotheses.max_hypotheses, V) != Status::Ok) return Status::InvalidArgument;
   if (im.answer.bind(ar, config.verify.refine_top, config.voxel.max_voxels) != Status::Ok && !ar.counting())
     return Status::InvalidArgument;
-  if (im.confidence.bind(ar, config.verify.max_points) != Status::Ok && !ar.counting()) return Status::InvalidArgument;
+  // The confidence's per-sample arrays hold the window's combined sample (one scan's without a window).
+  const uint32_t window_scans = std::max(1u, std::min(config.window.scans, ScanWindow::kMaxScans));
+  if (im.confidence.bind(ar, config.verify.max_points * window_scans) != Status::Ok && !ar.counting())
+    return Status::InvalidArgument;
   im.height_samples = ar.allocate<HeightSample>(C);
   record(&b.clique);
   if ((config.refine.enabled || config.track.refine) && im.refiner.bind(ar, config.refine) != Status::Ok)
     return Status::InvalidArgument;
   record(&b.refine);
+  if (im.window.bind(ar, config.window, config.verify.max_points) != Status::Ok && !ar.counting())
+    return Status::InvalidArgument;
+  record(&b.window);
   if (ar.overflowed()) return Status::BufferTooSmall;
   if (parts) *parts = b;
   return Status::Ok;
@@ -161,7 +169,7 @@ Localizer::Budget Localizer::budget(const LocalizerConfig& c) {
   if (bind_workspace(counting, c, scratch, &b) != Status::Ok) return Budget{};
   b.total = counting.used();
   const size_t parts = b.voxel + b.cluster + b.poles + b.field + b.triangle + b.match + b.gsf_cache + b.correspondence +
-                       b.clique + b.refine;
+                       b.clique + b.refine + b.window;
   b.other = b.total - parts;  // the Impl object and its alignment
   return b;
 }
@@ -606,6 +614,121 @@ Status Localizer::track(const ScanView& scan, const Eigen::Isometry3d& predicted
   out.confidence = o.confidence;
   out.confident = o.confidence >= cfg.confidence.min_probability;
   return finish(ts.n > 0 ? Status::Ok : Status::NoSolution);
+}
+
+namespace {
+
+// The poses a one-shot result offers the window: its answer (at the pose verification scored, with the
+// answer's height), then its rivals, each with the share of the scan's instances it explained (a rival's:
+// the reported hypothesis nearest it within the same-pose tolerance; 0 without one).
+uint32_t offered_candidates(const AnswerSelector& sel, const LocalizeResult& r, const HypothesisConfig& hc,
+                            uint32_t max, WindowCandidate* out) {
+  if (r.status != Status::Ok || !r.verified || max == 0) return 0;
+  const float instances = float(std::max<uint32_t>(1, r.query_instances));
+  uint32_t n = 0;
+  out[n].map_T_scan = sel.answer_pose();
+  out[n].map_T_scan.translation().z() = r.map_T_scan.translation().z();
+  out[n++].inlier_share = float(r.inliers) / instances;
+  for (uint32_t k = 0; k < sel.rival_count() && n < max; ++k) {
+    const Eigen::Isometry3d& p = sel.rival_poses()[k];
+    float share = 0.0f;
+    double nearest = double(hc.same_pose_m) * hc.same_pose_m;
+    const double yaw = std::atan2(p.linear()(1, 0), p.linear()(0, 0)) * 57.29577951308232;
+    for (const HypothesisReport& h : r.hypothesis) {
+      const double dx = h.x - p.translation().x(), dy = h.y - p.translation().y(), d = dx * dx + dy * dy;
+      const double dyaw = std::fabs(std::remainder(double(h.yaw_deg) - yaw, 360.0));
+      if (h.inliers > 0 && d <= nearest && dyaw <= hc.same_pose_deg) {
+        nearest = d;
+        share = float(h.inliers) / instances;
+      }
+    }
+    out[n].map_T_scan = p;
+    out[n++].inlier_share = share;
+  }
+  return n;
+}
+
+}  // namespace
+
+// The window's answer into `out` (when it is better than the scan's own): pose, confidence, provenance.
+void Localizer::apply_window(const WindowOutcome& w, LocalizeResult& out) const {
+  out.window_candidates = w.candidates;
+  if (!w.combined || !(w.confidence > out.confidence)) return;
+  out.status = Status::Ok;
+  out.map_T_scan = w.map_T_scan;
+  out.map_frame_T_scan = to_map_frame(map_.georef, w.map_T_scan);
+  out.verified = true;
+  out.refined = false;
+  out.confidence_evidence = w.evidence;
+  out.confidence = w.confidence;
+  out.confident = w.confidence >= config_.confidence.min_probability;
+  out.window_combined = true;
+  out.window_scans = w.scans;
+  for (uint32_t k = 0; k < w.scans && k < kMaxWindowScans; ++k) out.window_ids[k] = w.ids[k];
+}
+
+// A confident answer with a thin margin over its rivals (a lattice's flip had z_rival 1.2-1.7 at
+// confidence 0.92-0.98, suite seeds 12 and 13) is checked by the window: an answer the combined scans
+// put elsewhere (beyond 5 m / 10 deg) is replaced by the window's when that is more confident, else keeps
+// at most 1 - the window's confidence (as a prior's answer against the global search).
+void Localizer::check_with_window(const WindowOutcome& w, LocalizeResult& out) const {
+  out.window_checked = true;
+  out.window_candidates = w.candidates;
+  if (!w.combined) return;
+  const Eigen::Isometry3d d = out.map_T_scan.inverse() * w.map_T_scan;
+  constexpr double kSameM = 5.0, kSameRad = 10.0 * 3.14159265358979323846 / 180.0;  // the success criterion
+  if (d.translation().norm() < kSameM && Eigen::AngleAxisd(d.rotation()).angle() < kSameRad) return;
+  out.window_contradicted = true;
+  if (w.confidence > out.confidence) return apply_window(w, out);
+  out.confidence = std::min(out.confidence, 1.0 - w.confidence);
+  out.confident = out.confidence >= config_.confidence.min_probability;
+}
+
+Status Localizer::localize_sequence(const ScanView& scan, const Eigen::Isometry3d& previous_T_scan,
+                                    LocalizeResult* out_ptr) {
+  LocalizeResult scratch_result;
+  LocalizeResult& out = out_ptr ? *out_ptr : scratch_result;
+  out = LocalizeResult();
+  if (!initialized_) return out.status = Status::NotInitialized;
+  Impl& im = *impl_;
+  if (!previous_T_scan.matrix().allFinite()) {
+    im.window.reset();
+    return out.status = Status::InvalidArgument;
+  }
+  localize_in(scan, nullptr, &out);
+  const uint64_t t0 = now(clock_);
+  out.single_confidence = out.confidence;
+  // This scan's verification sample: verification's copy, or (no hypotheses) made here from its voxels.
+  const bool has_scan = out.scan_voxels > 0 && (out.status == Status::Ok || out.status == Status::NoSolution);
+  if (has_scan && im.answer.compact_point_count() == 0) im.answer.prepare(im.voxels, im.weights, config_.verify);
+  out.sequence_index = im.window.begin_scan(previous_T_scan, has_scan ? im.answer.compact_points() : nullptr,
+                                            has_scan ? im.answer.compact_point_count() : 0);
+  out.window_scans = 1;
+  out.window_ids[0] = out.sequence_index;
+  WindowCandidate own[ScanWindow::kMaxCandidates];
+  const uint32_t n_own = offered_candidates(im.answer, out, config_.hypotheses, config_.window.candidates, own);
+  const bool alone = out.status == Status::Ok && out.confident;
+  const bool thin = alone && out.confidence_evidence.z_rival < kWindowCheckZ;
+  if (has_scan && (!alone || thin) && im.window.scans() > 1) {
+    const WindowOutcome w = im.window.combine(own, n_own, im.semantic, im.answer.verify_weights(), config_.verify,
+                                              config_.hypotheses, im.confidence);
+    if (thin) check_with_window(w, out);
+    else apply_window(w, out);
+  }
+  // What this scan offers its successors: its answer (the window's, when that replaced its own), then
+  // its own candidates at other poses.
+  WindowCandidate offer[ScanWindow::kMaxCandidates];
+  uint32_t n = 0;
+  if (out.window_combined) offer[n++] = WindowCandidate{out.map_T_scan, out.confidence_evidence.inlier_share};
+  for (uint32_t k = 0; k < n_own && n < ScanWindow::kMaxCandidates; ++k) offer[n++] = own[k];
+  im.window.set_candidates(offer, n);
+  out.times.window = now(clock_) - t0;
+  out.times.total += out.times.window;
+  return out.status;
+}
+
+void Localizer::reset_sequence() {
+  if (impl_) impl_->window.reset();
 }
 
 PoseVerification Localizer::score_pose(const Eigen::Isometry3d& map_T_scan) const {

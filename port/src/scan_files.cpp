@@ -95,6 +95,27 @@ Status InputFile::read_exact(void* dst, size_t bytes) {
   return Status::Ok;
 }
 
+namespace {
+
+// Removes the frame files (NNNNNN<ext>) of <d>/<sub>, if that folder exists; other files stay.
+bool remove_frames(const std::string& d, const char* sub, const char* ext) {
+  namespace fs = std::filesystem;
+  std::error_code ec;
+  const fs::path folder = fs::path(d) / sub;
+  if (!fs::is_directory(folder, ec)) return true;
+  std::vector<fs::path> stale;
+  fs::directory_iterator it(folder, ec);
+  for (; !ec && it != fs::directory_iterator(); it.increment(ec)) {
+    uint32_t f;
+    if (parse_frame_name(it->path().filename().string(), ext, &f)) stale.push_back(it->path());
+  }
+  for (const fs::path& p : stale)
+    if (!ec) fs::remove(p, ec);
+  return !ec;
+}
+
+}  // namespace
+
 Status make_sequence_dirs(const std::string& root, const std::string& seq, const char* label_sub, std::string* dir) {
   namespace fs = std::filesystem;
   dir->clear();
@@ -103,6 +124,11 @@ Status make_sequence_dirs(const std::string& root, const std::string& seq, const
   fs::create_directories(fs::path(d) / "velodyne", ec);
   if (!ec) fs::create_directories(fs::path(d) / label_sub, ec);
   if (ec) return Status::IoError;
+  // A sequence written before into the same place may have had more frames: the readers list the frame
+  // files, so its stale ones would join the new sequence (without poses: build-map failed NotFound).
+  if (!remove_frames(d, "velodyne", ".bin") || !remove_frames(d, label_sub, ".label") ||
+      !remove_frames(d, "logits", ".bin"))
+    return Status::IoError;
   *dir = d;
   return Status::Ok;
 }

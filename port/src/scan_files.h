@@ -30,8 +30,10 @@ Status list_frames(const std::string& dir, const char* sub, const char* ext, std
 // Reads a whole text file (open() time only: allocates). Missing file -> NotFound.
 Status read_text(const std::string& path, std::string* text);
 
-// Writers (host tools: allocate). Creates <root>/sequences/<seq>/velodyne and .../<label_sub> and sets
-// *dir to <root>/sequences/<seq> (cleared on failure). IoError when a folder cannot be created.
+// Writers (host tools: allocate). Creates <root>/sequences/<seq>/velodyne and .../<label_sub>, removes
+// the frame files (NNNNNN.bin / .label) a sequence written there before left in velodyne, <label_sub>
+// and logits (a writer writes a whole sequence), and sets *dir to <root>/sequences/<seq> (cleared on
+// failure). IoError when a folder cannot be created or a stale frame file removed.
 Status make_sequence_dirs(const std::string& root, const std::string& seq, const char* label_sub, std::string* dir);
 // Writes `parts` to `path`; false unless every byte reached the file.
 bool write_file(const std::string& path, std::initializer_list<std::pair<const void*, size_t>> parts);

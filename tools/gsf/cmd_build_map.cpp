@@ -149,6 +149,9 @@ void report_build_failure(const BuildMapOptions& o, port::ScanSource& src, Statu
                  "gsf build-map: failed: %s at scan %u (file %u): its pose is more than %.0f m from the map "
                  "origin (give an --origin near the drive) or not finite, or its points are unusable\n",
                  to_string(s), failed_scan, src.frame_id(failed_scan), mapping::kMaxMapLocalCoordinate);
+  else if (failed_scan != UINT32_MAX && s == Status::NotFound)
+    std::fprintf(stderr, "gsf build-map: failed: %s: scan %u (file %u) has no pose (poses.txt has no line %u)\n",
+                 to_string(s), failed_scan, src.frame_id(failed_scan), src.frame_id(failed_scan) + 1);
   else if (s == Status::IoError) std::fprintf(stderr, "gsf build-map: failed: cannot write '%s'\n", o.out.c_str());
   else std::fprintf(stderr, "gsf build-map: failed: %s\n", to_string(s));
 }

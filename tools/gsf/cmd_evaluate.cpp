@@ -1,6 +1,7 @@
 // gsf evaluate --map MAP --dataset DIR --sequence 01 --json OUT.json [--mode gsf|instance|scan-context|all]
 // [--min-confidence P] [--svg DIR [--png]] [--label-noise P] [--object-confusion P] [--thin-miss P] [--noise-seed N]
 // [--prior-sigma S [--prior-bias B] [--prior-radius R] [--prior-seed N]] | --mode track [--odometry-noise F]
+// | --sequence-window N [--odometry-noise F]
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
@@ -94,8 +95,14 @@ std::vector<OptionSpec> evaluate_option_specs() {
        "0"},
       {"prior-radius", "with --prior-sigma: the prior's radius in m (default 3 x sigma, at least 5)", ""},
       {"prior-seed", "with --prior-sigma: seed of the priors' draws", "1"},
-      {"odometry-noise", "--mode track: odometry error as a share of the distance travelled (and 10 deg/m x it of yaw)",
+      {"odometry-noise",
+       "--mode track, --sequence-window: odometry error as a share of the distance travelled (and 10 deg/m x it of "
+       "yaw)",
        "0.02"},
+      {"sequence-window",
+       "N in 1..4: every scan of the 10 Hz stretches of sequence 02 through localize_sequence, combining the last N "
+       "scans when one is not confident (1: one-shot; docs/vehicle-modes.md)",
+       ""},
   };
   for (const OptionSpec& o : label_error_option_specs()) specs.push_back(o);
   return specs;
@@ -165,6 +172,14 @@ int cmd_evaluate(int argc, char** argv) {
   if (!args.parse(argc, argv, 2, specs, &err)) return usage_error("evaluate", err);
   EvalOptions o;
   if (!parse_eval_options(args, &o, &err)) return usage_error("evaluate", err);
+  if (args.has("sequence-window")) {
+    long long n = 0;
+    if (!args.get_int("sequence-window", &n, &err) || n < 1 || n > 4)
+      return usage_error("evaluate", "--sequence-window must be 1..4");
+    o.sequence_window = static_cast<uint32_t>(n);
+    if (!args.has("sequence")) o.sequence = "02";  // the simulator's stretches
+    return run_window(o);
+  }
   if (args.get("mode") == "track") {
     if (!args.has("sequence")) o.sequence = "02";  // the simulator's stretches
     return run_tracking(o);

@@ -136,17 +136,12 @@ void print_workspace_budget(const MapView& map) {
   const struct {
     const char* name;
     size_t bytes;
-  } rows[] = {{"voxel layer", b.voxel},
-              {"instances", b.cluster},
-              {"geometric poles", b.poles},
-              {"query fields", b.field},
-              {"triangles", b.triangle},
-              {"ranked matches", b.match},
-              {"GSF probe cache", b.gsf_cache},
-              {"correspondences", b.correspondence},
-              {"hypotheses", b.clique},
-              {"refinement", b.refine},
-              {"other", b.other}};
+  } rows[] = {{"voxel layer", b.voxel},         {"instances", b.cluster},
+              {"geometric poles", b.poles},     {"query fields", b.field},
+              {"triangles", b.triangle},        {"ranked matches", b.match},
+              {"GSF probe cache", b.gsf_cache}, {"correspondences", b.correspondence},
+              {"hypotheses", b.clique},         {"refinement", b.refine},
+              {"scan window", b.window},        {"other", b.other}};
   for (const auto& r : rows) std::printf("    %-18s %10.2f MB\n", r.name, r.bytes / 1e6);
   std::printf("    %-18s %10.2f MB  (%.2f MB without refinement)\n", "total", b.total / 1e6,
               (b.total - b.refine) / 1e6);

@@ -263,7 +263,10 @@ Status build_map(port::ScanSource& src, const mapping::MapBuildConfig& config, L
   for (uint32_t i = 0; i < src.size(); ++i) {
     Eigen::Isometry3d pose;
     Status s = src.pose(i, &pose);
-    if (s != Status::Ok) return s;
+    if (s != Status::Ok) {
+      if (failed_scan) *failed_scan = i;
+      return s;
+    }
     s = read_scan(src, i, buf.buffer(), logits, 1000000u + src.frame_id(i), config.stages.classes, errors);
     if (s != Status::Ok) return s;
     s = builder.add_scan(buf.buffer().view(), pose);

@@ -100,9 +100,9 @@ double path_length(port::ScanSource& src);
 
 // config.classes is the label set of src's labels.
 // Builds the map of every scan of `src`. On failure *failed_scan is the index of the scan add_scan
-// refused (UINT32_MAX when the failure came later, at build()). The map goes to `sink` section by
-// section (mapping/map_writer.h; a FileMapSink writes the file without holding the map).
-// `errors` (optional): simulated network errors on every mapping scan's labels (read_scan).
+// refused or that has no pose (NotFound) (UINT32_MAX when the failure came later, at build()). The map goes to `sink`
+// section by section (mapping/map_writer.h; a FileMapSink writes the file without holding the map). `errors`
+// (optional): simulated network errors on every mapping scan's labels (read_scan).
 Status build_map(port::ScanSource& src, const mapping::MapBuildConfig& config, LogitMode logits, mapping::MapSink& sink,
                  size_t* bytes, mapping::MapBuildStats* stats, bool progress, uint32_t* failed_scan = nullptr,
                  const ScanLabelErrors* errors = nullptr);

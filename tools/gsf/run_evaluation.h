@@ -28,7 +28,8 @@ struct EvalOptions {
   std::string overrides;           // config overrides (name=value,...) applied to every localizer mode
   LabelErrorOptions label_errors;  // simulated network errors on the query scans' labels (none by default)
   PriorDraw prior;                 // a position prior around each query's truth (--prior-sigma)
-  double odometry_noise = 0.02;    // --mode track: odometry noise (vehicle_modes.h noisy_odometry)
+  double odometry_noise = 0.02;    // --mode track, --sequence-window: odometry noise (vehicle_modes.h noisy_odometry)
+  uint32_t sequence_window = 0;    // --sequence-window N (1..4): localize_sequence over the stretches; 0: off
 };
 
 // Returns the process exit code.

@@ -38,4 +38,10 @@ Eigen::Isometry3d noisy_odometry(const Eigen::Isometry3d& from, const Eigen::Iso
 // process exit code.
 int run_tracking(const EvalOptions& o);
 
+// gsf evaluate --sequence-window N (run_window.cpp): every scan of o.sequence's stretches through
+// Localizer::localize_sequence with window.scans = o.sequence_window, odometry from the dataset's poses
+// with o.odometry_noise; the window restarts at each stretch. Prints the table (all scans, the repetitive
+// zone's), writes o.json_out. Returns the process exit code.
+int run_window(const EvalOptions& o);
+
 }  // namespace gsf::cli

@@ -37,6 +37,8 @@ struct LocalizerConfig {
   RefineConfig refine;  // off by default (the "gsf+refine" evaluation row turns it on)
   ConfidenceConfig confidence;
   TrackConfig track;  // Localizer::track (tracker.h, docs/vehicle-modes.md)
+  // Localizer::localize_sequence: several scans tied by odometry (scan_window.h, docs/vehicle-modes.md).
+  WindowConfig window;
 };
 
 // Ok, or InvalidArgument when a parameter is out of its range or breaks a rule with another one;

@@ -191,6 +191,30 @@ int gsf_track(gsf_localizer* localizer, const float* xyz_stride, uint32_t stride
               const uint32_t* labels, const float* logits, uint32_t logit_dim,
               const double predicted_map_frame_T_scan[12], gsf_result* out) GSF_NOEXCEPT;
 
+// ---- Several scans tied by odometry (docs/vehicle-modes.md) ----
+
+#define GSF_MAX_WINDOW_SCANS 4
+// Which scans made a gsf_localize_sequence answer.
+typedef struct gsf_window_info {
+  uint32_t sequence_index;             // this scan's number in the sequence (from 0)
+  uint32_t combined;                   // 1: the answer is the window's (this scan alone was not confident)
+  uint32_t checked, contradicted;      // a thin-margin confident answer checked by the window; put elsewhere
+  uint32_t scans;                      // scans whose evidence made the answer (1: this one alone)
+  uint32_t ids[GSF_MAX_WINDOW_SCANS];  // their sequence numbers, newest (this scan) first
+  double single_confidence;            // this scan's own one-shot confidence
+} gsf_window_info;
+
+// gsf_localize, and when the scan alone is not confident, its pose from the last N scans of the sequence
+// together (N: the config's window.scans, 3 by default; an expert parameter of the C++ config): each
+// scan's candidate poses are moved to this one through the odometry and scored on all the scans'
+// verification samples. previous_T_scan: this scan's pose in the previous scan's frame (odometry,
+// row-major 3x4 [R | t]); NULL starts a new sequence (the first scan, or after a gap). window: optional.
+// Every call enters its scan into the window. GSF_STATUS_INVALID_ARGUMENT for a non-finite odometry
+// (the sequence restarts).
+int gsf_localize_sequence(gsf_localizer* localizer, const float* xyz_stride, uint32_t stride, uint32_t count,
+                          const uint32_t* labels, const float* logits, uint32_t logit_dim,
+                          const double previous_T_scan[12], gsf_result* out, gsf_window_info* window) GSF_NOEXCEPT;
+
 #ifdef __cplusplus
 }  // extern "C"
 #endif

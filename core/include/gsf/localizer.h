@@ -19,14 +19,16 @@
 
 namespace gsf {
 
-class Arena;  // detail/arena.h: the bump allocator init() binds the stages with
+class Arena;           // detail/arena.h: the bump allocator init() binds the stages with
+struct WindowOutcome;  // detail/scan_window.h: what the several-scan window found
 
 struct StageTimes {  // nanoseconds from the Clock given at init (all zero without one)
   // match: index lookups and ranking (with the heading votes); gsf: the GSF filter and correspondence accumulation;
   // clique: the hypotheses (cliques + TLS poses); pose: verification and the answer's height; confidence: the
-  // answer's comparisons with wrong poses (confidence.h).
+  // answer's comparisons with wrong poses (confidence.h); window: localize_sequence's step after the one-shot
+  // (entering the scan, combining or checking; in total too).
   uint64_t voxel = 0, cluster = 0, field = 0, triangle = 0, match = 0, gsf = 0, clique = 0, pose = 0, confidence = 0,
-           refine = 0, total = 0;
+           refine = 0, window = 0, total = 0;
 };
 
 // One pose hypothesis as the localizer saw it (diagnostics).
@@ -41,6 +43,7 @@ struct HypothesisReport {
   bool fully_verified = false;                      // scored on verify.max_points (else only the coarse sample)
 };
 constexpr uint32_t kMaxReportedHypotheses = 16;  // the best by verified score (all of them when fewer)
+constexpr uint32_t kMaxWindowScans = 4;          // WindowConfig::scans at most (localize_sequence)
 
 struct LocalizeResult {
   Status status = Status::NotInitialized;
@@ -98,6 +101,17 @@ struct LocalizeResult {
   bool tracked = false;                   // the result of track(): no instances, triangles or hypotheses
   bool prior_global_check = false;        // a global search checked the prior's answer (thin margin)
   bool prior_contradicted = false;        // ... and gave another pose: confidence <= 1 - its confidence
+  // Several scans (localize_sequence): this scan's number in the sequence (calls since reset_sequence,
+  // from 0), its own one-shot confidence, and the scans whose evidence made the answer: window_scans of
+  // them (1: this scan alone), their numbers in window_ids, newest (this one) first.
+  uint32_t sequence_index = 0;
+  double single_confidence = 0.0;
+  bool window_combined = false;  // the answer is the window's (this scan alone was not confident)
+  uint32_t window_scans = 0;
+  uint32_t window_ids[kMaxWindowScans] = {};
+  uint32_t window_candidates = 0;    // distinct poses the window scored
+  bool window_checked = false;       // a confident answer with a thin margin was checked by the window
+  bool window_contradicted = false;  // ... which put it elsewhere: replaced, or confidence <= 1 - the window's
 };
 
 class Localizer {
@@ -108,7 +122,8 @@ class Localizer {
   // The same total broken down by stage (for memory budgets). Recorded by the one layout function while
   // it binds, so the parts always sum to required_bytes (other = the Impl object and its alignment).
   struct Budget {
-    size_t voxel, cluster, poles, field, triangle, match, gsf_cache, correspondence, clique, refine, other, total;
+    size_t voxel, cluster, poles, field, triangle, match, gsf_cache, correspondence, clique, refine, window, other,
+        total;
   };
   static Budget budget(const LocalizerConfig& config);
 
@@ -133,6 +148,22 @@ class Localizer {
   // localize(). InvalidArgument for a non-finite prediction, Unsupported for a map without a semantic
   // layer.
   Status track(const ScanView& scan, const Eigen::Isometry3d& predicted_map_frame_T_scan, LocalizeResult* out);
+
+  // Several scans tied by odometry (detail/scan_window.h, docs/vehicle-modes.md): localize(scan) one-shot;
+  // when that is not confident and the last config.window.scans - 1 scans of the sequence are held, their
+  // candidate poses and this scan's are moved to this scan through the odometry and scored on all the
+  // window's scans together, and the confidence comes from that combined evidence (window_combined,
+  // window_scans, window_ids). The window's answer replaces the single scan's when its confidence is
+  // higher. A confident answer with a thin margin over its rivals (z_rival < kWindowCheckZ) is checked
+  // by the window: if the combined scans put the scan elsewhere, the window's answer replaces it when more
+  // confident, else it keeps at most 1 - the window's confidence (window_checked, window_contradicted).
+  // `previous_T_scan`: this scan's pose in the previous scan's frame (odometry between the two calls' scans); ignored
+  // on the first call after init() or reset_sequence(). Every call (whatever its status) enters the scan into the
+  // window. InvalidArgument for a non-finite odometry (the window is reset). With window.scans = 1 this is
+  // localize(scan) with sequence numbers.
+  Status localize_sequence(const ScanView& scan, const Eigen::Isometry3d& previous_T_scan, LocalizeResult* out);
+  // Forgets the window: the next localize_sequence() starts a sequence (after a gap in the odometry).
+  void reset_sequence();
 
   // The correspondences the last localize() passed to the max clique (for pictures and debugging):
   // copies up to `max` into `out`, returns how many there were.
@@ -161,6 +192,10 @@ class Localizer {
   // scan_ready: the last call built this scan's voxels, instances, fields and triangles; start at matching.
   Status localize_in(const ScanView& scan, const PositionPrior* prior, LocalizeResult* out, bool scan_ready = false);
   void check_outside_prior(const ScanView& scan, LocalizeResult& out);
+  void apply_window(const WindowOutcome& window, LocalizeResult& out) const;
+  void check_with_window(const WindowOutcome& window, LocalizeResult& out) const;
+  // A sequence scan's confident answer whose z_rival is below this is checked by the window (localizer.cpp).
+  static constexpr float kWindowCheckZ = 4.0f;
   // A prior's confident answer whose z_rival is below this is checked by a global search (localize.cpp).
   static constexpr float kPriorGlobalCheckZ = 4.0f;
   LocalizerConfig config_{};

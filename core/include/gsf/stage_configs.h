@@ -266,4 +266,12 @@ struct TrackConfig {
   uint32_t icp_iterations = 6;
 };
 
+// Localizer::localize_sequence: several scans tied by odometry (detail/scan_window.h).
+struct WindowConfig {
+  // N: the scans combined (this one and the last N - 1 given to localize_sequence); 1: off (no memory).
+  uint32_t scans = 3;
+  // K: poses each scan keeps for its successors (its answer, then its rivals).
+  uint32_t candidates = 4;
+};
+
 }  // namespace gsf

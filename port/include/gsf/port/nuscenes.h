@@ -25,6 +25,8 @@ uint8_t kitti_to_nuscenes(uint32_t kitti_label);
 // float32), lidarseg/NNNNNN.label (uint8 class per point), poses.txt and an identity calib.txt.
 class NuScenesLidarsegWriter {
  public:
+  // Creates the sequence's folders; frame files a sequence written there before left are removed (the
+  // reader lists the frame files: a longer stale sequence would add frames without poses).
   Status open(const std::string& dataset_root, const std::string& sequence);
   Status write_scan(uint32_t frame, const float* xyzi, const uint8_t* lidarseg, uint32_t count);
   Status write_poses(const std::vector<Eigen::Isometry3d>& world_T_lidar);

@@ -53,6 +53,8 @@ class SemanticKittiSource final : public ScanSource {
 
 class SemanticKittiWriter {
  public:
+  // Creates the sequence's folders; frame files a sequence written there before left are removed (the
+  // reader lists the frame files: a longer stale sequence would add frames without poses).
   Status open(const std::string& dataset_root, const std::string& sequence);
   Status write_scan(uint32_t frame, const float* xyzi, const uint32_t* labels, const float* logits_or_null,
                     uint32_t count);

@@ -1,0 +1,179 @@
+#include "gsf/detail/scan_window.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstring>
+
+#include "gsf/config.h"
+
+namespace gsf {
+namespace {
+
+constexpr double kPi = 3.14159265358979323846;
+
+double yaw_of(const Eigen::Isometry3d& T) { return std::atan2(T.linear()(1, 0), T.linear()(0, 0)); }
+
+// Within same_m and same_deg of each other in the bird's-eye view verification sees: one answer.
+bool same_pose(const Eigen::Isometry3d& a, const Eigen::Isometry3d& b, float same_m, float same_deg) {
+  const double dx = b.translation().x() - a.translation().x(), dy = b.translation().y() - a.translation().y();
+  double dyaw = std::fabs(yaw_of(b) - yaw_of(a));
+  if (dyaw > kPi) dyaw = 2.0 * kPi - dyaw;
+  return std::sqrt(dx * dx + dy * dy) <= same_m && dyaw <= double(same_deg) * kPi / 180.0;
+}
+
+}  // namespace
+
+size_t ScanWindow::required_bytes(const WindowConfig& config, uint32_t max_points) {
+  return counted_bytes<ScanWindow>(config, max_points);
+}
+
+Status ScanWindow::bind(Arena& arena, const WindowConfig& config, uint32_t max_points) {
+  points_ = nullptr;
+  scored_ = nullptr;
+  slots_ = nullptr;
+  capacity_scans_ = std::min(config.scans, kMaxScans);
+  capacity_candidates_ = std::min(config.candidates, kMaxCandidates);
+  max_points_ = max_points;
+  reset();
+  if (capacity_scans_ <= 1) return Status::Ok;
+  points_ = arena.allocate<VerifyPoint>(size_t(capacity_scans_) * max_points);
+  scored_ = arena.allocate<Scored>(size_t(capacity_scans_) * capacity_candidates_);
+  slots_ = arena.allocate<Slot>(capacity_scans_, true);
+  return arena.overflowed() ? Status::BufferTooSmall : Status::Ok;
+}
+
+void ScanWindow::reset() {
+  held_ = 0;
+  next_id_ = 0;
+}
+
+void ScanWindow::drop_oldest() {
+  const uint32_t gone = slots_[0].count;
+  const uint32_t total = slots_[held_ - 1].first + slots_[held_ - 1].count;
+  if (total > gone) std::memmove(points_, points_ + gone, size_t(total - gone) * sizeof(VerifyPoint));
+  for (uint32_t k = 1; k < held_; ++k) {
+    slots_[k - 1] = slots_[k];
+    slots_[k - 1].first -= gone;
+  }
+  --held_;
+}
+
+uint32_t ScanWindow::begin_scan(const Eigen::Isometry3d& previous_T_scan, const VerifyPoint* points, uint32_t n) {
+  if (!bound()) return next_id_++;
+  if (held_ > 0) {
+    // newest_T_scan of every held scan, and their samples, into the new scan's frame (bird's-eye, as
+    // verification reads them: the heading and the horizontal translation).
+    const Eigen::Isometry3d scan_T_previous = previous_T_scan.inverse();
+    const float yaw = static_cast<float>(yaw_of(scan_T_previous));
+    const float c = std::cos(yaw), s = std::sin(yaw);
+    const float tx = static_cast<float>(scan_T_previous.translation().x());
+    const float ty = static_cast<float>(scan_T_previous.translation().y());
+    const uint32_t total = slots_[held_ - 1].first + slots_[held_ - 1].count;
+    for (uint32_t i = 0; i < total; ++i) {
+      VerifyPoint& p = points_[i];
+      const float x = p.x, y = p.y;
+      p.x = c * x - s * y + tx;
+      p.y = s * x + c * y + ty;
+    }
+    for (uint32_t k = 0; k < held_; ++k) slots_[k].newest_T_scan = scan_T_previous * slots_[k].newest_T_scan;
+  }
+  if (held_ == capacity_scans_) drop_oldest();
+  Slot& slot = slots_[held_];
+  slot.first = held_ > 0 ? slots_[held_ - 1].first + slots_[held_ - 1].count : 0;
+  slot.count = 0;
+  slot.id = next_id_++;
+  slot.newest_T_scan = Eigen::Isometry3d::Identity();
+  slot.candidates = 0;
+  if (points != nullptr && n > 0 && max_points_ > 0) {
+    const uint32_t stride = (n + max_points_ - 1) / max_points_;  // verify_pose's sample
+    for (uint32_t i = 0; i < n && slot.count < max_points_; i += stride) points_[slot.first + slot.count++] = points[i];
+  }
+  ++held_;
+  return slot.id;
+}
+
+void ScanWindow::set_candidates(const WindowCandidate* c, uint32_t n) {
+  if (!bound() || held_ == 0) return;
+  Slot& slot = slots_[held_ - 1];
+  slot.candidates = std::min(n, capacity_candidates_);
+  for (uint32_t k = 0; k < slot.candidates; ++k) slot.cand[k] = c[k];
+}
+
+// The newest scan's candidates, then each older scan's moved to the newest scan (newest first), without
+// repeats (within the same-pose tolerance of one already taken). Returns how many are in scored_.
+uint32_t ScanWindow::gather(const WindowCandidate* own, uint32_t n_own, float same_m, float same_deg) {
+  const uint32_t cap = capacity_scans_ * capacity_candidates_;
+  uint32_t n = 0;
+  auto add = [&](const Eigen::Isometry3d& pose, float share) {
+    for (uint32_t k = 0; k < n; ++k)
+      if (same_pose(scored_[k].pose, pose, same_m, same_deg)) {
+        scored_[k].inlier_share = std::max(scored_[k].inlier_share, share);
+        return;
+      }
+    if (n < cap) scored_[n++] = Scored{pose, PoseVerification(), share};
+  };
+  for (uint32_t k = 0; k < std::min(n_own, capacity_candidates_); ++k) add(own[k].map_T_scan, own[k].inlier_share);
+  for (uint32_t s = held_ - 1; s-- > 0;) {
+    const Slot& slot = slots_[s];
+    const Eigen::Isometry3d scan_T_newest = slot.newest_T_scan.inverse();
+    for (uint32_t k = 0; k < slot.candidates; ++k)
+      add(slot.cand[k].map_T_scan * scan_T_newest, slot.cand[k].inlier_share);
+  }
+  return n;
+}
+
+// The best other candidates at another place or heading than scored_[0] (best first), into rivals.
+uint32_t ScanWindow::pick_rivals(uint32_t n, float same_m, float same_deg, Eigen::Isometry3d* rivals) const {
+  uint32_t r = 0;
+  for (uint32_t k = 1; k < n && r < kMaxRivals; ++k)
+    if (!same_pose(scored_[0].pose, scored_[k].pose, same_m, same_deg)) rivals[r++] = scored_[k].pose;
+  return r;
+}
+
+WindowOutcome ScanWindow::combine(const WindowCandidate* own, uint32_t n_own, const SemanticGridView& grid,
+                                  const float* weights, const VerifyConfig& vc, const HypothesisConfig& hc,
+                                  AnswerConfidence& confidence) {
+  WindowOutcome o;
+  if (!bound() || held_ < 2 || grid.empty()) return o;
+  const uint32_t total = slots_[held_ - 1].first + slots_[held_ - 1].count;
+  const float lambda = vc.disagree_weight;
+  const uint32_t n = gather(own, n_own, hc.same_pose_m, hc.same_pose_deg);
+  if (n == 0 || total == 0) return o;
+  // Every candidate on the combined sample, the best refine_top by a pattern search, best first.
+  for (uint32_t k = 0; k < n; ++k)
+    scored_[k].v = verify_pose(points_, total, grid, scored_[k].pose, total, weights, lambda);
+  // Best first, ties in gathering order (an insertion sort: n <= scans x candidates, and no heap, which
+  // std::stable_sort may take).
+  auto sort_by_score = [this, n] {
+    for (uint32_t i = 1; i < n; ++i)
+      for (uint32_t k = i; k > 0 && scored_[k - 1].v.score < scored_[k].v.score; --k)
+        std::swap(scored_[k - 1], scored_[k]);
+  };
+  sort_by_score();
+  const uint32_t refine = std::min(n, vc.refine_rounds > 0 ? vc.refine_top : 0u);
+  for (uint32_t k = 0; k < refine; ++k) {
+    const PoseVerification at = scored_[k].v;
+    scored_[k].v =
+        verify_pose_refined(points_, total, grid, scored_[k].pose, total, weights, vc.refine_rounds, vc.refine_step_m,
+                            vc.refine_step_deg, &scored_[k].pose, vc.search_divisor, vc.polish_divisor, &at, lambda);
+  }
+  sort_by_score();
+  Eigen::Isometry3d rivals[kMaxRivals];
+  const uint32_t nr = pick_rivals(n, hc.same_pose_m, hc.same_pose_deg, rivals);
+  // The inlier factor reads inliers / instances: the best candidate's share, in thousandths.
+  const uint32_t inliers = static_cast<uint32_t>(std::lround(1000.0f * scored_[0].inlier_share));
+  const AnswerConfidence::Answer a{scored_[0].pose, rivals, nr, inliers, 1000};
+  o.evidence = confidence.measure(points_, total, grid, weights, lambda, a, total);
+  o.confidence = confidence_probability(o.evidence);
+  o.map_T_scan = scored_[0].pose;
+  o.verification = scored_[0].v;
+  o.inlier_share = scored_[0].inlier_share;
+  o.combined = true;
+  o.candidates = n;
+  o.samples = total;
+  o.scans = held_;
+  for (uint32_t k = 0; k < held_; ++k) o.ids[k] = slots_[held_ - 1 - k].id;
+  return o;
+}
+
+}  // namespace gsf

@@ -1,0 +1,190 @@
+// Several scans tied by odometry (detail/scan_window.h, Localizer::localize_sequence): the window's
+// bookkeeping (samples moved into the newest scan's frame, the oldest dropped, sequence numbers), and end
+// to end on the simulator's tiny-lattice world: each lattice query with the two scans driven 1 and 2 m
+// before it; a scan declined alone is answered with its neighbours, never a confident wrong answer, and
+// window.scans = 1 is one-shot localization bit for bit.
+#include <catch2/catch.hpp>
+
+#include <cmath>
+#include <vector>
+
+#include "arena_buffer.h"
+#include "gsf/detail/scan_window.h"
+#include "gsf/localizer.h"
+#include "tiny_world.h"
+
+using namespace gsf;
+
+namespace {
+
+Eigen::Isometry3d planar(double x, double y, double yaw_deg) {
+  Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
+  T.linear() = Eigen::AngleAxisd(yaw_deg * M_PI / 180.0, Eigen::Vector3d::UnitZ()).toRotationMatrix();
+  T.translation() = Eigen::Vector3d(x, y, 0.0);
+  return T;
+}
+
+// The tiny-lattice world's query scans with, before each, the scans a vehicle driving to it took 2 m and
+// 1 m earlier (along its heading), oldest first: three scans per query.
+struct LatticeSequences {
+  std::vector<std::vector<gsf_test::QueryScan>> runs;  // per in-zone query: scans at -2, -1, 0 m
+};
+
+const LatticeSequences& lattice_sequences() {
+  static LatticeSequences* s = [] {
+    auto* out = new LatticeSequences();
+    const gsf::sim::SimConfig sc = gsf::sim::SimConfig::tiny_lattice();
+    const gsf::sim::World world = gsf::sim::generate_world(sc.world);
+    const gsf::sim::World later = gsf::sim::apply_time_gap(world, sc.time_gap);
+    const gsf::sim::Raycaster rc(later);
+    const gsf_test::TinyWorld& w = gsf_test::tiny_lattice_world();
+    for (uint32_t q = 0; q < w.queries.size(); ++q) {
+      if (!w.queries[q].in_zone) continue;
+      std::vector<gsf_test::QueryScan> run(3);
+      for (int k = 0; k < 2; ++k) {
+        const Eigen::Isometry3d pose = w.queries[q].truth * planar(-(2.0 - k), 0.0, 0.0);
+        gsf_test::make_scan(rc, sc, pose, 7000u + 10u * q + k, 3000000u + 10u * q + k, &run[k]);
+      }
+      run[2] = w.queries[q];
+      out->runs.push_back(std::move(run));
+    }
+    return out;
+  }();
+  return *s;
+}
+
+}  // namespace
+
+TEST_CASE("The window moves its scans into the newest scan's frame and keeps the last N") {
+  WindowConfig wc;
+  wc.scans = 3;
+  wc.candidates = 2;
+  gsf_test::ArenaBuffer buf(ScanWindow::required_bytes(wc, 4));
+  ScanWindow win;
+  REQUIRE(win.bind(buf.arena, wc, 4) == Status::Ok);
+  REQUIRE(win.bound());
+  const VerifyPoint p[1] = {{2.0f, 0.0f, 9}};
+  CHECK(win.begin_scan(Eigen::Isometry3d::Identity(), p, 1) == 0);
+  CHECK(win.scans() == 1);
+  // The next scan 1 m ahead and turned 90 deg left: the first scan's point (2, 0) is 1 m ahead of the
+  // new sensor, which looks along the old y axis: (0, -1) in its frame.
+  CHECK(win.begin_scan(planar(1.0, 0.0, 90.0), p, 1) == 1);
+  CHECK(win.scans() == 2);
+  REQUIRE(win.sample_count() == 2);
+  CHECK(win.samples()[0].x == Approx(0.0f).margin(1e-6));
+  CHECK(win.samples()[0].y == Approx(-1.0f));
+  CHECK(win.samples()[0].label == 9u);
+  CHECK(win.samples()[1].x == 2.0f);  // the new scan's own, as given
+  for (uint32_t k = 2; k < 6; ++k) CHECK(win.begin_scan(planar(1.0, 0.0, 0.0), p, 1) == k);
+  CHECK(win.scans() == 3);  // the oldest dropped
+  CHECK(win.sample_count() == 3);
+  win.reset();
+  CHECK(win.scans() == 0);
+  CHECK(win.begin_scan(planar(5.0, 0.0, 0.0), p, 1) == 0);  // a new sequence: its odometry is ignored
+  WindowConfig off;
+  off.scans = 1;
+  CHECK(ScanWindow::required_bytes(off, 4096) == 0);
+}
+
+TEST_CASE("Without a map semantic layer the window combines nothing") {
+  WindowConfig wc;
+  gsf_test::ArenaBuffer buf(ScanWindow::required_bytes(wc, 16));
+  ScanWindow win;
+  REQUIRE(win.bind(buf.arena, wc, 16) == Status::Ok);
+  const VerifyPoint p[2] = {{3.0f, 1.0f, 1}, {4.0f, -1.0f, 2}};
+  win.begin_scan(Eigen::Isometry3d::Identity(), p, 2);
+  WindowCandidate c;
+  c.map_T_scan = planar(100.0, 50.0, 30.0);
+  c.inlier_share = 0.5f;
+  win.set_candidates(&c, 1);
+  win.begin_scan(planar(1.0, 0.0, 0.0), p, 2);
+  AnswerConfidence conf;
+  const WindowOutcome o =
+      win.combine(nullptr, 0, SemanticGridView(), nullptr, VerifyConfig(), HypothesisConfig(), conf);
+  CHECK(!o.combined);
+}
+
+TEST_CASE("Lattice scans declined alone are answered with their neighbours, never wrongly") {
+  const gsf_test::TinyWorld& w = gsf_test::tiny_lattice_world();
+  const LatticeSequences& seq = lattice_sequences();
+  REQUIRE(seq.runs.size() >= 8);
+  LocalizerConfig cfg = w.config;
+  cfg.window.scans = 3;
+  std::vector<uint64_t> ws(Localizer::required_bytes(cfg) / 8 + 2);
+  Localizer loc;
+  REQUIRE(loc.init(cfg, w.map, ws.data(), ws.size() * 8) == Status::Ok);
+  LocalizerConfig one = w.config;
+  one.window.scans = 1;
+  std::vector<uint64_t> ws1(Localizer::required_bytes(one) / 8 + 2);
+  Localizer alone;
+  REQUIRE(alone.init(one, w.map, ws1.data(), ws1.size() * 8) == Status::Ok);
+  CHECK(Localizer::required_bytes(one) < Localizer::required_bytes(cfg));
+  uint32_t declined_alone = 0, settled = 0, answered_alone = 0, answered = 0, wrong = 0;
+  for (const auto& run : seq.runs) {
+    loc.reset_sequence();
+    LocalizeResult r, single;
+    for (uint32_t k = 0; k < run.size(); ++k) {
+      const Eigen::Isometry3d odo = k == 0 ? Eigen::Isometry3d::Identity() : run[k - 1].truth.inverse() * run[k].truth;
+      loc.localize_sequence(run[k].view(), odo, &r);
+      CHECK(r.sequence_index == k);
+      const bool right = r.status == Status::Ok && gsf_test::pose_ok(r.map_T_scan, run[k].truth);
+      wrong += r.status == Status::Ok && r.confident && !right;
+    }
+    // The query itself (the newest of three), and one-shot on it.
+    alone.localize(run[2].view(), &single);
+    CHECK(r.single_confidence == single.confidence);  // the window's first step is one-shot
+    const bool single_ok = single.status == Status::Ok && single.confident;
+    answered_alone += single_ok;
+    answered += r.status == Status::Ok && r.confident;
+    if (!single_ok) {
+      ++declined_alone;
+      if (r.status == Status::Ok && r.confident) {
+        ++settled;
+        CHECK(r.window_combined);
+        CHECK(r.window_scans >= 2);
+        CHECK(r.window_ids[0] == 2);
+        CHECK(r.window_ids[1] == 1);
+      }
+    } else {
+      CHECK(!r.window_combined);  // confident alone: the scan's own answer
+      CHECK(r.window_scans == 1);
+      CHECK(r.map_T_scan.isApprox(single.map_T_scan));
+    }
+  }
+  INFO("queries " << seq.runs.size() << ": answered alone " << answered_alone << ", with neighbours " << answered
+                  << "; declined alone " << declined_alone << ", settled by the window " << settled);
+  CHECK(wrong == 0);
+  CHECK(answered >= answered_alone);
+  CHECK(settled >= 1);
+}
+
+TEST_CASE("window.scans = 1 is one-shot localization; bad odometry is refused") {
+  const gsf_test::TinyWorld& w = gsf_test::tiny_world();
+  LocalizerConfig one = w.config;
+  one.window.scans = 1;
+  std::vector<uint64_t> a(Localizer::required_bytes(one) / 8 + 2), b(Localizer::required_bytes(w.config) / 8 + 2);
+  Localizer seq, plain;
+  REQUIRE(seq.init(one, w.map, a.data(), a.size() * 8) == Status::Ok);
+  REQUIRE(plain.init(w.config, w.map, b.data(), b.size() * 8) == Status::Ok);
+  uint32_t k = 0;
+  for (const auto& q : w.queries) {
+    LocalizeResult r, p;
+    seq.localize_sequence(q.view(), planar(1.0, 0.0, 0.0), &r);
+    plain.localize(q.view(), &p);
+    CHECK(r.status == p.status);
+    CHECK(r.confidence == p.confidence);
+    CHECK(r.map_T_scan.isApprox(p.map_T_scan, 0.0));
+    CHECK(r.sequence_index == k++);
+    CHECK(r.window_scans == 1);
+    CHECK(!r.window_combined);
+  }
+  Eigen::Isometry3d bad = Eigen::Isometry3d::Identity();
+  bad.translation().x() = std::nan("");
+  LocalizeResult r;
+  CHECK(seq.localize_sequence(w.queries[0].view(), bad, &r) == Status::InvalidArgument);
+  CHECK(r.status == Status::InvalidArgument);
+  seq.localize_sequence(w.queries[0].view(), Eigen::Isometry3d::Identity(), &r);
+  CHECK(r.sequence_index == 0);  // refused odometry restarts the sequence
+  Localizer fresh;
+  CHECK(fresh.localize_sequence(w.queries[0].view(), Eigen::Isometry3d::Identity(), &r) == Status::NotInitialized);
+}
