@@ -42,7 +42,8 @@ void errors(const Eigen::Isometry3d& est, const Eigen::Isometry3d& truth, double
 
 }  // namespace
 
-TEST_CASE("Tracking from a prediction 1 m / 3 deg off returns the pose within 0.5 m / 1 deg, 90% within 0.3 m, confident") {
+TEST_CASE(
+    "Tracking from a prediction 1 m / 3 deg off returns the pose within 0.5 m / 1 deg, 90% within 0.3 m, confident") {
   const auto& w = tiny_world();
   Ready r(w, w.config);
   uint32_t within = 0, confident = 0, refined = 0;
