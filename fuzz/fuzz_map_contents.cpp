@@ -10,6 +10,8 @@
 #include "fuzz_seed_map.h"
 #include "gsf/detail/crc32.h"
 #include "gsf/detail/map_quantization.h"
+#include "gsf/detail/refine_layer.h"
+#include "gsf/detail/semantic_grid.h"
 #include "gsf/map_format.h"
 
 namespace {
@@ -49,7 +51,7 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
     for (uint32_t e = view.index_offsets[k]; e < view.index_offsets[k + 1]; ++e)
       sink = sink + view.triangles[e].side[0];
   uint32_t hint = 0;
-  const gsf::SemanticGridView grid = view.semantic_grid();
+  const gsf::SemanticGridView grid = gsf::semantic_grid_view(view);
   for (float x = -3; x < 3; x += 0.7f)
     for (float y = -3; y < 40; y += 0.9f)
       sink = sink + float((grid.cell_at(x, y, &hint) ^ grid.neighbours_at(x, y)) & 0xFF);
@@ -62,7 +64,7 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   sink = sink + gsf::verify_pose(points, 64, grid, Eigen::Isometry3d::Identity(), 64, weights).score;
   for (uint32_t i = 0; i < view.counts.instances; ++i)
     if (view.instances[i].label >= gsf::kNumClasses) __builtin_trap();
-  const gsf::RefineLayerView refine = view.refine_layer();
+  const gsf::RefineLayerView refine = gsf::refine_layer_view(view);
   for (int32_t x = -2; x < 20; ++x)
     for (int32_t z = -2; z < 3; ++z) {
       uint32_t b = 0, e = 0;
