@@ -113,3 +113,33 @@ for m, q in (("0004", "0002"), ("0002", "0004"), ("0001", "0002")):
             rev = sum(bool(x["success"]) for x in v["queries"] if 8 <= x["frame"] <= 20)
             print(f"{'':16} {'':11} query frames 8-20 (6-8.5 m from the 0004 drive): {rev} of 13 correct")
 PY
+# The vehicle modes on the same real drives (docs/vehicle-modes.md): the query sequence is one drive, the
+# odometry between its keyframes (2 Hz, 3-4 m apart) from its poses with 2% noise. Several scans
+# (--sequence-window 3) and tracking (--mode track: one-shot until the first answer, then track, one-shot
+# again after a loss).
+for pair in 0004:0002 0002:0004 0001:0002; do
+  m=${pair%%:*} q=${pair##*:}
+  # shellcheck disable=SC2086
+  $gsf evaluate --map "$out/nuscenes-$m.gsfmap" --dataset "$N" --sequence $q --classes "$classes" --quiet \
+    --sequence-window 3 --json "$out/nuscenes-$m-$q-window3.json" $noise >/dev/null
+  # shellcheck disable=SC2086
+  $gsf evaluate --map "$out/nuscenes-$m.gsfmap" --dataset "$N" --sequence $q --classes "$classes" --quiet \
+    --mode track --json "$out/nuscenes-$m-$q-track.json" $noise >/dev/null
+done
+python3 - "$out" <<'PY'
+import json, sys
+out = sys.argv[1]
+print("\nnuScenes-lidarseg drives, vehicle modes (of 40 scans; answered = confident)")
+print(f"{'map -> queries':16} {'one-shot answered right/wrong':>29} {'window of 3 right/wrong':>23} "
+      f"{'tracking answered right/wrong':>29} {'tracked within 0.3 m, 1 deg':>27} {'losses':>6}")
+for m, q in (("0004", "0002"), ("0002", "0004"), ("0001", "0002")):
+    one = json.load(open(f"{out}/nuscenes-{m}-{q}.json"))["modes"]["gsf"]["queries"]
+    win = json.load(open(f"{out}/nuscenes-{m}-{q}-window3.json"))["scans"]
+    trk = json.load(open(f"{out}/nuscenes-{m}-{q}-track.json"))
+    def rw(xs):
+        return f"{sum(x['answered'] and x['success'] for x in xs)} / {sum(x['answered'] and not x['success'] for x in xs)}"
+    tracked = [x for x in trk["scans"] if x["how"] == "track"]
+    precise = sum(x["precise"] for x in tracked)
+    print(f"{m + ' -> ' + q:16} {rw(one):>29} {rw(win):>23} {rw(trk['scans']):>29} "
+          f"{str(precise) + ' of ' + str(len(tracked)):>27} {trk['summary']['losses']:>6}")
+PY

@@ -103,7 +103,14 @@ namespace {
 struct NuScenesRun {
   uint32_t overlap = 0, correct_pose = 0, answered_right = 0, answered_wrong = 0, queries = 0;
   uint32_t correct_8_to_20 = 0;  // correct poses among query frames 8-20 (the data README's revisit frames)
+  // The same drive through localize_sequence (window.scans = 3, odometry from the poses): answers.
+  uint32_t window_answered_right = 0, window_answered_wrong = 0;
 };
+
+bool is_right(const LocalizeResult& r, const Eigen::Isometry3d& truth) {
+  const Eigen::Isometry3d d = r.map_frame_T_scan.inverse() * truth;  // nuScenes poses are the map's frame
+  return d.translation().norm() < 5.0 && Eigen::AngleAxisd(d.rotation()).angle() < 10.0 * M_PI / 180.0;
+}
 
 std::vector<uint64_t> build_nuscenes_map(const std::string& root, const char* seq, const LocalizerConfig& cfg,
                                          size_t* bytes) {
@@ -139,9 +146,11 @@ NuScenesRun localize_nuscenes(const std::string& root, const char* map_seq, cons
   const std::vector<uint64_t> blob = build_nuscenes_map(root, map_seq, cfg, &bytes);
   MapView map;
   REQUIRE(load_map(blob.data(), bytes, &map) == Status::Ok);
-  std::vector<uint64_t> ws(Localizer::required_bytes(cfg) / 8 + 2);
-  Localizer loc;
+  std::vector<uint64_t> ws(Localizer::required_bytes(cfg) / 8 + 2), window_ws(ws.size());
+  Localizer loc, window_loc;
   REQUIRE(loc.init(cfg, map, ws.data(), ws.size() * 8) == Status::Ok);
+  REQUIRE(cfg.window.scans == 3);
+  REQUIRE(window_loc.init(cfg, map, window_ws.data(), window_ws.size() * 8) == Status::Ok);
   port::NuScenesLidarsegSource map_src, src;
   port::KittiReadOptions opt;
   opt.raw_labels = true;
@@ -156,6 +165,7 @@ NuScenesRun localize_nuscenes(const std::string& root, const char* map_seq, cons
   port::OwnedScanBuffer buf(60000, true);
   port::LogitModel model;
   NuScenesRun run;
+  Eigen::Isometry3d last_truth = Eigen::Isometry3d::Identity();
   for (uint32_t i = 0; i < src.size(); ++i) {
     Eigen::Isometry3d truth;
     REQUIRE(src.pose(i, &truth) == Status::Ok);
@@ -163,12 +173,17 @@ NuScenesRun localize_nuscenes(const std::string& root, const char* map_seq, cons
     port::synthesize_logits(model, 2000000u + src.frame_id(i), buf.buffer().labels, buf.buffer().count,
                             buf.buffer().logits, buf.buffer().labels, &nus);
     buf.buffer().has_logits = true;
-    LocalizeResult r;
+    LocalizeResult r, w;
     const bool ok = loc.localize(buf.buffer().view(), &r) == Status::Ok;
-    const Eigen::Isometry3d d = r.map_frame_T_scan.inverse() * truth;  // nuScenes poses are the map's frame
-    const bool right =
-        ok && d.translation().norm() < 5.0 && Eigen::AngleAxisd(d.rotation()).angle() < 10.0 * M_PI / 180.0;
+    const bool right = ok && is_right(r, truth);
     const bool answered = ok && r.confident;  // the default decision rule
+    if (i == 0) window_loc.reset_sequence();
+    const Eigen::Isometry3d odometry = i == 0 ? Eigen::Isometry3d::Identity() : last_truth.inverse() * truth;
+    last_truth = truth;
+    if (window_loc.localize_sequence(buf.buffer().view(), odometry, &w) == Status::Ok && w.confident) {
+      run.window_answered_right += is_right(w, truth);
+      run.window_answered_wrong += !is_right(w, truth);
+    }
     double nearest = 1e9;
     for (const auto& p : drive) nearest = std::min(nearest, (p - truth.translation()).head<2>().norm());
     ++run.queries;
@@ -202,6 +217,11 @@ TEST_CASE("Real nuScenes-lidarseg: the opposite-direction revisit localizes, the
   // measured; the issue's target is 9).
   CHECK(fwd.correct_8_to_20 >= 9);
   CHECK(fwd.answered_wrong == 0);
+  // Several scans (issue 27): the drive's last three scans tied by its odometry answer what one scan
+  // cannot vouch for alone (35 of 40 measured against 21 one-shot), never wrongly.
+  INFO("window of 3: answered " << fwd.window_answered_right << " right, " << fwd.window_answered_wrong << " wrong");
+  CHECK(fwd.window_answered_right >= fwd.answered_right + 8);
+  CHECK(fwd.window_answered_wrong == 0);
   // Under qemu (GSF_UNDER_EMULATOR, the aarch64 preset) the forward pair only: each map build and
   // drive costs ~40x the host's there, and the reverse and distractor runs exercise no other code.
   if (std::getenv("GSF_UNDER_EMULATOR")) return;
@@ -214,9 +234,14 @@ TEST_CASE("Real nuScenes-lidarseg: the opposite-direction revisit localizes, the
   CHECK(rev.overlap >= 13);
   CHECK(rev.correct_pose >= 5);
   CHECK(rev.answered_wrong == 0);
+  // The window: 17 answered measured with exact odometry, 18 with `gsf evaluate`'s 2% noise (one-shot 15).
+  INFO("window of 3: answered " << rev.window_answered_right << " right, " << rev.window_answered_wrong << " wrong");
+  CHECK(rev.window_answered_right >= rev.answered_right + 1);
+  CHECK(rev.window_answered_wrong == 0);
   const NuScenesRun distractor = localize_nuscenes(root, "0001", "0002");
   INFO("map 0001, queries 0002: answered " << distractor.answered_right + distractor.answered_wrong << " of "
                                            << distractor.queries);
   CHECK(distractor.overlap == 0);
   CHECK(distractor.answered_wrong == 0);
+  CHECK(distractor.window_answered_wrong == 0);
 }

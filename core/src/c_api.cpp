@@ -181,6 +181,40 @@ void fill(const gsf::LocalizeResult& r, gsf_result* out) {
 
 int code(Status s) { return static_cast<int>(s); }
 
+gsf::ScanView scan_view(const float* xyz_stride, uint32_t stride, uint32_t count, const uint32_t* labels,
+                        const float* logits, uint32_t logit_dim) {
+  gsf::ScanView scan;
+  scan.points = xyz_stride;
+  scan.stride = stride;
+  scan.count = count;
+  scan.labels = labels;
+  scan.logits = logits;
+  scan.logit_dim = logit_dim;
+  return scan;
+}
+
+// Every localizing call: a null or unusable handle (or bad arguments) gives a status and no work.
+template <typename Call>
+gsf::LocalizeResult run_on_localizer(gsf_localizer* localizer, bool arguments_valid, Call call) {
+  gsf::LocalizeResult r;
+  if (localizer == nullptr || !arguments_valid) {
+    r.status = Status::InvalidArgument;
+  } else if (Handle* h = live_handle(localizer)) {
+    call(h->localizer, &r);
+  } else {
+    r.status = Status::NotInitialized;
+  }
+  return r;
+}
+
+// A row-major 3x4 [R | t] from the C API.
+Eigen::Isometry3d pose_from_rows(const double rows[12]) {
+  Eigen::Isometry3d pose = Eigen::Isometry3d::Identity();
+  for (int row = 0; row < 3; ++row)
+    for (int col = 0; col < 4; ++col) pose.matrix()(row, col) = rows[row * 4 + col];
+  return pose;
+}
+
 }  // namespace
 
 extern "C" {
@@ -263,66 +297,32 @@ int gsf_localizer_init(void* storage, size_t storage_bytes, const gsf_config* co
 
 int gsf_localize(gsf_localizer* localizer, const float* xyz_stride, uint32_t stride, uint32_t count,
                  const uint32_t* labels, const float* logits, uint32_t logit_dim, gsf_result* out) noexcept {
-  gsf::LocalizeResult r;
-  if (localizer == nullptr) {
-    r.status = Status::InvalidArgument;
-  } else if (Handle* h = live_handle(localizer)) {
-    gsf::ScanView scan;
-    scan.points = xyz_stride;
-    scan.stride = stride;
-    scan.count = count;
-    scan.labels = labels;
-    scan.logits = logits;
-    scan.logit_dim = logit_dim;
-    h->localizer.localize(scan, &r);
-  } else {
-    r.status = Status::NotInitialized;
-  }
+  const gsf::ScanView scan = scan_view(xyz_stride, stride, count, labels, logits, logit_dim);
+  const gsf::LocalizeResult r =
+      run_on_localizer(localizer, true, [&](gsf::Localizer& l, gsf::LocalizeResult* res) { l.localize(scan, res); });
   if (out != nullptr) fill(r, out);
   return code(r.status);
 }
 
-}  // extern "C"
-
 // ---- Vehicle modes: a position prior, tracking and several scans. ----
 static_assert(GSF_MAX_WINDOW_SCANS == gsf::kMaxWindowScans, "gsf_window_info.ids holds every combined scan");
-
-namespace {
-
-gsf::ScanView scan_view(const float* xyz_stride, uint32_t stride, uint32_t count, const uint32_t* labels,
-                        const float* logits, uint32_t logit_dim) {
-  gsf::ScanView scan;
-  scan.points = xyz_stride;
-  scan.stride = stride;
-  scan.count = count;
-  scan.labels = labels;
-  scan.logits = logits;
-  scan.logit_dim = logit_dim;
-  return scan;
-}
-
-}  // namespace
-
-extern "C" {
 
 int gsf_localize_with_prior(gsf_localizer* localizer, const float* xyz_stride, uint32_t stride, uint32_t count,
                             const uint32_t* labels, const float* logits, uint32_t logit_dim,
                             const gsf_position_prior* prior, gsf_result* out) noexcept {
-  gsf::LocalizeResult r;
-  if (localizer == nullptr || prior == nullptr || prior->has_heading > 1) {
-    r.status = Status::InvalidArgument;
-  } else if (Handle* h = live_handle(localizer)) {
-    gsf::PositionPrior p;
+  const bool valid = prior != nullptr && prior->has_heading <= 1;
+  gsf::PositionPrior p;
+  if (valid) {
     p.x = prior->x;
     p.y = prior->y;
     p.radius_m = prior->radius_m;
     p.has_heading = prior->has_heading != 0;
     p.heading_deg = prior->heading_deg;
     p.heading_tolerance_deg = prior->heading_tolerance_deg;
-    h->localizer.localize(scan_view(xyz_stride, stride, count, labels, logits, logit_dim), p, &r);
-  } else {
-    r.status = Status::NotInitialized;
   }
+  const gsf::ScanView scan = scan_view(xyz_stride, stride, count, labels, logits, logit_dim);
+  const gsf::LocalizeResult r = run_on_localizer(
+      localizer, valid, [&](gsf::Localizer& l, gsf::LocalizeResult* res) { l.localize(scan, p, res); });
   if (out != nullptr) fill(r, out);
   return code(r.status);
 }
@@ -330,17 +330,11 @@ int gsf_localize_with_prior(gsf_localizer* localizer, const float* xyz_stride, u
 int gsf_track(gsf_localizer* localizer, const float* xyz_stride, uint32_t stride, uint32_t count,
               const uint32_t* labels, const float* logits, uint32_t logit_dim,
               const double predicted_map_frame_T_scan[12], gsf_result* out) noexcept {
-  gsf::LocalizeResult r;
-  if (localizer == nullptr || predicted_map_frame_T_scan == nullptr) {
-    r.status = Status::InvalidArgument;
-  } else if (Handle* h = live_handle(localizer)) {
-    Eigen::Isometry3d predicted = Eigen::Isometry3d::Identity();
-    for (int row = 0; row < 3; ++row)
-      for (int col = 0; col < 4; ++col) predicted.matrix()(row, col) = predicted_map_frame_T_scan[row * 4 + col];
-    h->localizer.track(scan_view(xyz_stride, stride, count, labels, logits, logit_dim), predicted, &r);
-  } else {
-    r.status = Status::NotInitialized;
-  }
+  const gsf::ScanView scan = scan_view(xyz_stride, stride, count, labels, logits, logit_dim);
+  const gsf::LocalizeResult r = run_on_localizer(localizer, predicted_map_frame_T_scan != nullptr,
+                                                 [&](gsf::Localizer& l, gsf::LocalizeResult* res) {
+                                                   l.track(scan, pose_from_rows(predicted_map_frame_T_scan), res);
+                                                 });
   if (out != nullptr) fill(r, out);
   return code(r.status);
 }
@@ -348,19 +342,13 @@ int gsf_track(gsf_localizer* localizer, const float* xyz_stride, uint32_t stride
 int gsf_localize_sequence(gsf_localizer* localizer, const float* xyz_stride, uint32_t stride, uint32_t count,
                           const uint32_t* labels, const float* logits, uint32_t logit_dim,
                           const double previous_T_scan[12], gsf_result* out, gsf_window_info* window) noexcept {
-  gsf::LocalizeResult r;
-  if (localizer == nullptr) {
-    r.status = Status::InvalidArgument;
-  } else if (Handle* h = live_handle(localizer)) {
-    Eigen::Isometry3d odometry = Eigen::Isometry3d::Identity();
-    if (previous_T_scan == nullptr) h->localizer.reset_sequence();  // the first scan of a sequence
-    else
-      for (int row = 0; row < 3; ++row)
-        for (int col = 0; col < 4; ++col) odometry.matrix()(row, col) = previous_T_scan[row * 4 + col];
-    h->localizer.localize_sequence(scan_view(xyz_stride, stride, count, labels, logits, logit_dim), odometry, &r);
-  } else {
-    r.status = Status::NotInitialized;
-  }
+  const gsf::ScanView scan = scan_view(xyz_stride, stride, count, labels, logits, logit_dim);
+  const gsf::LocalizeResult r = run_on_localizer(localizer, true, [&](gsf::Localizer& l, gsf::LocalizeResult* res) {
+    if (previous_T_scan == nullptr) l.reset_sequence();  // the first scan of a sequence
+    const Eigen::Isometry3d odometry =
+        previous_T_scan == nullptr ? Eigen::Isometry3d::Identity() : pose_from_rows(previous_T_scan);
+    l.localize_sequence(scan, odometry, res);
+  });
   if (out != nullptr) fill(r, out);
   if (window != nullptr) {
     *window = gsf_window_info{};

@@ -69,7 +69,7 @@ std::vector<OptionSpec> evaluate_option_specs() {
       {"map-sequence", "mapping sequence (Scan Context peer database)", "00"},
       {"mode",
        "comma list of instance (GSF off, Outram), gsf, gsf+refine, scan-context, or all; or track (tracking over the "
-       "10 Hz stretches of sequence 02, gsf simulate --stretches)",
+       "10 Hz stretches of sequence 02, gsf simulate --stretches; on real data the whole --sequence is one drive)",
        "all"},
       {"json", "write per-mode summaries and per-query results here", ""},
       {"svg", "directory for the pictures (map + trajectory, correspondences, reliability diagram)", ""},
@@ -100,8 +100,8 @@ std::vector<OptionSpec> evaluate_option_specs() {
        "yaw)",
        "0.02"},
       {"sequence-window",
-       "N in 1..4: every scan of the 10 Hz stretches of sequence 02 through localize_sequence, combining the last N "
-       "scans when one is not confident (1: one-shot; docs/vehicle-modes.md)",
+       "N in 1..4: every scan of the 10 Hz stretches of sequence 02 (real data: of --sequence, one drive) through "
+       "localize_sequence, combining the last N scans when one is not confident (1: one-shot; docs/vehicle-modes.md)",
        ""},
   };
   for (const OptionSpec& o : label_error_option_specs()) specs.push_back(o);

@@ -14,6 +14,7 @@
 #include "gsf/port/clock.h"
 #include "json_writer.h"
 #include "run_evaluation.h"
+#include "stretch_evaluation.h"
 #include "vehicle_modes.h"
 
 namespace gsf::cli {
@@ -224,60 +225,25 @@ void write_window_json(const std::string& path, const EvalOptions& o, const Wind
 }  // namespace
 
 int run_window(const EvalOptions& o) {
-  MapFile file;
-  std::string err;
-  MapView map;
-  if (read_map_file(o.map_path, &file, &err) != Status::Ok || load_map(file.data(), file.bytes, &map) != Status::Ok) {
-    std::fprintf(stderr, "gsf evaluate: cannot load map '%s' %s\n", o.map_path.c_str(), err.c_str());
-    return 1;
-  }
-  LabelSet labels;
-  LocalizerConfig cfg = default_config();
-  ScanLabelErrors label_errors;
-  std::string note;
-  if (!resolve_label_set(o.classes, o.dataset, o.sequence, &labels, &err) ||
-      !apply_overrides(&cfg, o.overrides, &err) ||
-      !resolve_scan_label_errors(o.label_errors, labels, o.sequence, &label_errors, &note, &err)) {
-    std::fprintf(stderr, "gsf evaluate: %s\n", err.c_str());
-    return 2;
-  }
-  const Meta meta = read_meta(o.dataset);
-  Status s;
-  auto src = open_source(o.dataset, o.sequence, &s, &labels);
-  if (s != Status::Ok || meta.stretches.empty()) {
-    std::fprintf(stderr,
-                 "gsf evaluate: --sequence-window needs the stretches of sequence %s (gsf simulate --stretches)\n",
-                 o.sequence.c_str());
-    return 1;
-  }
-  cfg.classes = labels.config_table();
-  cfg.window.scans = o.sequence_window;
-  if (o.min_confidence >= 0) cfg.confidence.min_probability = static_cast<float>(o.min_confidence);
-  std::vector<uint64_t> workspace(Localizer::required_bytes(cfg) / 8 + 2);
-  port::SteadyClock clock;
-  Localizer loc;
-  if ((s = loc.init(cfg, map, workspace.data(), workspace.size() * 8, &clock)) != Status::Ok) {
-    std::fprintf(stderr, "gsf evaluate: init failed: %s\n", to_string(s));
-    return 1;
-  }
-  port::OwnedScanBuffer buf(kMaxScanPoints, true);
-  const WindowRun run{o, loc, *src, labels, buf.buffer(), label_errors};
+  StretchEvaluation ev;
+  if (const int code = open_stretch_evaluation(o, "--sequence-window", o.sequence_window, &ev)) return code;
+  const WindowRun run{o, ev.loc, *ev.src, ev.labels, ev.buf->buffer(), ev.label_errors};
   std::vector<WindowRecord> recs;
   uint32_t stretches = 0;
-  for (uint32_t k = 0; k < meta.stretches.size() && (o.limit == 0 || recs.size() < o.limit); ++k, ++stretches) {
-    const auto [first, length] = meta.stretches[k];
+  for (uint32_t k = 0; k < ev.stretches.size() && (o.limit == 0 || recs.size() < o.limit); ++k, ++stretches) {
+    const auto [first, length] = ev.stretches[k];
     Eigen::Isometry3d last_truth = Eigen::Isometry3d::Identity();
-    for (uint32_t i = first; i < first + length && i < src->size(); ++i) {
+    for (uint32_t i = first; i < first + length && i < ev.src->size(); ++i) {
       recs.push_back(run_window_scan(run, i, i == first, &last_truth));
       recs.back().stretch = k;
-      recs.back().in_zone = i < meta.stretch_in_zone.size() && meta.stretch_in_zone[i];
+      recs.back().in_zone = ev.in_zone(i);
     }
-    if (o.progress) std::fprintf(stderr, "\r  sequence window: %u / %zu stretches", k + 1, meta.stretches.size());
+    if (o.progress) std::fprintf(stderr, "\r  sequence window: %u / %zu stretches", k + 1, ev.stretches.size());
   }
   if (o.progress) std::fprintf(stderr, "\n");
   const WindowSummary sum = summarize_window(recs);
   print_window(sum, o.sequence_window, stretches, o);
-  if (label_errors.rates.any()) std::printf("  labels: %s\n", describe(label_errors).c_str());
+  if (ev.label_errors.rates.any()) std::printf("  labels: %s\n", describe(ev.label_errors).c_str());
   if (!o.json_out.empty()) write_window_json(o.json_out, o, sum, recs);
   return 0;
 }
