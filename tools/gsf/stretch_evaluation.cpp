@@ -15,8 +15,7 @@ bool find_stretches(const Meta& meta, const port::ScanSource& src,
 
 }  // namespace
 
-int open_stretch_evaluation(const EvalOptions& o, const char* mode_flag, uint32_t window_scans,
-                            StretchEvaluation* ev) {
+int open_stretch_evaluation(const EvalOptions& o, const char* mode_flag, uint32_t window_scans, StretchEvaluation* ev) {
   std::string err;
   if (read_map_file(o.map_path, &ev->file, &err) != Status::Ok ||
       load_map(ev->file.data(), ev->file.bytes, &ev->map) != Status::Ok) {
