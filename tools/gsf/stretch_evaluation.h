@@ -36,8 +36,9 @@ struct StretchEvaluation {
 
 // Loads o.map_path, resolves the labels and their errors, opens o.sequence, finds its stretches and
 // initialises the localizer with the default config, o's overrides and o.min_confidence, then
-// window.scans = `window_scans` (0: the default). `mode_flag` names the option in messages ("--mode track"). Returns 0,
-// or the process exit code after printing why (1: a file or the stretches, 2: a usage error).
+// window.scans = `window_scans` (0: the default). `mode_flag` names the option in messages ("--mode
+// track"). Returns 0, or the process exit code after printing why (1: a file or the stretches, 2: a
+// usage error).
 int open_stretch_evaluation(const EvalOptions& o, const char* mode_flag, uint32_t window_scans, StretchEvaluation* ev);
 
 }  // namespace gsf::cli
