@@ -192,6 +192,17 @@ TEST_CASE("window.scans = 1 is one-shot localization; bad odometry is refused") 
   CHECK(r.status == Status::InvalidArgument);
   seq.localize_sequence(w.queries[0].view(), Eigen::Isometry3d::Identity(), &r);
   CHECK(r.sequence_index == 0);  // refused odometry restarts the sequence
+  // Not odometry: a 2 km step, a scaled rotation.
+  seq.localize_sequence(w.queries[0].view(), Eigen::Isometry3d::Identity(), &r);
+  CHECK(r.sequence_index == 1);
+  Eigen::Isometry3d jump = Eigen::Isometry3d::Identity();
+  jump.translation().x() = 2000.0;
+  CHECK(seq.localize_sequence(w.queries[0].view(), jump, &r) == Status::InvalidArgument);
+  Eigen::Isometry3d scaled = Eigen::Isometry3d::Identity();
+  scaled.linear() *= 0.9;
+  CHECK(seq.localize_sequence(w.queries[0].view(), scaled, &r) == Status::InvalidArgument);
+  seq.localize_sequence(w.queries[0].view(), Eigen::Isometry3d::Identity(), &r);
+  CHECK(r.sequence_index == 0);
   Localizer fresh;
   CHECK(fresh.localize_sequence(w.queries[0].view(), Eigen::Isometry3d::Identity(), &r) == Status::NotInitialized);
 }

@@ -114,7 +114,7 @@ TEST_CASE("Tracking without ICP (track.refine off) still finds the pose near the
   CHECK(degrees[degrees.size() / 2] < 1.0);
 }
 
-TEST_CASE("Tracking refuses a non-finite prediction and repeats itself bit for bit") {
+TEST_CASE("Tracking refuses a prediction that is not a rigid pose and repeats itself bit for bit") {
   const auto& w = tiny_world();
   Ready r(w, w.config);
   Eigen::Isometry3d bad = w.queries[0].truth;
@@ -123,6 +123,19 @@ TEST_CASE("Tracking refuses a non-finite prediction and repeats itself bit for b
   CHECK(r.loc.track(w.queries[0].view(), bad, &out) == Status::InvalidArgument);
   CHECK(out.status == Status::InvalidArgument);
   CHECK(!out.confident);
+  // Finite but not computable: 1e142 m away (fuzz_vehicle_modes: it reached a float-to-int conversion in
+  // ICP), 2000 km away, a scaled rotation, a reflection.
+  Eigen::Isometry3d far = w.queries[0].truth;
+  far.translation().y() = 1e142;
+  CHECK(r.loc.track(w.queries[0].view(), far, &out) == Status::InvalidArgument);
+  far.translation().y() = 2e6;
+  CHECK(r.loc.track(w.queries[0].view(), far, &out) == Status::InvalidArgument);
+  Eigen::Isometry3d scaled = w.queries[0].truth;
+  scaled.linear() *= 1.01;
+  CHECK(r.loc.track(w.queries[0].view(), scaled, &out) == Status::InvalidArgument);
+  Eigen::Isometry3d mirrored = w.queries[0].truth;
+  mirrored.linear().col(2) *= -1.0;
+  CHECK(r.loc.track(w.queries[0].view(), mirrored, &out) == Status::InvalidArgument);
   LocalizeResult a, b;
   const Eigen::Isometry3d p = perturbed(w.queries[3].truth, 1.0, 3.0, 3);
   r.loc.track(w.queries[3].view(), p, &a);

@@ -237,6 +237,20 @@ namespace {
 
 uint64_t now(Clock* c) { return c ? c->now_ns() : 0; }
 
+// Limits of a pose the stages can compute with: beyond them the map-local floats lose the metre and the
+// layers' cell keys wrap (fuzz_vehicle_modes found a 1e142 m prediction reaching a float-to-int
+// conversion). 1000 km from the map's origin for a predicted pose; 1 km between consecutive scans.
+constexpr double kMaxPredictedM = 1e6;
+constexpr double kMaxOdometryStepM = 1e3;
+
+// Finite, a rotation (orthonormal with determinant +1, within 1e-3) and a translation within max_m.
+bool is_rigid_pose(const Eigen::Isometry3d& T, double max_m) {
+  if (!T.matrix().allFinite() || !(T.translation().norm() <= max_m)) return false;
+  const Eigen::Matrix3d R = T.linear();
+  return (R.transpose() * R - Eigen::Matrix3d::Identity()).cwiseAbs().maxCoeff() <= 1e-3 &&
+         std::fabs(R.determinant() - 1.0) <= 1e-3;
+}
+
 static_assert(AnswerChoice::kMaxRanked == kMaxReportedHypotheses, "every ranked hypothesis is reported");
 
 // A pose hypothesis as LocalizeResult reports it.
@@ -592,7 +606,8 @@ Status Localizer::track(const ScanView& scan, const Eigen::Isometry3d& predicted
     out.times.total = now(clock_) - t_start;
     return s;
   };
-  if (!predicted.matrix().allFinite()) return finish(Status::InvalidArgument);
+  if (!predicted.matrix().allFinite() || !is_rigid_pose(to_map_local(map_.georef, predicted), kMaxPredictedM))
+    return finish(Status::InvalidArgument);
   if (im.semantic.empty()) return finish(Status::Unsupported);  // nothing to verify against
   if (scan.count > cfg.max_scan_points) return finish(Status::CapacityExceeded);
   const Status s = im.build_voxels(scan, out);
@@ -691,7 +706,7 @@ Status Localizer::localize_sequence(const ScanView& scan, const Eigen::Isometry3
   out = LocalizeResult();
   if (!initialized_) return out.status = Status::NotInitialized;
   Impl& im = *impl_;
-  if (!previous_T_scan.matrix().allFinite()) {
+  if (!is_rigid_pose(previous_T_scan, kMaxOdometryStepM)) {
     im.window.reset();
     return out.status = Status::InvalidArgument;
   }

@@ -145,7 +145,8 @@ class Localizer {
   // as LocalizeResult::map_frame_T_scan: e.g. the last pose times odometry), by a pattern search of
   // whole-scan verification, ICP against the map's refinement layer (config.track.refine) and the
   // confidence's probes. Bounded work, no global search. Loss = !out->confident: fall back to
-  // localize(). InvalidArgument for a non-finite prediction, Unsupported for a map without a semantic
+  // localize(). InvalidArgument for a prediction that is not a rigid pose (non-finite, a rotation off by
+  // more than 1e-3) or lies over 1000 km from the map's origin, Unsupported for a map without a semantic
   // layer.
   Status track(const ScanView& scan, const Eigen::Isometry3d& predicted_map_frame_T_scan, LocalizeResult* out);
 
@@ -159,7 +160,8 @@ class Localizer {
   // confident, else it keeps at most 1 - the window's confidence (window_checked, window_contradicted).
   // `previous_T_scan`: this scan's pose in the previous scan's frame (odometry between the two calls' scans); ignored
   // on the first call after init() or reset_sequence(). Every call (whatever its status) enters the scan into the
-  // window. InvalidArgument for a non-finite odometry (the window is reset). With window.scans = 1 this is
+  // window. InvalidArgument for an odometry that is not a rigid pose (non-finite, a rotation off by more
+  // than 1e-3) or a step over 1 km (the window is reset). With window.scans = 1 this is
   // localize(scan) with sequence numbers.
   Status localize_sequence(const ScanView& scan, const Eigen::Isometry3d& previous_T_scan, LocalizeResult* out);
   // Forgets the window: the next localize_sequence() starts a sequence (after a gap in the odometry).
