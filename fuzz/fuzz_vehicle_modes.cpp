@@ -103,15 +103,13 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
       s = g_loc.localize(scan, prior, &r);
       break;
     }
-    case 1:
-      s = g_loc.track(scan, pose_from(h.pose), &r);
-      break;
+    case 1: s = g_loc.track(scan, pose_from(h.pose), &r); break;
     default:
       if ((h.flags & 3) == 3) g_loc.reset_sequence();
       s = g_loc.localize_sequence(scan, pose_from(h.pose), &r);
       break;
   }
-  if (s != r.status) __builtin_trap();  // the returned status is the result's
+  if (s != r.status) __builtin_trap();                    // the returned status is the result's
   if (!finite && s == gsf::Status::Ok) __builtin_trap();  // a non-finite argument must be refused
   if (s == gsf::Status::Ok && !r.map_T_scan.matrix().allFinite()) __builtin_trap();
   gsf::LocalizeResult again;
