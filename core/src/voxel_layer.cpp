@@ -114,7 +114,9 @@ Status VoxelLayer::bind(Arena& arena, const VoxelConfig& config) {
   slot_count_ = BoundedHashMap<uint32_t>::slots_for(config.max_voxels);
   slots_ = arena.allocate<uint32_t>(slot_count_);
   keys_ = arena.allocate<uint64_t>(config.max_voxels);
-  const bool ok_index = slots_ != nullptr && keys_ != nullptr;
+  recent_keys_ = arena.allocate<uint64_t>(kRecent);
+  recent_ids_ = arena.allocate<uint32_t>(kRecent);
+  const bool ok_index = slots_ != nullptr && keys_ != nullptr && recent_keys_ != nullptr && recent_ids_ != nullptr;
   if (ok_index) std::memset(slots_, 0, sizeof(uint32_t) * slot_count_);
   active_slots_ = ok_index ? slot_count_ : 0;  // lookups on a counting or failed bind find nothing
   const bool ok_columns = columns_.bind(arena, config.max_columns);
@@ -172,6 +174,7 @@ void VoxelLayer::reset_index(uint32_t points) {
   if (active_slots_ > 0) std::memset(slots_, 0, sizeof(uint32_t) * active_slots_);
   const uint32_t want = BoundedHashMap<uint32_t>::slots_for(points < config_.max_voxels ? points : config_.max_voxels);
   active_slots_ = want < slot_count_ ? want : slot_count_;
+  std::memset(recent_keys_, 0xFF, sizeof(uint64_t) * kRecent);  // UINT64_MAX: no packed key is all ones
   columns_.clear_for(0);
 }
 
@@ -217,6 +220,8 @@ GSF_AVX2_CLONE uint32_t VoxelLayer::accumulate_points(const ScanView& scan, bool
   Voxel* const voxels = voxels_;
   uint32_t* const slots = slots_;
   uint64_t* const keys = keys_;
+  uint64_t* const recent_keys = recent_keys_;
+  uint32_t* const recent_ids = recent_ids_;
   const uint32_t active = active_slots_, max_voxels = config_.max_voxels;
   uint32_t count = 0;
   // Consecutive points of a scan line often share a voxel: the last key found skips the hash lookup.
@@ -243,10 +248,19 @@ GSF_AVX2_CLONE uint32_t VoxelLayer::accumulate_points(const ScanView& scan, bool
     const uint64_t key = pack3(cx, cy, cz);
     uint32_t id = last_voxel;
     if (key != last_key) {
-      id = find_or_insert(key, slots, keys, voxels, active, max_voxels, &count);
-      if (id == UINT32_MAX) {
-        ++stats->dropped_points;
-        continue;
+      // The recent table (direct-mapped, in L1) before the big index: the next scan column revisits
+      // the voxels of the last few.
+      const uint32_t r = static_cast<uint32_t>((key * 0x9E3779B97F4A7C15ULL) >> (64 - kRecentBits));
+      if (recent_keys[r] == key) {
+        id = recent_ids[r];
+      } else {
+        id = find_or_insert(key, slots, keys, voxels, active, max_voxels, &count);
+        if (id == UINT32_MAX) {
+          ++stats->dropped_points;
+          continue;
+        }
+        recent_keys[r] = key;
+        recent_ids[r] = id;
       }
       last_key = key;
       last_voxel = id;

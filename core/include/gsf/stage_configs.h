@@ -23,7 +23,7 @@ struct VoxelConfig {
   // softmax, later ones only every 2nd, then every 4th, ... point (stride doubling each time the point
   // count doubles), so a dense sensor's near voxels stop paying a softmax per point; position and count
   // take every point. 0: every point (the exact mean).
-  uint32_t prob_samples = 16;
+  uint32_t prob_samples = 8;
 };
 
 // Instance clustering of the voxels of instance classes (detail/instance_clustering.h).

@@ -114,6 +114,11 @@ class VoxelLayer {
   uint32_t index_find(uint64_t key) const;
   uint32_t* slots_ = nullptr;
   uint64_t* keys_ = nullptr;
+  // Recently found voxels, direct-mapped by key hash (12 KB: stays in L1): a scan's next column mostly
+  // hits the voxels of the last few, and the big index's slots and keys miss the caches at 100k points.
+  static constexpr uint32_t kRecentBits = 10, kRecent = 1u << kRecentBits;
+  uint64_t* recent_keys_ = nullptr;
+  uint32_t* recent_ids_ = nullptr;
   uint32_t slot_count_ = 0, active_slots_ = 0;
   BoundedHashMap<ColumnCell> columns_;  // column key -> range in column_members_
   uint32_t* column_members_ = nullptr;  // voxel ids grouped by column
