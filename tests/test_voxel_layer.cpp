@@ -400,3 +400,102 @@ TEST_CASE("The same scan twice gives bitwise identical layers, whatever the aren
   REQUIRE(n1 == n2);
   CHECK(std::equal(g1.begin(), g1.begin() + n1, g2.begin()));  // same order, not just the same set
 }
+
+TEST_CASE("prob_samples: the softmax of a voxel's first k points, then of every 2nd, 4th, ... point") {
+  // The documented rule, written out: the point finding n points in its voxel adds its softmax when
+  // n < k or n is a multiple of 2^bit_width(n / k).
+  auto takes = [](uint32_t n, uint32_t k) {
+    if (k == 0 || n < k) return true;
+    uint32_t width = 0;
+    for (uint32_t q = n / k; q; q >>= 1) ++width;
+    return n % (1u << width) == 0;
+  };
+  for (uint32_t k : {0u, 1u, 3u, 4u, 16u, 17u})
+    for (uint32_t n = 0; n < 3000; ++n) {
+      uint32_t brute = 0;
+      for (uint32_t j = 0; j < n; ++j) brute += takes(j, k) ? 1 : 0;
+      REQUIRE(VoxelLayer::samples_of(n, k) == brute);
+    }
+  CHECK(VoxelLayer::samples_of(40, 4) == 11);                   // 0 1 2 3 | 4 6 | 8 12 | 16 24 | 32
+  CHECK(VoxelLayer::samples_of(UINT32_MAX, 16) < 16 + 8 * 32);  // logarithmic in the count
+
+  // One voxel of 40 points: even points are confidently pole, odd ones car. With k = 4 the samples are
+  // 0 1 2 3 4 6 8 12 16 24 32: nine poles and two cars; position and count still take every point.
+  Cloud c;
+  for (int j = 0; j < 40; ++j) {
+    c.add(4.81f + 0.009f * j, 0.05f, 0.05f + 0.005f * j, 80);
+    c.logits.resize(c.logits.size() + kNumClasses, -30.0f);
+    c.logits[c.logits.size() - kNumClasses + (j % 2 ? kCar : kPole)] = 30.0f;
+  }
+  VoxelConfig exact_cfg, thin_cfg;
+  exact_cfg.prob_samples = 0;
+  thin_cfg.prob_samples = 4;
+  ArenaBuffer b1(VoxelLayer::required_bytes(exact_cfg)), b2(VoxelLayer::required_bytes(thin_cfg));
+  VoxelLayer exact, thin;
+  REQUIRE(exact.bind(b1.arena, exact_cfg) == Status::Ok);
+  REQUIRE(thin.bind(b2.arena, thin_cfg) == Status::Ok);
+  VoxelStats se, st;
+  REQUIRE(exact.build(c.view(), &se) == Status::Ok);
+  REQUIRE(thin.build(c.view(), &st) == Status::Ok);
+  REQUIRE(exact.size() == 1);
+  REQUIRE(thin.size() == 1);
+  CHECK(se.unsampled_points == 0);
+  CHECK(st.unsampled_points == 40 - 11);
+  CHECK(exact.voxel(0).prob[kPole] == Approx(0.5f).epsilon(1e-5));
+  CHECK(thin.voxel(0).prob[kPole] == Approx(9.0f / 11.0f).epsilon(1e-5));
+  CHECK(thin.voxel(0).prob[kCar] == Approx(2.0f / 11.0f).epsilon(1e-5));
+  CHECK(thin.voxel(0).count == 40);
+  CHECK(std::memcmp(thin.voxel(0).centroid, exact.voxel(0).centroid, sizeof(float) * 3) == 0);
+  CHECK(thin.voxel(0).label == kPole);
+
+  // Without logits every point adds its one-hot label whatever prob_samples says.
+  Cloud hard = c;
+  hard.logits.clear();
+  REQUIRE(thin.build(hard.view(), &st) == Status::Ok);
+  CHECK(st.unsampled_points == 0);
+  CHECK(thin.voxel(0).prob[kPole] == Approx(1.0f));  // every label is pole
+}
+
+TEST_CASE("prob_samples at or above every voxel's count is bitwise the exact layer; below, only probabilities move") {
+  Cloud c = street(31);
+  std::mt19937 rng(4);
+  std::normal_distribution<float> n(0.0f, 2.0f);
+  c.logits.resize(c.labels.size() * kNumClasses);
+  for (float& x : c.logits) x = n(rng);
+  VoxelConfig exact_cfg;
+  exact_cfg.prob_samples = 0;
+  ArenaBuffer b0(VoxelLayer::required_bytes(exact_cfg));
+  VoxelLayer exact;
+  REQUIRE(exact.bind(b0.arena, exact_cfg) == Status::Ok);
+  REQUIRE(exact.build(c.view(), nullptr) == Status::Ok);
+  uint32_t most = 0;
+  for (uint32_t i = 0; i < exact.size(); ++i) most = std::max(most, exact.voxel(i).count);
+  REQUIRE(most > 4);
+  for (uint32_t k : {most, 3u, 1u}) {
+    VoxelConfig vc;
+    vc.prob_samples = k;
+    ArenaBuffer b(VoxelLayer::required_bytes(vc));
+    VoxelLayer l;
+    REQUIRE(l.bind(b.arena, vc) == Status::Ok);
+    VoxelStats st;
+    REQUIRE(l.build(c.view(), &st) == Status::Ok);
+    REQUIRE(l.size() == exact.size());
+    uint64_t unsampled = 0;
+    for (uint32_t i = 0; i < l.size(); ++i) {
+      const Voxel &a = l.voxel(i), &e = exact.voxel(i);
+      CHECK(std::memcmp(a.centroid, e.centroid, sizeof a.centroid) == 0);
+      CHECK(a.count == e.count);
+      unsampled += a.count - VoxelLayer::samples_of(a.count, k);
+      float sum = 0.0f;
+      for (int j = 0; j < kNumClasses; ++j) sum += a.prob[j];
+      CHECK(sum == Approx(1.0f).epsilon(1e-4));
+    }
+    CHECK(st.unsampled_points == unsampled);
+    if (k == most) {
+      CHECK(st.unsampled_points == 0);
+      CHECK(std::memcmp(l.voxels(), exact.voxels(), sizeof(Voxel) * l.size()) == 0);
+    } else {
+      CHECK(st.unsampled_points > 0);
+    }
+  }
+}

@@ -33,11 +33,10 @@ inline int32_t ordered_bits(float v) {
 // One padding lane (exp of 0, never summed or stored): the exp loop then runs whole 4-wide vectors.
 constexpr int kLanes = (kNumClasses + 3) / 4 * 4;
 
-// Softmax of one point's logits l into prob (kLanes floats; `shifted` keeps its padding lane 0 between
-// calls). False when a logit is not finite.
-inline bool softmax_logits(const float* l, float* prob, float* shifted) {
-  // Max and finiteness without branches, on integers so that both loops vectorise (a float max
-  // does not without -ffast-math). -0 and +0 order differently here, which moves no l - max.
+// The largest of one point's logits l into *mx; false when a logit is not finite. Max and finiteness
+// without branches, on integers so that both loops vectorise (a float max does not without
+// -ffast-math). -0 and +0 order differently here, which moves no l - max.
+inline bool logits_max(const float* l, float* mx) {
   uint32_t non_finite = 0;
   int32_t max_bits = ordered_bits(l[0]);
   for (int k = 0; k < kNumClasses; ++k) {
@@ -47,20 +46,33 @@ inline bool softmax_logits(const float* l, float* prob, float* shifted) {
     const int32_t o = ordered_bits(l[k]);
     max_bits = o > max_bits ? o : max_bits;
   }
-  if (non_finite) return false;
-  const float mx = [&] {
-    const int32_t b = max_bits ^ ((max_bits >> 31) & 0x7FFFFFFF);
-    float f;
-    std::memcpy(&f, &b, sizeof f);
-    return f;
-  }();
+  const int32_t b = max_bits ^ ((max_bits >> 31) & 0x7FFFFFFF);
+  std::memcpy(mx, &b, sizeof *mx);
+  return non_finite == 0;
+}
+
+// Softmax of one point's finite logits l (mx: their largest) into prob (kLanes floats; `shifted` keeps
+// its padding lane 0 between calls).
+inline void softmax_logits(const float* l, float mx, float* prob, float* shifted) {
   for (int k = 0; k < kNumClasses; ++k) shifted[k] = l[k] - mx;
   for (int k = 0; k < kLanes; ++k) prob[k] = detail::exp_nonpositive(shifted[k]);
   float sum = 0.0f;
   for (int k = 0; k < kNumClasses; ++k) sum += prob[k];
   const float inv = 1.0f / sum;
   for (int k = 0; k < kNumClasses; ++k) prob[k] *= inv;
-  return true;
+}
+
+// Whether the point that finds n points already in its voxel adds its softmax (VoxelConfig::prob_samples
+// = k > 0): the first k do, then every 2nd while n < 2k, every 4th while n < 4k, ...: the stride is
+// 2^bit_width(n / k), so the samples spread over the whole sweep of the voxel and grow with log(n).
+inline bool takes_sample(uint32_t n, uint32_t k) {
+  if (n < k) return true;
+  uint32_t q = n / k, width = 0;
+  while (q) {
+    ++width;
+    q >>= 1;
+  }
+  return width >= 32 || (n & ((1u << width) - 1u)) == 0;
 }
 
 // The voxel of `key`: found, or inserted (zeroed) while fewer than max_voxels exist, with the same
@@ -102,7 +114,9 @@ Status VoxelLayer::bind(Arena& arena, const VoxelConfig& config) {
   slot_count_ = BoundedHashMap<uint32_t>::slots_for(config.max_voxels);
   slots_ = arena.allocate<uint32_t>(slot_count_);
   keys_ = arena.allocate<uint64_t>(config.max_voxels);
-  const bool ok_index = slots_ != nullptr && keys_ != nullptr;
+  recent_keys_ = arena.allocate<uint64_t>(kRecent);
+  recent_ids_ = arena.allocate<uint32_t>(kRecent);
+  const bool ok_index = slots_ != nullptr && keys_ != nullptr && recent_keys_ != nullptr && recent_ids_ != nullptr;
   if (ok_index) std::memset(slots_, 0, sizeof(uint32_t) * slot_count_);
   active_slots_ = ok_index ? slot_count_ : 0;  // lookups on a counting or failed bind find nothing
   const bool ok_columns = columns_.bind(arena, config.max_columns);
@@ -146,7 +160,7 @@ Status VoxelLayer::build(const ScanView& scan, VoxelStats* stats_out) {
   const bool use_logits = scan.logits != nullptr;
   if (use_logits && scan.logit_dim != static_cast<uint32_t>(kNumClasses)) return Status::InvalidArgument;
   count_ = accumulate_points(scan, use_logits, &stats);
-  average_voxels();
+  average_voxels(use_logits ? config_.prob_samples : 0);
   stats.unindexed_voxels = build_columns();
   stats.voxels = count_;
   if (stats_out) *stats_out = stats;
@@ -160,6 +174,7 @@ void VoxelLayer::reset_index(uint32_t points) {
   if (active_slots_ > 0) std::memset(slots_, 0, sizeof(uint32_t) * active_slots_);
   const uint32_t want = BoundedHashMap<uint32_t>::slots_for(points < config_.max_voxels ? points : config_.max_voxels);
   active_slots_ = want < slot_count_ ? want : slot_count_;
+  std::memset(recent_keys_, 0xFF, sizeof(uint64_t) * kRecent);  // UINT64_MAX: no packed key is all ones
   columns_.clear_for(0);
 }
 
@@ -187,27 +202,41 @@ int VoxelLayer::point_class(const float* p, uint32_t label, float min_r2, float 
   return c;
 }
 
+// x86-64 Linux: accumulate_points also as an AVX2 clone, picked at load time (ifunc). The softmax's exp
+// then runs 8 lanes a vector instead of 4; the clone does the same +, -, *, / on every lane in the same
+// order (no FMA: -ffp-contract=off, and AVX2 does not include it), so the layer is bitwise the same.
+#if defined(__x86_64__) && defined(__linux__) && defined(__GNUC__) && !defined(GSF_NO_TARGET_CLONES)
+#define GSF_AVX2_CLONE __attribute__((target_clones("avx2", "default")))
+#else
+#define GSF_AVX2_CLONE
+#endif
+
 // Every kept point into its voxel: sums of position and class probabilities (the softmax of its logits,
 // or 1 for its label) and the point count. Returns the number of voxels.
-uint32_t VoxelLayer::accumulate_points(const ScanView& scan, bool use_logits, VoxelStats* stats) {
+GSF_AVX2_CLONE uint32_t VoxelLayer::accumulate_points(const ScanView& scan, bool use_logits, VoxelStats* stats) {
   const float min_r2 = config_.min_range * config_.min_range;
   const float max_r2 = config_.max_range * config_.max_range;
   const float inv_size = 1.0f / config_.voxel_size;
   Voxel* const voxels = voxels_;
   uint32_t* const slots = slots_;
   uint64_t* const keys = keys_;
+  uint64_t* const recent_keys = recent_keys_;
+  uint32_t* const recent_ids = recent_ids_;
   const uint32_t active = active_slots_, max_voxels = config_.max_voxels;
   uint32_t count = 0;
   // Consecutive points of a scan line often share a voxel: the last key found skips the hash lookup.
   uint64_t last_key = UINT64_MAX;
   uint32_t last_voxel = 0;
   float prob[kLanes], shifted[kLanes] = {};
+  const uint32_t samples = config_.prob_samples;
   stats->points_in = scan.count;
   for (uint32_t i = 0; i < scan.count; ++i) {
     const float* p = scan.points + static_cast<size_t>(i) * scan.stride;
     const int c = point_class(p, scan.labels[i], min_r2, max_r2, stats);
     if (c < 0) continue;
-    if (use_logits && !softmax_logits(scan.logits + static_cast<size_t>(i) * kNumClasses, prob, shifted)) {
+    const float* logits = use_logits ? scan.logits + static_cast<size_t>(i) * kNumClasses : nullptr;
+    float mx = 0.0f;
+    if (use_logits && !logits_max(logits, &mx)) {
       ++stats->non_finite;
       continue;
     }
@@ -219,10 +248,19 @@ uint32_t VoxelLayer::accumulate_points(const ScanView& scan, bool use_logits, Vo
     const uint64_t key = pack3(cx, cy, cz);
     uint32_t id = last_voxel;
     if (key != last_key) {
-      id = find_or_insert(key, slots, keys, voxels, active, max_voxels, &count);
-      if (id == UINT32_MAX) {
-        ++stats->dropped_points;
-        continue;
+      // The recent table (direct-mapped, in L1) before the big index: the next scan column revisits
+      // the voxels of the last few.
+      const uint32_t r = static_cast<uint32_t>((key * 0x9E3779B97F4A7C15ULL) >> (64 - kRecentBits));
+      if (recent_keys[r] == key) {
+        id = recent_ids[r];
+      } else {
+        id = find_or_insert(key, slots, keys, voxels, active, max_voxels, &count);
+        if (id == UINT32_MAX) {
+          ++stats->dropped_points;
+          continue;
+        }
+        recent_keys[r] = key;
+        recent_ids[r] = id;
       }
       last_key = key;
       last_voxel = id;
@@ -231,25 +269,44 @@ uint32_t VoxelLayer::accumulate_points(const ScanView& scan, bool use_logits, Vo
     v.centroid[0] += p[0];
     v.centroid[1] += p[1];
     v.centroid[2] += p[2];
-    v.count += 1;
-    if (use_logits) {
+    const uint32_t before = v.count++;
+    if (!use_logits) {
+      v.prob[c] += 1.0f;
+    } else if (samples == 0 || takes_sample(before, samples)) {
+      softmax_logits(logits, mx, prob, shifted);
       for (int k = 0; k < kNumClasses; ++k) v.prob[k] += prob[k];
     } else {
-      v.prob[c] += 1.0f;
+      ++stats->unsampled_points;
     }
   }
   return count;
 }
 
-// Sums to means, and each voxel's label: its most probable class (the first of equals).
-void VoxelLayer::average_voxels() {
+uint32_t VoxelLayer::samples_of(uint32_t n, uint32_t k) {
+  if (k == 0 || n <= k) return n;
+  // k, then per octave [lo, 2 lo) of the count (lo = k, 2k, 4k, ...) the multiples of its stride.
+  uint64_t s = k, lo = k, stride = 2;
+  while (lo < n) {
+    const uint64_t hi = 2 * lo < n ? 2 * lo : n;
+    s += (hi + stride - 1) / stride - (lo + stride - 1) / stride;
+    lo *= 2;
+    stride *= 2;
+  }
+  return static_cast<uint32_t>(s);
+}
+
+// Sums to means (probabilities over the points that added theirs: samples_of(count, prob_samples) with
+// logits, every point without), and each voxel's label: its most probable class (the first of equals).
+void VoxelLayer::average_voxels(uint32_t prob_samples) {
   for (uint32_t i = 0; i < count_; ++i) {
     Voxel& v = voxels_[i];
     const float inv = 1.0f / static_cast<float>(v.count);
     v.centroid[0] *= inv;
     v.centroid[1] *= inv;
     v.centroid[2] *= inv;
-    for (int k = 0; k < kNumClasses; ++k) v.prob[k] *= inv;
+    const uint32_t sampled = samples_of(v.count, prob_samples);
+    const float inv_prob = sampled == v.count ? inv : 1.0f / static_cast<float>(sampled);
+    for (int k = 0; k < kNumClasses; ++k) v.prob[k] *= inv_prob;
     int best = 0;
     float best_prob = v.prob[0];
     for (int k = 1; k < kNumClasses; ++k)

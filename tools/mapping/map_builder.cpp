@@ -130,6 +130,8 @@ MapBuilder::MapBuilder(const MapBuildConfig& config)
   if (config_.classes) config_.classes = &classes_;
   // Map scans are voxelised on the host: at least scan_max_voxels per scan (MapBuildConfig).
   config_.voxel.max_voxels = std::max(config_.voxel.max_voxels, config.scan_max_voxels);
+  // The map's voxels average every point's softmax (offline; the query thins them, VoxelConfig).
+  config_.voxel.prob_samples = 0;
   scan_arena_.resize(VoxelLayer::required_bytes(config_.voxel) + 64);
   georef_valid_ = set_frame_name(&georef_, options_.frame.c_str());
   for (int k = 0; k < 3; ++k) georef_.origin[k] = options_.origin[k];

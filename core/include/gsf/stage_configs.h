@@ -19,6 +19,11 @@ struct VoxelConfig {
   uint32_t max_voxels = 32768;
   float column_size = 2.0f;      // m; cell of the 2-D gather index
   uint32_t max_columns = 16384;  // gather index cells (hash capacity)
+  // Softmax samples per voxel (scans with logits): a voxel's first prob_samples points each add their
+  // softmax, later ones only every 2nd, then every 4th, ... point (stride doubling each time the point
+  // count doubles), so a dense sensor's near voxels stop paying a softmax per point; position and count
+  // take every point. 0: every point (the exact mean).
+  uint32_t prob_samples = 8;
 };
 
 // Instance clustering of the voxels of instance classes (detail/instance_clustering.h).

@@ -8,7 +8,10 @@
 // Per point: non-finite -> counted and skipped; range outside [min_range, max_range] -> skipped;
 // label -> library class through the label set's ClassTable (set_classes; without one,
 // class_from_kitti, i.e. SemanticKITTI): ignored classes skipped, unknown ids counted and skipped; probability =
-// softmax(logits) when the scan carries logits, else one-hot of the label.
+// softmax(logits) when the scan carries logits, else one-hot of the label. With logits, a voxel's mean
+// probability is over a deterministic subset of its points (VoxelConfig::prob_samples: the first k, then
+// every 2nd, 4th, ... as its count doubles; samples_of()); its centroid and count take every point.
+// A dense sensor's near voxels (hundreds of points at 128 beams) then stop costing a softmax a point.
 // Voxels are stored densely in order of first insertion (scan point order), so the layer is deterministic.
 // Capacity: when max_voxels is reached, points that fall into existing voxels still accumulate and
 // points needing a new voxel are dropped (counted). When the 2-D gather index runs out of columns
@@ -46,6 +49,7 @@ struct VoxelStats {
   uint32_t points_in = 0, non_finite = 0, out_of_range = 0, ignored = 0, unknown_label = 0;
   uint32_t voxels = 0, dropped_points = 0;
   uint32_t unindexed_voxels = 0;  // voxels left out of the gather index (column capacity)
+  uint32_t unsampled_points = 0;  // kept points whose softmax was skipped (VoxelConfig::prob_samples)
 };
 
 class VoxelLayer {
@@ -70,6 +74,9 @@ class VoxelLayer {
   // A non-finite centre, a NaN radius or radius <= 0 matches nothing; radius = +inf matches every indexed voxel.
   uint32_t gather_within(const float center[3], float radius, bool horizontal_only, uint32_t* out, uint32_t max_out,
                          uint32_t* total = nullptr) const;
+  // How many of a voxel's n points add their softmax when VoxelConfig::prob_samples is k (0: all n):
+  // n up to k, then k + about k/2 per doubling of n (closed form of the rule in accumulate_points).
+  static uint32_t samples_of(uint32_t n, uint32_t k);
   // Index of the voxel containing point p, or UINT32_MAX.
   uint32_t find(const float p[3]) const;
   uint64_t key_of(const float p[3]) const;
@@ -93,7 +100,7 @@ class VoxelLayer {
   // The steps of build(), in order.
   void reset_index(uint32_t points);
   uint32_t accumulate_points(const ScanView& scan, bool use_logits, VoxelStats* stats);
-  void average_voxels();
+  void average_voxels(uint32_t prob_samples);
   uint32_t build_columns();  // returns the number of voxels left unindexed
   int point_class(const float* p, uint32_t label, float min_r2, float max_r2, VoxelStats* stats) const;
 
@@ -107,6 +114,11 @@ class VoxelLayer {
   uint32_t index_find(uint64_t key) const;
   uint32_t* slots_ = nullptr;
   uint64_t* keys_ = nullptr;
+  // Recently found voxels, direct-mapped by key hash (12 KB: stays in L1): a scan's next column mostly
+  // hits the voxels of the last few, and the big index's slots and keys miss the caches at 100k points.
+  static constexpr uint32_t kRecentBits = 10, kRecent = 1u << kRecentBits;
+  uint64_t* recent_keys_ = nullptr;
+  uint32_t* recent_ids_ = nullptr;
   uint32_t slot_count_ = 0, active_slots_ = 0;
   BoundedHashMap<ColumnCell> columns_;  // column key -> range in column_members_
   uint32_t* column_members_ = nullptr;  // voxel ids grouped by column
