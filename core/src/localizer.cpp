@@ -610,7 +610,12 @@ Status Localizer::track(const ScanView& scan, const Eigen::Isometry3d& predicted
     return finish(Status::InvalidArgument);
   if (im.semantic.empty()) return finish(Status::Unsupported);  // nothing to verify against
   if (scan.count > cfg.max_scan_points) return finish(Status::CapacityExceeded);
-  const Status s = im.build_voxels(scan, out);
+  ScanView labels_only = scan;  // tracking reads the voxels' argmax labels: the softmax per point is optional
+  if (!cfg.track.use_logits) {
+    labels_only.logits = nullptr;
+    labels_only.logit_dim = 0;
+  }
+  const Status s = im.build_voxels(labels_only, out);
   out.times.voxel = now(clock_) - t;
   t = now(clock_);
   if (s != Status::Ok) return finish(s);

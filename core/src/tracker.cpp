@@ -1,5 +1,7 @@
 #include "gsf/detail/tracker.h"
 
+#include <algorithm>
+#include <cmath>
 #include "gsf/config.h"
 
 namespace gsf {
@@ -9,6 +11,18 @@ double tracking_probability(const ConfidenceEvidence& evidence) {
   e.inlier_share = 1.0f;  // the inlier factor at its ceiling (s(a_i + b_i) = 1 - 6e-11): left out
   return confidence_probability(e);
 }
+
+namespace {
+
+// a and b within m metres (horizontally) and deg degrees of heading.
+bool near_pose(const Eigen::Isometry3d& a, const Eigen::Isometry3d& b, float m, float deg) {
+  const Eigen::Vector3d d = a.translation() - b.translation();
+  const Eigen::Matrix3d r = a.linear().transpose() * b.linear();
+  const double yaw = std::fabs(std::atan2(r(1, 0), r(0, 0))) * 57.29577951308232;
+  return d.head<2>().norm() <= double(m) && yaw <= double(deg);
+}
+
+}  // namespace
 
 TrackOutcome track_pose(const TrackScan& scan, const SemanticGridView& grid, const Eigen::Isometry3d& predicted,
                         const TrackConfig& tc, const VerifyConfig& vc, Refiner* refiner, AnswerConfidence& confidence,
@@ -28,11 +42,14 @@ TrackOutcome track_pose(const TrackScan& scan, const SemanticGridView& grid, con
                                        vc.search_divisor, vc.polish_divisor, nullptr, lambda);
   o.map_T_scan = searched;
   lap(&o.search_ns);
-  // 2. ICP from there for the last decimetres (the score is flat within a semantic cell).
+  // 2. ICP for the last decimetres. The score is flat within a semantic cell, so the search wanders in
+  // it: when it ends within icp_start_m / icp_start_deg of the prediction, ICP starts from the prediction.
   if (refiner != nullptr) {
     Eigen::Isometry3d refined;
     RefineStats rs;
-    if (refiner->refine(scan.voxels, searched, &refined, &rs, tc.icp_points, tc.icp_iterations) == Status::Ok &&
+    const Eigen::Isometry3d start =
+        near_pose(searched, predicted, tc.icp_start_m, tc.icp_start_deg) ? predicted : searched;
+    if (refiner->refine(scan.voxels, start, &refined, &rs, tc.icp_points, tc.icp_iterations) == Status::Ok &&
         rs.accepted) {
       o.map_T_scan = refined;
       o.refined = true;
@@ -41,7 +58,8 @@ TrackOutcome track_pose(const TrackScan& scan, const SemanticGridView& grid, con
   lap(&o.refine_ns);
   // 3. The probes at the result: is it a peak in position and heading?
   const AnswerConfidence::Answer a{o.map_T_scan, nullptr, 0, 0, 0};
-  o.evidence = confidence.measure(scan.points, scan.n, grid, scan.weights, lambda, a, vc.max_points);
+  const uint32_t probe_points = tc.probe_points > 0 ? std::min(tc.probe_points, vc.max_points) : vc.max_points;
+  o.evidence = confidence.measure(scan.points, scan.n, grid, scan.weights, lambda, a, probe_points);
   o.confidence = tracking_probability(o.evidence);
   lap(&o.probe_ns);
   return o;

@@ -269,6 +269,16 @@ struct TrackConfig {
   // ICP's budget (at most RefineConfig's max_points / iterations): the search leaves it within a cell.
   uint32_t icp_points = 1000;
   uint32_t icp_iterations = 6;
+  // ICP starts from the prediction when the pattern search ends within these of it (the verification
+  // score is flat within a semantic cell), else from the search's pose. 0: always from the search's.
+  float icp_start_m = 1.0f;
+  float icp_start_deg = 2.0f;
+  // The confidence probes' sample: at most this many scan voxels (0: verify.max_points, the default).
+  // 2,048 saves 0.25 ms but turned one confident tracked scan of seed 10 into a (recovered) loss.
+  uint32_t probe_points = 0;
+  // Voxelize the scan's logits (a softmax per point) when it carries them; off: its labels alone (one-hot
+  // per point). Tracking reads only the voxels' centroids and argmax labels.
+  bool use_logits = false;
 };
 
 // Localizer::localize_sequence: several scans tied by odometry (detail/scan_window.h).

@@ -6,8 +6,10 @@
 //   1. a bird's-eye pattern search of whole-scan verification around the prediction (semantic_grid.h:
 //      verify_pose_refined, steps of search_step_m / search_step_deg halved each round), which takes a
 //      prediction a few metres and degrees off to within about a cell of the map's semantic layer;
-//   2. point-to-plane ICP against the map's refinement layer from there (refine.h), for centimetres,
-//      when the map has that layer (accepted only within its correction limit, as for one-shot);
+//   2. point-to-plane ICP against the map's refinement layer (refine.h), for centimetres, when the map
+//      has that layer (accepted only within its correction limit, as for one-shot); it starts from the
+//      prediction when the search ended within TrackConfig::icp_start_m / icp_start_deg of it (the
+//      score is flat within a cell, where the search wanders up to a metre), else from the search's pose;
 //   3. the confidence's probe statistic at the result (confidence.h): the shifted and turned probes,
 //      no rivals (there are no other hypotheses). The inlier factor is left out: tracking forms no
 //      instances; it guards one-shot answers in a map of somewhere else, and a tracked pose follows a
@@ -38,7 +40,8 @@ struct TrackOutcome {
   uint64_t search_ns = 0, refine_ns = 0, probe_ns = 0;  // the three steps' times (0 without a clock)
 };
 
-// The scan as verification reads it (answer_selection.h prepares the compact points and weights).
+// The scan as verification reads it (voxelized from the labels alone unless TrackConfig::use_logits)
+// (answer_selection.h prepares the compact points and weights).
 struct TrackScan {
   const VerifyPoint* points;
   uint32_t n;
