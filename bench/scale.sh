@@ -27,9 +27,9 @@ else
 fi
 mkdir -p "$out"
 tsv="$out/scale.tsv"
-printf "scale\troad_km\tscans\tmap_mb\tmb_per_km\tbuild_s\tbuild_cpu_s\trss_mb\tspill_peak_mb\tspill_live_mb\tmode\tmedian_ms\tp95_ms\n" > "$tsv"
-printf "| scale | blocks | road km | scans | map MB | MB/km | build s | build CPU s | build peak RSS MB | spill file peak MB | spill live peak MB | instances | triangles | mode | success | median ms | p95 ms | candidates/query | match ms | workspace MB |\n"
-printf "| --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- |\n"
+printf "scale\troad_km\tscans\tmap_mb\tmb_per_km\tbuild_s\tbuild_cpu_s\trss_mb\tspill_peak_mb\tspill_live_mb\tresident_peak_mb\tmode\tmedian_ms\tp95_ms\n" > "$tsv"
+printf "| scale | blocks | road km | scans | map MB | MB/km | build s | build CPU s | build peak RSS MB | spill file peak MB | spill live peak MB | resident peak MB | instances | triangles | mode | success | median ms | p95 ms | candidates/query | match ms | workspace MB |\n"
+printf "| --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- |\n"
 for s in $scales; do
   case $s in
     1x) spec="1x 4 3" ;;
@@ -51,24 +51,28 @@ for s in $scales; do
   rss=$((rss_kb * 1024 / 1000000))  # KiB -> MB (10^6 bytes, as build-map prints)
   scans=$(sed -n 's/.*labels): \([0-9]*\) scans.*/\1/p' "$d/build-map.txt")
   spill=$(sed -n 's/.*spill file peak \([0-9]*\) MB (its live slots at most \([0-9]*\) MB.*/\1 \2/p' "$d/build-map.txt")
+  grep -q "no spill file" "$d/build-map.txt" && spill="0 0"  # built block by block (--block-tiles)
   [ -n "$spill" ] || spill="- -"  # one tile, nothing spilled (or a gsf that does not report it)
+  # The largest resident working set: the tiles' voxels in spill records (192 B each).
+  resident=$(sed -n 's/.*voxels, \([0-9]*\) MB as spill records.*/\1/p' "$d/build-map.txt")
+  [ -n "$resident" ] || resident="-"
   $gsf evaluate --map "$d/map.gsfmap" --dataset "$d/dataset" --mode instance,gsf --limit "$nq" --quiet --json "$d/results.json" >/dev/null
   # shellcheck disable=SC2086
-  python3 - "$d/results.json" "$1" "$2x$3" "$rss" "$secs" "$wall" "$scans" $spill "$tsv" <<'PY'
+  python3 - "$d/results.json" "$1" "$2x$3" "$rss" "$secs" "$wall" "$scans" $spill "$resident" "$tsv" <<'PY'
 import json, statistics, sys
 r = json.load(open(sys.argv[1]))
-scale, blocks, rss, cpu, wall, scans, spill, live, tsv = sys.argv[2:11]
+scale, blocks, rss, cpu, wall, scans, spill, live, resident, tsv = sys.argv[2:12]
 km = r["road_length_m"] / 1000
 for mode, v in r["modes"].items():
     s = v["summary"]
     cand = statistics.median(q["diagnostics"]["match_candidates"] for q in v["queries"] if "diagnostics" in q)
     print(f"| {scale} | {blocks} | {km:.1f} | {scans} | {r['map_bytes']/1e6:.1f} | {r['map_bytes_per_km']/1e6:.2f} | "
-          f"{float(wall):.0f} | {float(cpu):.0f} | {rss} | {spill} | {live} | {r['map_instances']} | "
+          f"{float(wall):.0f} | {float(cpu):.0f} | {rss} | {spill} | {live} | {resident} | {r['map_instances']} | "
           f"{r['map_triangles']} | {mode} | {100*s['success_rate']:.1f}% | {s['median_ms']:.1f} | {s['p95_ms']:.1f} | "
           f"{cand:.0f} | {s['median_stage_ms']['match']:.1f} | {s['workspace_bytes']/1e6:.1f} |")
     with open(tsv, "a") as f:
         f.write(f"{scale}\t{km:.2f}\t{scans}\t{r['map_bytes']/1e6:.2f}\t{r['map_bytes_per_km']/1e6:.3f}\t{wall}\t"
-                f"{float(cpu):.1f}\t{rss}\t{spill}\t{live}\t{mode}\t{s['median_ms']:.2f}\t{s['p95_ms']:.2f}\n")
+                f"{float(cpu):.1f}\t{rss}\t{spill}\t{live}\t{resident}\t{mode}\t{s['median_ms']:.2f}\t{s['p95_ms']:.2f}\n")
 PY
 done
 python3 bench/scale_plot.py "$tsv" "$out/scale.svg"

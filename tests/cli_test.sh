@@ -43,6 +43,7 @@ expect 2 "need --prior-sigma" -- "$gsf" evaluate --map m --dataset d --prior-bia
 expect 2 "odometry-noise must be in" -- "$gsf" evaluate --map m --dataset d --mode track --odometry-noise 2
 expect 2 "sequence-window must be 1..4" -- "$gsf" evaluate --map m --dataset d --sequence-window 5
 expect 1 "cannot open sequence" -- "$gsf" build-map --dataset "$tmp/nothing" --out "$tmp/m.gsfmap"
+expect 2 "block-tiles must be a count" -- "$gsf" build-map --dataset d --out m --block-tiles -1
 printf 'not a map' > "$tmp/bad.gsfmap"
 expect 1 "not a valid map" -- "$gsf" inspect --map "$tmp/bad.gsfmap"
 
@@ -50,6 +51,11 @@ expect 1 "not a valid map" -- "$gsf" inspect --map "$tmp/bad.gsfmap"
 built=$("$gsf" build-map --dataset "$tmp/ds" --sequence 00 --out "$tmp/map.gsfmap" --quiet) || fail "build-map"
 echo "$built" | grep -Eq "peak RSS [1-9][0-9]* MB" || fail "build-map summary lacks its peak RSS: $built"
 echo "$built" | grep -q "origin 0.000, -2.000, 2.000 m in frame 'local'" || fail "build-map summary lacks the origin: $built"
+# Block by block (the default, no spill file) or in one pass with the spill file: the same map bytes.
+echo "$built" | grep -q "no spill file" || fail "build-map did not build in blocks: $built"
+"$gsf" build-map --dataset "$tmp/ds" --sequence 00 --out "$tmp/map1.gsfmap" --quiet --tile-size 16 --block-tiles 0 \
+  --resident-tiles 3 | grep -q "spill file peak" || fail "build-map --block-tiles 0"
+cmp -s "$tmp/map.gsfmap" "$tmp/map1.gsfmap" || fail "the one-pass map differs from the blocked one"
 "$gsf" inspect --map "$tmp/map.gsfmap" --json > "$tmp/inspect.json" || fail "inspect"
 # A regular file is memory-mapped; a pipe cannot be, so it is read into memory, and loads the same.
 "$gsf" inspect --map "$tmp/map.gsfmap" | grep -q "memory-mapped (used in place)" || fail "map file not mapped"

@@ -254,6 +254,111 @@ TEST_CASE("A streaming build with tiny tiles and a two-tile budget spills and re
   }
 }
 
+namespace {
+
+// The tiny drive's scans in `order` as a drive the builder can read again; counts the reads.
+class TestDrive : public mapping::ScanSequence {
+ public:
+  explicit TestDrive(const std::vector<uint32_t>& order) : order_(order) {}
+  uint32_t size() const override { return static_cast<uint32_t>(order_.size()); }
+  Status read(uint32_t i, ScanView* scan, Eigen::Isometry3d* pose) override {
+    ++reads;
+    *scan = drive().scans[order_[i]].view();
+    *pose = drive().scans[order_[i]].truth;
+    return Status::Ok;
+  }
+  uint64_t reads = 0;
+
+ private:
+  std::vector<uint32_t> order_;
+};
+
+// build_blocked over the scans in `order` (default: each once, in drive order).
+Built build_in_blocks(const mapping::MapBuildConfig& options, std::vector<uint32_t> order = {},
+                      uint64_t* reads = nullptr) {
+  mapping::MapBuildConfig config = options;
+  config.stages.max_scan_points = 262144;
+  config.road_length_m = 120.0f;
+  for (uint32_t f = 0; order.empty() && f < drive().scans.size(); ++f) order.push_back(f);
+  if (order.empty()) order.push_back(0);
+  mapping::MapBuilder builder(config);
+  TestDrive d(order);
+  Built b;
+  mapping::MemoryMapSink sink(&b.blob);
+  b.build = builder.build_blocked(d, sink, &b.bytes, &b.stats);
+  if (b.build == Status::Ok) b.build = load_map(b.blob.data(), b.bytes, &b.map);
+  if (reads) *reads = d.reads;
+  return b;
+}
+
+mapping::MapBuildConfig blocked(float tile_size, uint32_t block_tiles) {
+  mapping::MapBuildConfig c;
+  c.tile_size = tile_size;
+  c.block_tiles = block_tiles;
+  return c;
+}
+
+}  // namespace
+
+TEST_CASE("A blocked build holds one block, never spills, reads scans again, and gives the same map bytes") {
+  // Out along the drive and back over its start (a drive that returns to tiles it left: add_scan's
+  // build spills them), built block by block with blocks and tiles smaller than a scan.
+  std::vector<uint32_t> loop;
+  for (uint32_t f = 0; f < drive().scans.size(); ++f) loop.push_back(f);
+  for (uint32_t f = 0; f < 4; ++f) loop.push_back(f);
+  const Built whole = build(single_tile(), Eigen::Vector3d::Zero(), loop);
+  REQUIRE(whole.build == Status::Ok);
+  REQUIRE(whole.stats.instances > 10);
+  const Built streamed = build(tiled(10.0f, 2), Eigen::Vector3d::Zero(), loop);
+  REQUIRE(streamed.build == Status::Ok);
+  CHECK(streamed.stats.tiles.spill_peak_bytes > 0);
+  for (const auto& [tile, block] : {std::pair<float, uint32_t>{10.0f, 1}, {10.0f, 3}, {26.0f, 2}, {64.0f, 4}}) {
+    INFO("tile " << tile << " m, blocks of " << block << " x " << block);
+    uint64_t reads = 0;
+    const Built b = build_in_blocks(blocked(tile, block), loop, &reads);
+    REQUIRE(b.build == Status::Ok);
+    CHECK(b.stats.scans == loop.size());
+    CHECK(b.stats.tiles.spills == 0);  // no spill file
+    CHECK(b.stats.tiles.spill_peak_bytes == 0);
+    CHECK(b.stats.map_voxels == whole.stats.map_voxels);
+    CHECK(reads == loop.size() + b.stats.block_scan_reads);  // the first pass, then once per block reached
+    if (b.stats.blocks > 1) {
+      // One block and its halo in memory, not the map (the map's voxels in spill records: 192 B each).
+      CHECK(b.stats.tiles.peak_resident_voxels < whole.stats.map_voxels);
+      CHECK(b.stats.tiles.peak_resident_bytes == b.stats.tiles.peak_resident_voxels * 192);
+      CHECK(b.stats.block_scan_reads > loop.size());
+    }
+    CHECK(same_bytes(b, whole));
+  }
+  CHECK(build_in_blocks(blocked(10.0f, 3), loop).stats.blocks > 4);
+}
+
+TEST_CASE("A blocked build refuses a builder that added scans, no tiles or no blocks, and reports a bad scan") {
+  mapping::MapBuilder used(blocked(16.0f, 2));
+  REQUIRE(used.add_scan(drive().scans[0].view(), drive().scans[0].truth) == Status::Ok);
+  TestDrive d({0, 1});
+  std::vector<uint64_t> blob;
+  mapping::MemoryMapSink sink(&blob);
+  size_t bytes = 0;
+  CHECK(used.build_blocked(d, sink, &bytes, nullptr) == Status::InvalidArgument);
+  CHECK(build_in_blocks(blocked(0.0f, 2)).build == Status::InvalidArgument);
+  CHECK(build_in_blocks(blocked(16.0f, 0)).build == Status::InvalidArgument);
+  // A pose beyond the map-local range: InvalidInput, with the scan's index.
+  class FarDrive : public TestDrive {
+   public:
+    FarDrive() : TestDrive({0, 1, 2}) {}
+    Status read(uint32_t i, ScanView* scan, Eigen::Isometry3d* pose) override {
+      const Status s = TestDrive::read(i, scan, pose);
+      if (i == 2) pose->translation().x() += 1e6;
+      return s;
+    }
+  } far;
+  mapping::MapBuilder builder(blocked(16.0f, 2));
+  uint32_t failed = 0;
+  CHECK(builder.build_blocked(far, sink, &bytes, nullptr, nullptr, &failed) == Status::InvalidInput);
+  CHECK(failed == 2);
+}
+
 TEST_CASE("A loop back into spilled tiles continues their sums: the same bytes as in memory") {
   // Out along the drive and back over its start: by then the start's tiles were spilled.
   std::vector<uint32_t> loop;

@@ -4,6 +4,7 @@
 #include <catch2/catch.hpp>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstdint>
 #include <cstring>
@@ -101,6 +102,26 @@ TEST_CASE("Refinement positions dequantise within cell / 512 per axis, inside th
       REQUIRE(chunked_points.size() == points.size());
       CHECK(std::memcmp(chunked_tiles.data(), tiles.data(), tiles.size() * sizeof(MapRefineTile)) == 0);
       CHECK(std::memcmp(chunked_points.data(), points.data(), points.size() * sizeof(MapRefinePoint)) == 0);
+    }
+    {  // points in x order (as the builder's come, cell-key order): the chunks are placed one tile column at
+      // a time, the same layer as the whole sort over the same input order
+      std::vector<std::array<float, 3>> sorted(n);
+      for (uint32_t i = 0; i < n; ++i) sorted[i] = {xyz[3 * i], xyz[3 * i + 1], xyz[3 * i + 2]};
+      std::stable_sort(sorted.begin(), sorted.end(),
+                       [](const std::array<float, 3>& a, const std::array<float, 3>& b) { return a[0] < b[0]; });
+      std::vector<float> flat;
+      for (const auto& p : sorted) flat.insert(flat.end(), p.begin(), p.end());
+      std::vector<MapRefineTile> whole_tiles, column_tiles;
+      std::vector<MapRefinePoint> whole_points, column_points;
+      REQUIRE(mapping::build_refine_layer(flat.data(), n, cell, &whole_tiles, &whole_points) == Status::Ok);
+      std::vector<std::vector<float>> chunks;
+      for (size_t at = 0; at < flat.size(); at += 300)
+        chunks.emplace_back(flat.begin() + at, flat.begin() + std::min(flat.size(), at + 300));
+      REQUIRE(mapping::build_refine_layer(&chunks, cell, &column_tiles, &column_points) == Status::Ok);
+      REQUIRE(column_tiles.size() == whole_tiles.size());
+      REQUIRE(column_points.size() == whole_points.size());
+      CHECK(std::memcmp(column_tiles.data(), whole_tiles.data(), whole_tiles.size() * sizeof(MapRefineTile)) == 0);
+      CHECK(std::memcmp(column_points.data(), whole_points.data(), whole_points.size() * sizeof(MapRefinePoint)) == 0);
     }
     RefineLayerView layer;
     layer.cell = cell;

@@ -1,5 +1,5 @@
 // gsf build-map --dataset DIR --sequence 00 --out MAP [--logits synthetic|none] [--classes SET] [--origin X,Y[,Z]]
-// [--frame NAME] [--tile-size M] [--resident-tiles N] [--spill-dir DIR]
+// [--frame NAME] [--tile-size M] [--block-tiles N] [--resident-tiles N] [--spill-dir DIR]
 // [--label-noise P] [--object-confusion P] [--thin-miss P] [--noise-seed N]   (label_error_options.h)
 #include <cstdio>
 #include <cstdlib>
@@ -34,7 +34,12 @@ std::vector<OptionSpec> build_map_specs() {
        "bounded memory: voxel accumulators in square tiles of this side (m), the map built tile by tile; 0: "
        "one tile (the whole map in memory). The map is the same either way",
        "64"},
-      {"resident-tiles", "tiles held in memory at once; the others are spilled to a temporary file (0: no limit)",
+      {"block-tiles",
+       "build the map in blocks of N x N tiles, one in memory at a time, reading each scan once more per block it "
+       "reaches (no spill file); 0: read each scan once, spilling tiles beyond --resident-tiles to a file",
+       "2"},
+      {"resident-tiles",
+       "with --block-tiles 0: tiles held in memory at once; the others are spilled to a temporary file (0: no limit)",
        "24"},
       {"spill-dir", "directory of the spill file (default: the system's temporary directory)", ""},
       {"triangle-min-detections",
@@ -88,6 +93,11 @@ bool parse_tiles_and_triangles(const Args& args, mapping::MapBuildConfig* option
     return false;
   }
   options->spill_dir = args.get("spill-dir");
+  const std::string block = args.get("block-tiles");
+  if (!parse_count(block, &options->block_tiles)) {
+    *err = "--block-tiles must be a count >= 0, got '" + block + "'";
+    return false;
+  }
   const std::string md = args.get("triangle-min-detections");
   if (!md.empty() && !parse_count(md, &options->triangle_min_detections)) {
     *err = "--triangle-min-detections must be a count >= 0, got '" + md + "'";
@@ -166,12 +176,19 @@ void print_build_report(const BuildMapOptions& o, const mapping::MapBuildStats& 
       o.out.c_str(), o.labels.name.c_str(), st.scans, st.map_voxels, st.instances, st.pole_instances, st.triangles,
       st.index_keys, st.refine_points, bytes, road > 0 ? bytes / 1e6 / (road / 1000.0) : 0.0, road,
       st.seconds_accumulate, st.seconds_cluster, st.seconds_fields, st.seconds_triangles, peak_rss_bytes() / 1e6);
-  if (st.tiles.tiles > 1)
+  if (st.blocks > 0)
     std::printf(
-        "  tiles: %u of %.0f m, at most %u resident (peak %llu voxels), %llu spills, %llu reloads; spill file "
-        "peak %.0f MB (its live slots at most %.0f MB; %llu compactions moved %.0f MB)\n",
+        "  tiles: %u of %.0f m in %u blocks of %u x %u, one in memory at a time (peak %u tiles, %llu voxels, "
+        "%.0f MB as spill records), %llu scan reads after the first pass; no spill file\n",
+        st.tiles.tiles, o.options.tile_size, st.blocks, o.options.block_tiles, o.options.block_tiles,
+        st.tiles.peak_resident, static_cast<unsigned long long>(st.tiles.peak_resident_voxels),
+        st.tiles.peak_resident_bytes / 1e6, static_cast<unsigned long long>(st.block_scan_reads));
+  else if (st.tiles.tiles > 1)
+    std::printf(
+        "  tiles: %u of %.0f m, at most %u resident (peak %llu voxels, %.0f MB as spill records), %llu spills, "
+        "%llu reloads; spill file peak %.0f MB (its live slots at most %.0f MB; %llu compactions moved %.0f MB)\n",
         st.tiles.tiles, o.options.tile_size, st.tiles.peak_resident,
-        static_cast<unsigned long long>(st.tiles.peak_resident_voxels),
+        static_cast<unsigned long long>(st.tiles.peak_resident_voxels), st.tiles.peak_resident_bytes / 1e6,
         static_cast<unsigned long long>(st.tiles.spills), static_cast<unsigned long long>(st.tiles.reloads),
         st.tiles.spill_peak_bytes / 1e6, st.tiles.spill_live_peak_bytes / 1e6,
         static_cast<unsigned long long>(st.tiles.compactions), st.tiles.compaction_bytes / 1e6);

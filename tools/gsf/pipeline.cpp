@@ -254,11 +254,49 @@ double path_length(port::ScanSource& src) {
   return len;
 }
 
+namespace {
+
+// build-map's dataset as a drive the builder reads block by block (MapBuilder::build_blocked).
+class DatasetDrive : public mapping::ScanSequence {
+ public:
+  DatasetDrive(port::ScanSource& src, const mapping::MapBuildConfig& config, LogitMode logits,
+               const ScanLabelErrors* errors)
+      : src_(src), config_(config), logits_(logits), errors_(errors), buf_(kMaxScanPoints, true) {}
+  uint32_t size() const override { return src_.size(); }
+  Status read(uint32_t i, ScanView* scan, Eigen::Isometry3d* pose) override {
+    Status s = src_.pose(i, pose);
+    if (s == Status::Ok)
+      s = read_scan(src_, i, buf_.buffer(), logits_, 1000000u + src_.frame_id(i), config_.stages.classes, errors_);
+    if (s == Status::Ok) *scan = buf_.buffer().view();
+    return s;
+  }
+
+ private:
+  port::ScanSource& src_;
+  const mapping::MapBuildConfig& config_;
+  LogitMode logits_;
+  const ScanLabelErrors* errors_;
+  port::OwnedScanBuffer buf_;
+};
+
+mapping::Progress progress_printer() {
+  return [](const char* stage, uint64_t done, uint64_t total) {
+    std::fprintf(stderr, "\r  build-map: %s %llu / %llu", stage, (unsigned long long)done, (unsigned long long)total);
+    if (done == total) std::fprintf(stderr, "\n");
+  };
+}
+
+}  // namespace
+
 Status build_map(port::ScanSource& src, const mapping::MapBuildConfig& config, LogitMode logits, mapping::MapSink& sink,
                  size_t* bytes, mapping::MapBuildStats* stats, bool progress, uint32_t* failed_scan,
                  const ScanLabelErrors* errors) {
   if (failed_scan) *failed_scan = UINT32_MAX;
   mapping::MapBuilder builder(config);
+  if (config.block_tiles > 0 && config.tile_size > 0.0f) {  // block by block, no spill file
+    DatasetDrive drive(src, config, logits, errors);
+    return builder.build_blocked(drive, sink, bytes, stats, progress ? progress_printer() : nullptr, failed_scan);
+  }
   port::OwnedScanBuffer buf(kMaxScanPoints, true);
   for (uint32_t i = 0; i < src.size(); ++i) {
     Eigen::Isometry3d pose;
@@ -279,13 +317,7 @@ Status build_map(port::ScanSource& src, const mapping::MapBuildConfig& config, L
       std::fprintf(stderr, "\r  build-map: accumulated %u / %u scans", i + 1, src.size());
   }
   if (progress) std::fprintf(stderr, "\n");
-  mapping::Progress cb;
-  if (progress)
-    cb = [](const char* stage, uint64_t done, uint64_t total) {
-      std::fprintf(stderr, "\r  build-map: %s %llu / %llu", stage, (unsigned long long)done, (unsigned long long)total);
-      if (done == total) std::fprintf(stderr, "\n");
-    };
-  return builder.build(sink, bytes, stats, cb);
+  return builder.build(sink, bytes, stats, progress ? progress_printer() : nullptr);
 }
 
 }  // namespace gsf::cli

@@ -99,8 +99,10 @@ Meta read_meta(const std::string& dataset_root);
 double path_length(port::ScanSource& src);
 
 // config.classes is the label set of src's labels.
-// Builds the map of every scan of `src`. On failure *failed_scan is the index of the scan add_scan
-// refused or that has no pose (NotFound) (UINT32_MAX when the failure came later, at build()). The map goes to `sink`
+// Builds the map of every scan of `src`: with config.block_tiles > 0 (and tiles) block by block, reading the
+// scans again per block (MapBuilder::build_blocked, no spill file), else each scan once through add_scan.
+// On failure *failed_scan is the index of the scan add_scan refused, that could not be read or that has
+// no pose (NotFound) (UINT32_MAX when the failure came later, at build()). The map goes to `sink`
 // section by section (mapping/map_writer.h; a FileMapSink writes the file without holding the map). `errors`
 // (optional): simulated network errors on every mapping scan's labels (read_scan).
 Status build_map(port::ScanSource& src, const mapping::MapBuildConfig& config, LogitMode logits, mapping::MapSink& sink,

@@ -5,7 +5,9 @@
 #include <cmath>
 #include <cstring>
 #include <initializer_list>
+#include <map>
 #include <memory>
+#include <unordered_set>
 
 #include "gsf/class_table.h"
 #include "gsf/detail/arena.h"
@@ -17,6 +19,7 @@
 #include "gsf/detail/triangle_index.h"
 #include "gsf/detail/voxel_layer.h"
 #include "gsf/map_format.h"
+#include "mapping/floor_div.h"
 #include "mapping/map_writer.h"
 #include "mapping/refine_layer_builder.h"
 #include "mapping/scan_triangles.h"
@@ -141,8 +144,9 @@ MapBuilder::MapBuilder(const MapBuildConfig& config)
     detector_ok_ = detector_.init(config_, config_.voxel.max_voxels) == Status::Ok;
 }
 
-Status MapBuilder::add_scan(const ScanView& scan, const Eigen::Isometry3d& frame_T_lidar) {
-  const auto t0 = std::chrono::steady_clock::now();
+// Validity, origin and the scan's voxels (into scan_arena_), with its pose in the map-local frame.
+Status MapBuilder::voxelize(const ScanView& scan, const Eigen::Isometry3d& frame_T_lidar, VoxelLayer* layer,
+                            Eigen::Isometry3d* map_T_lidar, uint64_t* dropped) {
   if (!georef_valid_) return Status::InvalidArgument;
   if (!frame_T_lidar.matrix().allFinite()) return Status::InvalidInput;
   if (!origin_fixed_) {
@@ -153,29 +157,37 @@ Status MapBuilder::add_scan(const ScanView& scan, const Eigen::Isometry3d& frame
     origin_fixed_ = true;
   }
   // Into the map-local frame in double, before anything becomes float.
-  const Eigen::Isometry3d map_T_lidar = to_map_local(georef_, frame_T_lidar);
-  if (map_T_lidar.translation().cwiseAbs().maxCoeff() > kMaxMapLocalCoordinate) return Status::InvalidInput;
+  *map_T_lidar = to_map_local(georef_, frame_T_lidar);
+  if (map_T_lidar->translation().cwiseAbs().maxCoeff() > kMaxMapLocalCoordinate) return Status::InvalidInput;
   Arena arena = aligned_arena(scan_arena_.data(), scan_arena_.size());
-  VoxelLayer layer;
-  Status s = layer.bind(arena, config_.voxel);
+  Status s = layer->bind(arena, config_.voxel);
   if (s != Status::Ok) return s;
-  layer.set_classes(config_.classes);
+  layer->set_classes(config_.classes);
   VoxelStats vst;
-  s = layer.build(scan, &vst);
+  s = layer->build(scan, &vst);
   if (s != Status::Ok && s != Status::CapacityExceeded) return s;
-  stats_.scan_points_dropped += vst.dropped_points;
-  if (options_.triangle_min_detections > 0 || options_.scan_triangles) {
-    if (!detector_ok_) return Status::InvalidArgument;
-    const size_t before = detections_.size();
-    scan_detection_begin_.push_back(static_cast<uint32_t>(before));
-    s = detector_.detect(layer, map_T_lidar, &detections_);
-    if (s != Status::Ok) return s;
-    stats_.scan_detections += detections_.size() - before;
-    ScanDetection at{};
-    for (int k = 0; k < 3; ++k) at.xyz[k] = static_cast<float>(map_T_lidar.translation()[k]);
-    at.label = kAnyLabel;
-    scan_positions_.push_back(at);
-  }
+  if (dropped) *dropped += vst.dropped_points;
+  return Status::Ok;
+}
+
+// The query stages' instances of the scan (scan_detections.h) and its position, when they are used.
+Status MapBuilder::detect(const VoxelLayer& layer, const Eigen::Isometry3d& map_T_lidar) {
+  if (options_.triangle_min_detections == 0 && !options_.scan_triangles) return Status::Ok;
+  if (!detector_ok_) return Status::InvalidArgument;
+  const size_t before = detections_.size();
+  scan_detection_begin_.push_back(static_cast<uint32_t>(before));
+  const Status s = detector_.detect(layer, map_T_lidar, &detections_);
+  if (s != Status::Ok) return s;
+  stats_.scan_detections += detections_.size() - before;
+  ScanDetection at{};
+  for (int k = 0; k < 3; ++k) at.xyz[k] = static_cast<float>(map_T_lidar.translation()[k]);
+  at.label = kAnyLabel;
+  scan_positions_.push_back(at);
+  return Status::Ok;
+}
+
+// Per scan voxel its centroid in the map frame (scan_points_) and map voxel key (scan_order_, in voxel order).
+void MapBuilder::to_map(const VoxelLayer& layer, const Eigen::Isometry3d& map_T_lidar) {
   const double vs = config_.voxel.voxel_size;
   const uint32_t n = layer.size();
   scan_points_.resize(size_t(n) * 3);
@@ -186,6 +198,37 @@ Status MapBuilder::add_scan(const ScanView& scan, const Eigen::Isometry3d& frame
     for (int k = 0; k < 3; ++k) scan_points_[3 * size_t(i) + k] = p[k];
     scan_order_[i] = {voxel_key(p.x(), p.y(), p.z(), vs), i};
   }
+}
+
+// The scan's voxels (scan_order_'s order) into `store`'s accumulators; with `rect` (voxel x0, x1, y0, y1)
+// only those inside it.
+Status MapBuilder::accumulate(const VoxelLayer& layer, TileStore* store, const int32_t* rect) {
+  Status s = Status::Ok;
+  for (const auto& [key, i] : scan_order_) {
+    if (rect) {
+      const int32_t x = voxel_key_x(key), y = voxel_key_y(key);
+      if (x < rect[0] || x >= rect[1] || y < rect[2] || y >= rect[3]) continue;
+    }
+    const Voxel& v = layer.voxel(i);
+    const double* p = &scan_points_[3 * size_t(i)];
+    VoxelAccum* a = store->accumulator(key, &s);
+    if (!a) return s;  // the spill file failed: this scan is partly added, the builder is unusable
+    for (int k = 0; k < 3; ++k) a->sum[k] += p[k] * v.count;
+    for (int c = 0; c < kNumClasses; ++c) a->prob[c] += double(v.prob[c]) * v.count;
+    a->count += v.count;
+  }
+  return Status::Ok;
+}
+
+Status MapBuilder::add_scan(const ScanView& scan, const Eigen::Isometry3d& frame_T_lidar) {
+  const auto t0 = std::chrono::steady_clock::now();
+  VoxelLayer layer;
+  Eigen::Isometry3d map_T_lidar;
+  Status s = voxelize(scan, frame_T_lidar, &layer, &map_T_lidar, &stats_.scan_points_dropped);
+  if (s != Status::Ok) return s;
+  s = detect(layer, map_T_lidar);
+  if (s != Status::Ok) return s;
+  to_map(layer, map_T_lidar);
   // Tile by tile, so a scan touches each tile once however small the resident budget. Stable: a map
   // voxel still receives this scan's voxels in scan order, so its sums are those of a single-tile build.
   if (store_.tile_voxels() > 0)
@@ -193,15 +236,8 @@ Status MapBuilder::add_scan(const ScanView& scan, const Eigen::Isometry3d& frame
                      [&](const std::pair<uint64_t, uint32_t>& a, const std::pair<uint64_t, uint32_t>& b) {
                        return store_.tile_of(a.first) < store_.tile_of(b.first);
                      });
-  for (const auto& [key, i] : scan_order_) {
-    const Voxel& v = layer.voxel(i);
-    const double* p = &scan_points_[3 * size_t(i)];
-    VoxelAccum* a = store_.accumulator(key, &s);
-    if (!a) return s;  // the spill file failed: this scan is partly added, the builder is unusable
-    for (int k = 0; k < 3; ++k) a->sum[k] += p[k] * v.count;
-    for (int c = 0; c < kNumClasses; ++c) a->prob[c] += double(v.prob[c]) * v.count;
-    a->count += v.count;
-  }
+  s = accumulate(layer, &store_, nullptr);
+  if (s != Status::Ok) return s;
   store_.note_resident_voxels();
   stats_.scans++;
   stats_.points += scan.count;
@@ -221,29 +257,144 @@ Status MapBuilder::build(MapSink& sink, size_t* bytes_out, MapBuildStats* stats_
   MapBuildStats st = stats_;
   st.georef = georef_;
   MapContent content;
-  Status s = build_content(&content, &st, progress);
+  const Status s = build_content(&content, &st, progress);
   if (s != Status::Ok) return s;
-  if (content.instances.size() > kMaxMapInstances) return Status::CapacityExceeded;
-  MapView header = map_header(content, st);
-  s = write_instances(sink, &content);
+  return write_map(sink, &content, &st, bytes_out, stats_out, progress);
+}
+
+// The sections from the content, each freed once written, then the header.
+Status MapBuilder::write_map(MapSink& sink, MapContent* content, MapBuildStats* st, size_t* bytes_out,
+                             MapBuildStats* stats_out, const Progress& progress) const {
+  if (content->instances.size() > kMaxMapInstances) return Status::CapacityExceeded;
+  MapView header = map_header(*content, *st);
+  Status s = write_instances(sink, content);
   if (s != Status::Ok) return s;
-  s = write_triangles(sink, content, &header, &st, progress);
+  s = write_triangles(sink, *content, &header, st, progress);
   if (s != Status::Ok) return s;
-  std::vector<float>().swap(content.centroids);
-  std::vector<uint8_t>().swap(content.labels);
-  s = write_refine_layer(sink, &content, &header, &st);
+  std::vector<float>().swap(content->centroids);
+  std::vector<uint8_t>().swap(content->labels);
+  s = write_refine_layer(sink, content, &header, st);
   if (s != Status::Ok) return s;
-  s = write_semantic_layer(sink, content);
+  s = write_semantic_layer(sink, *content);
   if (s != Status::Ok) return s;
-  content = MapContent();
+  *content = MapContent();
 
   size_t written = 0;
   s = sink.finish(header, &written);
   if (s != Status::Ok) return s;
   *bytes_out = written;
-  st.bytes = written;
-  if (stats_out) *stats_out = st;
+  st->bytes = written;
+  if (stats_out) *stats_out = *st;
   return Status::Ok;
+}
+
+Status MapBuilder::build_blocked(ScanSequence& drive, MapSink& sink, size_t* bytes_out, MapBuildStats* stats_out,
+                                 const Progress& progress, uint32_t* failed_scan) {
+  *bytes_out = 0;
+  if (failed_scan) *failed_scan = UINT32_MAX;
+  if (stats_.scans > 0 || store_.tile_voxels() == 0 || options_.block_tiles == 0) return Status::InvalidArgument;
+  std::vector<ScanBox> boxes;
+  std::vector<uint64_t> tiles;
+  Status s = survey(drive, &boxes, &tiles, progress, failed_scan);
+  if (s != Status::Ok) return s;
+  MapBuildStats st = stats_;
+  st.georef = georef_;
+  MapContent content;
+  s = blocked_content(drive, boxes, tiles, &content, &st, progress);
+  if (s != Status::Ok) return s;
+  return write_map(sink, &content, &st, bytes_out, stats_out, progress);
+}
+
+// The blocked build's first pass, scan by scan in drive order: the add_scan checks, detections and
+// counts, the map tiles the scans' voxels fall in (sorted) and each scan's box of voxels (x0, x1, y0, y1).
+Status MapBuilder::survey(ScanSequence& drive, std::vector<ScanBox>* boxes, std::vector<uint64_t>* tiles,
+                          const Progress& progress, uint32_t* failed_scan) {
+  std::unordered_set<uint64_t> seen;
+  const uint32_t n = drive.size();
+  boxes->assign(n, ScanBox{INT32_MAX, INT32_MIN, INT32_MAX, INT32_MIN});
+  for (uint32_t i = 0; i < n; ++i) {
+    const auto t0 = std::chrono::steady_clock::now();
+    ScanView scan;
+    Eigen::Isometry3d pose, map_T_lidar;
+    VoxelLayer layer;
+    Status s = drive.read(i, &scan, &pose);
+    if (s == Status::Ok) s = voxelize(scan, pose, &layer, &map_T_lidar, &stats_.scan_points_dropped);
+    if (s == Status::Ok) s = detect(layer, map_T_lidar);
+    if (s != Status::Ok) {
+      if (failed_scan) *failed_scan = i;
+      return s;
+    }
+    to_map(layer, map_T_lidar);
+    ScanBox& b = (*boxes)[i];
+    uint64_t last = UINT64_MAX;
+    for (const auto& kv : scan_order_) {
+      const int32_t x = voxel_key_x(kv.first), y = voxel_key_y(kv.first);
+      b = {std::min(b[0], x), std::max(b[1], x), std::min(b[2], y), std::max(b[3], y)};
+      const uint64_t t = store_.tile_of(kv.first);
+      if (t != last) seen.insert(t);
+      last = t;
+    }
+    stats_.scans++;
+    stats_.points += scan.count;
+    stats_.seconds_accumulate += seconds_since(t0);
+    if (progress && (i % 25 == 0 || i + 1 == n)) progress("scans", i + 1, n);
+  }
+  tiles->assign(seen.begin(), seen.end());
+  std::sort(tiles->begin(), tiles->end());
+  return tiles->empty() ? Status::InvalidInput : Status::Ok;
+}
+
+// The map's tiles in blocks of block_tiles x block_tiles, x-major; per block the scans whose voxels
+// reach it or its halo read again, in drive order, and only their voxels there accumulated: every map
+// voxel there gets the same sums in the same order as in add_scan's build (tiled_stages.h).
+Status MapBuilder::blocked_content(ScanSequence& drive, const std::vector<ScanBox>& boxes,
+                                   const std::vector<uint64_t>& tiles, MapContent* content, MapBuildStats* st,
+                                   const Progress& progress) {
+  const int32_t B = static_cast<int32_t>(options_.block_tiles), T = store_.tile_voxels();
+  std::map<std::pair<int32_t, int32_t>, std::vector<uint64_t>> by_block;  // (bx, by): x-major
+  for (uint64_t id : tiles)
+    by_block[{int32_t(floor_div(TileStore::tile_x(id), B)), int32_t(floor_div(TileStore::tile_y(id), B))}].push_back(
+        id);
+  std::vector<MapBlock> blocks;
+  for (auto& kv : by_block) blocks.push_back(MapBlock{kv.first.first, kv.first.second, std::move(kv.second)});
+  const int32_t halo =
+      static_cast<int32_t>(std::ceil(tile_halo_m(config_, classes_, options_) / config_.voxel.voxel_size));
+  TileStoreConfig tc;
+  tc.tile_voxels = T;
+  TileStore store(tc);  // unbounded: one block and its halo
+  uint64_t reads = 0;
+  const FillBlock fill = [&](const MapBlock& b, TileStore* into) {
+    const int32_t rect[4] = {b.bx * B * T - halo, (b.bx + 1) * B * T + halo, b.by * B * T - halo,
+                             (b.by + 1) * B * T + halo};
+    for (uint32_t i = 0; i < boxes.size(); ++i) {
+      const ScanBox& x = boxes[i];
+      if (x[1] < rect[0] || x[0] >= rect[1] || x[3] < rect[2] || x[2] >= rect[3]) continue;
+      const auto t0 = std::chrono::steady_clock::now();
+      ScanView scan;
+      Eigen::Isometry3d pose, map_T_lidar;
+      VoxelLayer layer;
+      Status s = drive.read(i, &scan, &pose);
+      if (s == Status::Ok) s = voxelize(scan, pose, &layer, &map_T_lidar, nullptr);
+      if (s != Status::Ok) return s;
+      to_map(layer, map_T_lidar);
+      s = accumulate(layer, into, rect);
+      if (s != Status::Ok) return s;
+      ++reads;
+      st->seconds_accumulate += seconds_since(t0);
+    }
+    into->note_resident_voxels();
+    return Status::Ok;
+  };
+  const Status s =
+      build_map_content_blocked(blocks, tiles, B, fill, store, config_, classes_, options_, content, st, progress);
+  st->tiles = store.stats();
+  st->tiles.tiles = static_cast<uint32_t>(tiles.size());
+  st->blocks = static_cast<uint32_t>(blocks.size());
+  st->block_scan_reads = reads;
+#if defined(__GLIBC__)
+  malloc_trim(0);  // as build_content
+#endif
+  return s;
 }
 
 // Instances, fields, refinement points and semantic layer, tile by tile (tiled_stages.h). The map

@@ -2,7 +2,13 @@
 // with the same VoxelLayer the localizer uses, and their voxels accumulate into map-local voxels (class
 // probabilities averaged, weighted by point counts), kept per 64 m tile with at most
 // max_resident_tiles tiles in memory and the others spilled to a temporary file (tile_store.h), so
-// the builder's memory is set by its config, not by the length of the drive. Poses come in the map's
+// the builder's memory is set by its config, not by the length of the drive. A drive it can read again
+// (build_blocked: build-map's dataset) is built block by block instead, with no spill file: a first pass
+// over the scans (checks, detections, which tiles exist), then per block of tiles the scans that reach it
+// read again in drive order and only their voxels there accumulated, so every map voxel gets the same
+// sums in the same order and the map is the same bytes, whatever the order of the drive (a drive that
+// comes back to every street at its end, as the simulated city's rows-then-columns drive does, left
+// add_scan's spill file holding the whole map). Poses come in the map's
 // frame (e.g. UTM metres); the builder moves them to the map-local frame by subtracting the map origin
 // in double before anything becomes float (georeference.h), so maps of GNSS-posed drives keep
 // millimetres. build() then runs the localizer's own stages tile by tile with a halo (tiled_stages.h),
@@ -60,10 +66,22 @@ struct MapBuildStats {
   size_t bytes = 0;
   MapGeoreference georef = local_georeference();  // the map's origin and frame
   double seconds_accumulate = 0, seconds_cluster = 0, seconds_fields = 0, seconds_triangles = 0;
-  TileStoreStats tiles;  // the voxel accumulators' tiles: count, spills, reloads, peak resident
+  TileStoreStats tiles;           // the voxel accumulators' tiles: count, spills, reloads, peak resident
+  uint32_t blocks = 0;            // build_blocked: blocks of tiles built one at a time
+  uint64_t block_scan_reads = 0;  // ... and the scans they read again (each scan once per block it reaches)
 };
 
 using Progress = std::function<void(const char* stage, uint64_t done, uint64_t total)>;
+
+// A mapping drive the builder can read more than once (MapBuilder::build_blocked), e.g. build-map's dataset.
+class ScanSequence {
+ public:
+  virtual ~ScanSequence() = default;
+  virtual uint32_t size() const = 0;
+  // Scan i, the same points every time it is read, and its pose in the map's frame (as add_scan's);
+  // the view stays valid until the next read.
+  virtual Status read(uint32_t i, ScanView* scan, Eigen::Isometry3d* frame_T_lidar) = 0;
+};
 
 // Scan poses farther than this from the map origin (m, on any axis) are refused with InvalidInput: float32
 // steps there are 1/64 m, still far below the 0.4 m voxels, and the builder's voxel keys (2^20 voxels
@@ -117,6 +135,12 @@ struct MapBuildConfig {
   float tile_size = 64.0f;
   uint32_t max_resident_tiles = 24;  // 0: no limit (nothing is spilled)
   std::string spill_dir;
+  // build_blocked (a drive it can read again): blocks of block_tiles x block_tiles tiles, one at a time
+  // with its halo in memory, each from the scans that reach it read again; no spill file. Memory is one
+  // block's voxels, whatever the order of the drive; each scan is read once more per block it reaches
+  // (1x world: 5.3 times at 2 x 64 m, 3.5 at 3, 3.0 at 4, against an 80 m scan; docs/memory.md).
+  // Must be > 0 for build_blocked; add_scan ignores it.
+  uint32_t block_tiles = 2;
   // Triangles only among map instances that the query's own instance stages (clustering, geometric
   // poles) found in at least this many mapping scans, same label within detection_radius m (bird's-eye):
   // a query finds those, not the instances only the accumulated drive reveals (scan_detections.h).
@@ -158,11 +182,31 @@ class MapBuilder {
   Status build(MapSink& sink, size_t* bytes, MapBuildStats* stats, const Progress& progress = nullptr);
   // The same map in memory: `blob` (16-byte aligned words) through a MemoryMapSink.
   Status build(std::vector<uint64_t>* blob, size_t* bytes, MapBuildStats* stats, const Progress& progress = nullptr);
+  // The same map from a drive it reads more than once, instead of add_scan and build (a builder that
+  // added scans refuses it with InvalidArgument, as does tile_size <= 0 or block_tiles == 0): a first
+  // pass over the scans (add_scan's checks and errors, *failed_scan their index), then the map block by
+  // block (MapBuildConfig::block_tiles), never a spill file. The same bytes as add_scan and build.
+  Status build_blocked(ScanSequence& drive, MapSink& sink, size_t* bytes, MapBuildStats* stats,
+                       const Progress& progress = nullptr, uint32_t* failed_scan = nullptr);
 
  private:
-  struct TriangleVertices;  // map_builder.cpp
+  struct TriangleVertices;                 // map_builder.cpp
+  using ScanBox = std::array<int32_t, 4>;  // a scan's voxels' x0, x1, y0, y1 (voxel coordinates, inclusive)
+  // add_scan's steps (map_builder.cpp).
+  Status voxelize(const ScanView& scan, const Eigen::Isometry3d& frame_T_lidar, VoxelLayer* layer,
+                  Eigen::Isometry3d* map_T_lidar, uint64_t* dropped);
+  Status detect(const VoxelLayer& layer, const Eigen::Isometry3d& map_T_lidar);
+  void to_map(const VoxelLayer& layer, const Eigen::Isometry3d& map_T_lidar);
+  Status accumulate(const VoxelLayer& layer, TileStore* store, const int32_t* rect);
+  // build_blocked's passes.
+  Status survey(ScanSequence& drive, std::vector<ScanBox>* boxes, std::vector<uint64_t>* tiles,
+                const Progress& progress, uint32_t* failed_scan);
+  Status blocked_content(ScanSequence& drive, const std::vector<ScanBox>& boxes, const std::vector<uint64_t>& tiles,
+                         MapContent* content, MapBuildStats* st, const Progress& progress);
   // build()'s steps (map_builder.cpp).
   Status build_content(MapContent* content, MapBuildStats* st, const Progress& progress);
+  Status write_map(MapSink& sink, MapContent* content, MapBuildStats* st, size_t* bytes, MapBuildStats* stats_out,
+                   const Progress& progress) const;
   MapView map_header(const MapContent& content, const MapBuildStats& st) const;
   void choose_triangle_vertices(const MapContent& content, TriangleVertices* v) const;
   Status write_triangles(MapSink& sink, const MapContent& content, MapView* header, MapBuildStats* st,

@@ -35,40 +35,45 @@ bool place(const float* xyz, float inv, uint32_t i, Placed* p) {
   return true;
 }
 
-// The layer from the placed points (consumed: freed before the normals, 20 bytes a point, the most here).
-Status build_from_placed(std::vector<Placed>* placed_in, float cell, std::vector<MapRefineTile>* tiles,
-                         std::vector<MapRefinePoint>* points) {
-  const uint32_t n = static_cast<uint32_t>(placed_in->size());
-  {
-    std::vector<Placed> placed;
-    placed.swap(*placed_in);
-    std::sort(placed.begin(), placed.end(), [](const Placed& a, const Placed& b) {
-      if (a.key != b.key) return a.key < b.key;
-      if (a.cz != b.cz) return a.cz < b.cz;
-      if (a.local != b.local) return a.local < b.local;
-      return a.input < b.input;
-    });
-    // Tiles: z base = the lowest z cell of the tile (points are sorted by z within a tile).
-    points->resize(n);
-    for (uint32_t i = 0; i < n;) {
-      uint32_t j = i;
-      while (j < n && placed[j].key == placed[i].key) ++j;
-      const int32_t z_base = placed[i].cz;
-      if (placed[j - 1].cz - z_base >= kRefineTileZCells) return Status::InvalidInput;
-      tiles->push_back(MapRefineTile{placed[i].key, i, z_base});
-      for (uint32_t k = i; k < j; ++k) {
-        MapRefinePoint& out = (*points)[k];
-        out.cell = static_cast<uint16_t>((uint32_t(placed[k].cz - z_base) << 8) | placed[k].local);
-        for (int a = 0; a < 3; ++a) {
-          out.offset[a] = placed[k].offset[a];
-          out.normal[a] = 0;
-        }
+// Appends the placed points, sorted (tile, z cell, cell, input order), to the layer's tiles and points;
+// *placed is emptied. The tiles must come after every tile already in the layer.
+Status append_placed(std::vector<Placed>* placed, std::vector<MapRefineTile>* tiles,
+                     std::vector<MapRefinePoint>* points) {
+  std::sort(placed->begin(), placed->end(), [](const Placed& a, const Placed& b) {
+    if (a.key != b.key) return a.key < b.key;
+    if (a.cz != b.cz) return a.cz < b.cz;
+    if (a.local != b.local) return a.local < b.local;
+    return a.input < b.input;
+  });
+  const std::vector<Placed>& p = *placed;
+  const uint32_t n = static_cast<uint32_t>(p.size()), base = static_cast<uint32_t>(points->size());
+  points->resize(size_t(base) + n);
+  // Tiles: z base = the lowest z cell of the tile (points are sorted by z within a tile).
+  for (uint32_t i = 0; i < n;) {
+    uint32_t j = i;
+    while (j < n && p[j].key == p[i].key) ++j;
+    const int32_t z_base = p[i].cz;
+    if (p[j - 1].cz - z_base >= kRefineTileZCells) return Status::InvalidInput;
+    tiles->push_back(MapRefineTile{p[i].key, base + i, z_base});
+    for (uint32_t k = i; k < j; ++k) {
+      MapRefinePoint& out = (*points)[base + k];
+      out.cell = static_cast<uint16_t>((uint32_t(p[k].cz - z_base) << 8) | p[k].local);
+      for (int a = 0; a < 3; ++a) {
+        out.offset[a] = p[k].offset[a];
+        out.normal[a] = 0;
       }
-      i = j;
     }
+    i = j;
   }
-  // Normals: PCA of the quantised points in the 27 cells around each point's cell (smallest
-  // eigenvector) when the neighbourhood is planar enough; otherwise none (zero).
+  std::vector<Placed>().swap(*placed);
+  return Status::Ok;
+}
+
+// Normals: PCA of the quantised points in the 27 cells around each point's cell (smallest eigenvector)
+// when the neighbourhood is planar enough; otherwise none (zero).
+void add_normals(float cell, const std::vector<MapRefineTile>& tiles_in, std::vector<MapRefinePoint>* points) {
+  const std::vector<MapRefineTile>* tiles = &tiles_in;
+  const uint32_t n = static_cast<uint32_t>(points->size());
   RefineLayerView view;
   view.cell = cell;
   view.tile_count = static_cast<uint32_t>(tiles->size());
@@ -114,6 +119,31 @@ Status build_from_placed(std::vector<Placed>* placed_in, float cell, std::vector
       for (int k = 0; k < 3; ++k) (*points)[i].normal[k] = quantize_normal_component(float(nrm[k]));
     }
   }
+}
+
+// The layer from the placed points (consumed: freed before the normals, 20 bytes a point).
+Status build_from_placed(std::vector<Placed>* placed, float cell, std::vector<MapRefineTile>* tiles,
+                         std::vector<MapRefinePoint>* points) {
+  const Status s = append_placed(placed, tiles, points);
+  if (s == Status::Ok) add_normals(cell, *tiles, points);
+  return s;
+}
+
+// Whether the chunks' points are all placeable and their refinement tile columns never decrease in input
+// order (the builder's points come in cell-key order, x-major: so they do when the grid's cell is the
+// builder's refine_voxel); *n: their count.
+Status scan_chunks(const std::vector<std::vector<float>>& chunks, float inv, size_t* n, bool* monotone) {
+  *n = 0;
+  *monotone = true;
+  uint32_t column = 0;
+  Placed p;
+  for (const std::vector<float>& c : chunks)
+    for (size_t j = 0; j + 3 <= c.size(); j += 3, ++*n) {
+      if (!place(c.data() + j, inv, 0, &p)) return Status::InvalidInput;
+      const uint32_t tx = p.key >> 16;
+      if (*n > 0 && tx < column) *monotone = false;
+      column = tx;
+    }
   return Status::Ok;
 }
 
@@ -138,17 +168,33 @@ Status build_refine_layer(std::vector<std::vector<float>>* chunks, float cell, s
   if (!(cell > 0.0f) || !std::isfinite(cell)) return Status::InvalidArgument;
   const float inv = 1.0f / cell;
   size_t n = 0;
-  for (const std::vector<float>& c : *chunks) n += c.size() / 3;
+  bool monotone = true;
+  Status s = scan_chunks(*chunks, inv, &n, &monotone);
+  if (s != Status::Ok) return s;
   if (n > UINT32_MAX) return Status::InvalidInput;
-  std::vector<Placed> placed(n);
+  // Tile column by tile column when the columns come in order (a column's tiles sort alone and follow
+  // the previous column's): only one column is placed at a time, 20 bytes a point, while the chunks
+  // are freed as they are read and the layer grows. Else every point placed at once.
+  std::vector<Placed> placed;
+  if (!monotone) placed.reserve(n);
+  points->reserve(n);
   uint32_t i = 0;
   for (std::vector<float>& c : *chunks) {
-    for (size_t j = 0; j + 3 <= c.size(); j += 3, ++i)
-      if (!place(c.data() + j, inv, i, &placed[i])) return Status::InvalidInput;
+    for (size_t j = 0; j + 3 <= c.size(); j += 3, ++i) {
+      Placed p;
+      place(c.data() + j, inv, i, &p);
+      if (monotone && !placed.empty() && (p.key >> 16) != (placed.back().key >> 16)) {
+        s = append_placed(&placed, tiles, points);
+        if (s != Status::Ok) return s;
+      }
+      placed.push_back(p);
+    }
     std::vector<float>().swap(c);
   }
   chunks->clear();
-  return build_from_placed(&placed, cell, tiles, points);
+  s = append_placed(&placed, tiles, points);
+  if (s == Status::Ok) add_normals(cell, *tiles, points);
+  return s;
 }
 
 }  // namespace gsf::mapping

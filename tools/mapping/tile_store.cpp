@@ -133,6 +133,14 @@ void TileStore::note_resident_voxels() {
   uint64_t voxels = 0;
   for (const Tile* t : resident_list_) voxels += t->voxels.size();
   stats_.peak_resident_voxels = std::max(stats_.peak_resident_voxels, voxels);
+  stats_.peak_resident_bytes = stats_.peak_resident_voxels * kRecordBytes;
+}
+
+void TileStore::clear() {
+  tiles_.clear();
+  resident_list_.clear();
+  last_tile_ = nullptr;
+  last_id_ = UINT64_MAX;
 }
 
 Status TileStore::spill_resident() {

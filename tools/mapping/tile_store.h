@@ -64,6 +64,9 @@ struct TileStoreStats {
   uint64_t spill_bytes = 0;    // size of the spill file now (its slots and free space)
   uint32_t peak_resident = 0;  // most tiles in memory at once
   uint64_t peak_resident_voxels = 0;
+  // The largest resident working set in the spill file's bytes (192 B a voxel: key and raw sums), the
+  // unit of spill_peak_bytes; the hash maps that hold it in memory take more.
+  uint64_t peak_resident_bytes = 0;
   uint64_t spill_peak_bytes = 0;       // the file's largest size (<= max_spill_ratio x the next)
   uint64_t spill_live_peak_bytes = 0;  // the largest total of live slots (tiles' copies with headroom)
   uint64_t compactions = 0;            // times the file was compacted
@@ -103,6 +106,9 @@ class TileStore {
   Status spill_resident();
   // Records the voxels now in memory for stats().peak_resident_voxels (the builder calls it per scan).
   void note_resident_voxels();
+  // Forgets every tile (an unbounded store only: the blocked build empties it between blocks); the stats
+  // stay.
+  void clear();
   const TileStoreStats& stats() const { return stats_; }
 
  private:

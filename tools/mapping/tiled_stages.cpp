@@ -221,12 +221,17 @@ uint32_t keep_best(std::vector<Candidate>* v, uint32_t cap, Better better) {
 // and orders and fills the content.
 class TiledStages {
  public:
+  // `exists`: every tile of the map, sorted (the blocked build's store holds one block); nullptr: the store's.
   TiledStages(TileStore& store, const LocalizerConfig& config, const ClassTable& classes, const MapBuildConfig& options,
-              MapContent* out);
+              MapContent* out, const std::vector<uint64_t>* exists = nullptr);
   // Binds the field solver; false when the field config does not fit.
   bool bind() { return fitter_.bind(); }
   // Runs the stages on tile tiles[t] (tiles in id order, x-major) and keeps what it owns.
   Status add_tile(const std::vector<uint64_t>& tiles, size_t t, const Progress& progress);
+  // Runs the stages on tile `id` (its voxels and its halo's in the store) and keeps what it owns.
+  Status run_tile(uint64_t id);
+  // Every tile left of tile column tx_end is done: the refinement cells left of it are final.
+  void flush_left_of(int32_t tx_end);
   // After the last tile: the whole-map capacities and orders, into the content and *st.
   Status finish(MapBuildStats* st, const Progress& progress);
 
@@ -240,6 +245,9 @@ class TiledStages {
   Status collect_semantic(uint64_t id, const VoxelLayer& layer);
   bool owns_semantic_tile(uint64_t id, int64_t fx, int64_t fy, std::unordered_map<uint64_t, bool>* owned) const;
   void flush_finished_column(const std::vector<uint64_t>& tiles, size_t t);
+  bool has_tile(uint64_t id) const {
+    return exists_ ? std::binary_search(exists_->begin(), exists_->end(), id) : store_.has_tile(id);
+  }
   void flush_refine(uint64_t limit);
   std::vector<Candidate> apply_capacities(MapBuildStats* st);
   void write_instances(const std::vector<Candidate>& found, MapBuildStats* st);
@@ -271,11 +279,12 @@ class TiledStages {
   std::vector<std::pair<uint32_t, std::pair<uint32_t, uint32_t>>> semantic_;
   std::vector<SemanticChunk> semantic_chunks_;
   uint64_t map_voxels_ = 0;
+  const std::vector<uint64_t>* exists_ = nullptr;
   double seconds_cluster_ = 0, seconds_fields_ = 0;
 };
 
 TiledStages::TiledStages(TileStore& store, const LocalizerConfig& config, const ClassTable& classes,
-                         const MapBuildConfig& options, MapContent* out)
+                         const MapBuildConfig& options, MapContent* out, const std::vector<uint64_t>* exists)
     : store_(store),
       config_(config),
       classes_(classes),
@@ -286,7 +295,8 @@ TiledStages::TiledStages(TileStore& store, const LocalizerConfig& config, const 
       cc0_(config.cluster),
       pc0_(effective_pole_config(config)),
       G_(grid_points(config.field)),
-      fitter_(config.field, options.max_field_points) {
+      fitter_(config.field, options.max_field_points),
+      exists_(exists) {
   if (tile_ != 0) {
     halo_ = static_cast<int32_t>(std::ceil(tile_halo_m(config, classes, options) / vs_));
     ring_ = (halo_ + tile_ - 1) / tile_;
@@ -298,7 +308,14 @@ TiledStages::TiledStages(TileStore& store, const LocalizerConfig& config, const 
 }
 
 Status TiledStages::add_tile(const std::vector<uint64_t>& tiles, size_t t, const Progress& progress) {
-  const uint64_t id = tiles[t];
+  const Status s = run_tile(tiles[t]);
+  if (s != Status::Ok) return s;
+  flush_finished_column(tiles, t);
+  if (progress) progress("tiles", t + 1, tiles.size());
+  return Status::Ok;
+}
+
+Status TiledStages::run_tile(uint64_t id) {
   const auto t_cluster = std::chrono::steady_clock::now();
   TileScan scan;
   Status s = load_tile(id, &scan);
@@ -320,8 +337,6 @@ Status TiledStages::add_tile(const std::vector<uint64_t>& tiles, size_t t, const
   collect_refine(id, tl);
   s = collect_semantic(id, tl.layer);
   if (s != Status::Ok) return s;
-  flush_finished_column(tiles, t);
-  if (progress) progress("tiles", t + 1, tiles.size());
 #if defined(__GLIBC__)
   // The tile's temporaries (tens of MB) were freed between the map's growing arrays: hand their pages
   // back, or the heap's high-water mark grows with the map by the fragments.
@@ -500,7 +515,7 @@ bool TiledStages::owns_semantic_tile(uint64_t id, int64_t fx, int64_t fy,
   uint64_t first = UINT64_MAX;
   for (int32_t x = ax; x <= bx && first == UINT64_MAX; ++x)
     for (int32_t y = ay; y <= by; ++y)
-      if (store_.has_tile(TileStore::tile_id(x, y))) {
+      if (has_tile(TileStore::tile_id(x, y))) {
         first = TileStore::tile_id(x, y);
         break;
       }
@@ -511,8 +526,12 @@ bool TiledStages::owns_semantic_tile(uint64_t id, int64_t fx, int64_t fy,
 // edge (less a voxel for rounding), so the refinement cells left of it are final.
 void TiledStages::flush_finished_column(const std::vector<uint64_t>& tiles, size_t t) {
   const int32_t tx = TileStore::tile_x(tiles[t]);
-  if (tile_ > 0 && options_.refine_voxel > 0.0f && t + 1 < tiles.size() && TileStore::tile_x(tiles[t + 1]) != tx) {
-    const double edge = (double(tx + 1) * tile_ - 1.0) * vs_;  // m, a voxel inside the column's right edge
+  if (t + 1 < tiles.size() && TileStore::tile_x(tiles[t + 1]) != tx) flush_left_of(tx + 1);
+}
+
+void TiledStages::flush_left_of(int32_t tx_end) {
+  if (tile_ > 0 && options_.refine_voxel > 0.0f) {
+    const double edge = (double(tx_end) * tile_ - 1.0) * vs_;  // m, a voxel inside the columns' right edge
     const int64_t cell_x = static_cast<int64_t>(std::floor(edge / options_.refine_voxel)) + (1 << 20);
     if (cell_x > 0 && cell_x < (1 << 21)) flush_refine(uint64_t(cell_x) << 42);
   }
@@ -649,6 +668,31 @@ Status build_map_content(TileStore& store, const LocalizerConfig& config, const 
   for (size_t t = 0; t < tiles.size(); ++t) {
     const Status s = stages.add_tile(tiles, t, progress);
     if (s != Status::Ok) return s;
+  }
+  return stages.finish(st, progress);
+}
+
+// Per block (x-major) the store filled with the block and its halo, the stages over the block's tiles
+// (id order); the refinement cells left of a block column once it is done, then the whole-map
+// capacities and orders.
+Status build_map_content_blocked(const std::vector<MapBlock>& blocks, const std::vector<uint64_t>& tiles,
+                                 int32_t block_tiles, const FillBlock& fill, TileStore& store,
+                                 const LocalizerConfig& config, const ClassTable& classes,
+                                 const MapBuildConfig& options, MapContent* out, MapBuildStats* st,
+                                 const Progress& progress) {
+  *out = MapContent();
+  TiledStages stages(store, config, classes, options, out, &tiles);
+  if (!stages.bind()) return Status::InvalidArgument;
+  size_t done = 0;
+  for (size_t b = 0; b < blocks.size(); ++b) {
+    Status s = fill(blocks[b], &store);
+    for (size_t t = 0; s == Status::Ok && t < blocks[b].tiles.size(); ++t) s = stages.run_tile(blocks[b].tiles[t]);
+    if (s != Status::Ok) return s;
+    store.clear();
+    if (b + 1 < blocks.size() && blocks[b + 1].bx != blocks[b].bx)
+      stages.flush_left_of((blocks[b].bx + 1) * block_tiles);
+    done += blocks[b].tiles.size();
+    if (progress) progress("tiles", done, tiles.size());
   }
   return stages.finish(st, progress);
 }

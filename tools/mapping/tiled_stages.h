@@ -7,7 +7,8 @@
 //    whole-map stages discover it from), so an instance spanning a tile border is built once, from the
 //    same voxels in the same order as in a whole-map build;
 //  - a refinement cell takes its first voxel in key order, chosen among the tiles' owned voxels (cells
-//    are final, and emitted, once the column of tiles left of them is done: tiles come x-major);
+//    are final, and emitted, once the column of tiles left of them is done: tiles come x-major; in a
+//    blocked build once the column of blocks is);
 //  - a semantic-layer tile belongs to the first existing map tile (in id order) it overlaps.
 // The halo (tile_halo_m) covers what those read around an owned voxel: an instance's extent plus the
 // larger of its clustering tolerance and the field radius, a semantic tile, and a pole chain's reach.
@@ -18,6 +19,7 @@
 // stages' own rules (largest by points; poles best by score), so capped maps match too.
 #pragma once
 #include <cstdint>
+#include <functional>
 #include <vector>
 
 #include "gsf/class_table.h"
@@ -54,5 +56,22 @@ double tile_halo_m(const LocalizerConfig& config, const ClassTable& classes, con
 Status build_map_content(TileStore& store, const LocalizerConfig& config, const ClassTable& classes,
                          const MapBuildConfig& options, MapContent* out, MapBuildStats* stats,
                          const Progress& progress);
+
+// The blocked build (MapBuilder::build_blocked): the map's tiles in square blocks of block_tiles x
+// block_tiles tiles, one block in memory at a time. fill() puts into the (unbounded, emptied) store
+// every voxel of the block and of its halo (tile_halo_m around it), final: the stages then run on the
+// block's tiles as on the whole store, and the store is emptied for the next block. `tiles`: every tile
+// of the map (sorted), for the semantic layer's ownership. The content is build_map_content's.
+struct MapBlock {
+  int32_t bx = 0, by = 0;       // block coordinates (tile x / block_tiles, floored)
+  std::vector<uint64_t> tiles;  // the map tiles in it, sorted
+};
+using FillBlock = std::function<Status(const MapBlock& block, TileStore* store)>;
+// `blocks` sorted x-major (bx, then by).
+Status build_map_content_blocked(const std::vector<MapBlock>& blocks, const std::vector<uint64_t>& tiles,
+                                 int32_t block_tiles, const FillBlock& fill, TileStore& store,
+                                 const LocalizerConfig& config, const ClassTable& classes,
+                                 const MapBuildConfig& options, MapContent* out, MapBuildStats* st,
+                                 const Progress& progress);
 
 }  // namespace gsf::mapping
