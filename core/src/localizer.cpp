@@ -570,7 +570,8 @@ void Localizer::check_outside_prior(LocalizeResult& out) {
     out.prior_contradicted = true;
     const HypothesisConfig& hc = config_.hypotheses;
     if (im.prior.contains(best.pose, hc.same_pose_m, hc.same_pose_deg)) {  // the restricted search missed it
-      out.map_T_scan = best.pose;
+      out.map_T_scan = best.pose;                                          // verification's pose (not ICP-refined)
+      out.refined = false;
       out.inliers = best.inliers;
       im.settle_height(config_, im.graph_pairs, out);
       out.map_frame_T_scan = to_map_frame(map_.georef, out.map_T_scan);
