@@ -111,7 +111,7 @@ AnswerChoice AnswerSelector::choose(PoseHypotheses& hyps, const VoxelLayer& voxe
   const bool compact = prepare_scoring(voxels, weights, vc, verify);
   if (verify) {
     const PoseScorer scorer{compact ? points_ : nullptr, voxels, semantic, vc, verify_weights_};
-    refined_count = verify_hypotheses(hyps, scorer, vc, full_scored);
+    refined_count = verify_hypotheses(hyps, scorer, vc, hc, full_scored);
     best = pick_answer_and_rivals(hyps, full_scored, hc, refined_count);
   }
   AnswerChoice choice;
@@ -142,7 +142,7 @@ bool AnswerSelector::prepare_scoring(const VoxelLayer& voxels, const float* weig
 // then the best `refine_top` at their best local alignment. Each step ranks, then caps. Returns how
 // many were refined (their ids and poses in refined_id_, refined_pose_).
 uint32_t AnswerSelector::verify_hypotheses(PoseHypotheses& hyps, const PoseScorer& scorer, const VerifyConfig& vc,
-                                           uint8_t* full_scored) {
+                                           const HypothesisConfig& hc, uint8_t* full_scored) {
   const uint32_t H = hyps.size();
   uint32_t top[PoseHypotheses::kMaxHypotheses];
   const uint32_t coarse_points = std::max<uint32_t>(1, vc.max_points / vc.coarse_divisor);
@@ -154,12 +154,34 @@ uint32_t AnswerSelector::verify_hypotheses(PoseHypotheses& hyps, const PoseScore
     full_scored[top[k]] = 1;
   }
   nt = vc.refine_rounds > 0 ? top_by_score(hyps, H, full_scored, std::min(vc.refine_top, refine_top_), top) : 0;
+  if (refine_distinct_) nt = distinct_of(hyps, hc, top, nt);
   for (uint32_t k = 0; k < nt; ++k) {
     refined_id_[k] = top[k];
     const PoseVerification full = hyps[top[k]].verification;  // verify_pose at max_points, just above
     hyps[top[k]].verification = scorer.search(hyps[top[k]].map_T_scan, &refined_pose_[k], &full);
   }
   return nt;
+}
+
+// Keeps in top[0, n) (best first) only the hypotheses not within the same-pose tolerance of a better
+// kept one; returns how many.
+uint32_t AnswerSelector::distinct_of(const PoseHypotheses& hyps, const HypothesisConfig& hc, uint32_t* top,
+                                     uint32_t n) const {
+  const double same_rad = double(hc.same_pose_deg) / kRadToDeg;
+  uint32_t kept = 0;
+  for (uint32_t k = 0; k < n; ++k) {
+    const Eigen::Isometry3d& b = hyps[top[k]].map_T_scan;
+    bool twin = false;
+    for (uint32_t j = 0; j < kept && !twin; ++j) {
+      const Eigen::Isometry3d& a = hyps[top[j]].map_T_scan;
+      const double dx = b.translation().x() - a.translation().x(), dy = b.translation().y() - a.translation().y();
+      double dyaw = std::fabs(yaw_of(b) - yaw_of(a));
+      if (dyaw > kPi) dyaw = 2.0 * kPi - dyaw;
+      twin = std::sqrt(dx * dx + dy * dy) <= hc.same_pose_m && dyaw <= same_rad;
+    }
+    if (!twin) top[kept++] = top[k];
+  }
+  return kept;
 }
 
 // The answer, and as runner-up the best fully scored hypotheses at another place or heading (into

@@ -29,6 +29,24 @@
 
 namespace gsf {
 
+namespace {
+
+// The best global pose away from a prior's answer (Localizer::check_outside_prior).
+struct Elsewhere {
+  Eigen::Isometry3d pose = Eigen::Isometry3d::Identity();  // as verification scored it
+  float score = 0.0f;                                      // its verification score
+  uint32_t inliers = 0;
+};
+
+// Two poses are the same answer within the success criterion (5 m, 10 deg).
+bool same_answer(const Eigen::Isometry3d& a, const Eigen::Isometry3d& b) {
+  const Eigen::Isometry3d d = a.inverse() * b;
+  constexpr double kSameM = 5.0, kSameRad = 10.0 * 3.14159265358979323846 / 180.0;
+  return d.translation().norm() < kSameM && Eigen::AngleAxisd(d.rotation()).angle() < kSameRad;
+}
+
+}  // namespace
+
 struct Localizer::Impl {
   ClassTable classes;  // the label set in effect (a copy: the caller's table need not outlive init)
   VoxelLayer voxels;
@@ -85,6 +103,11 @@ struct Localizer::Impl {
   void settle_height(const LocalizerConfig& cfg, uint32_t C, LocalizeResult& out);
   void measure_confidence(const LocalizerConfig& cfg, LocalizeResult& out);
   void refine_answer(LocalizeResult& out);
+  // The global check of a prior's answer (Localizer::check_outside_prior).
+  bool search_elsewhere(const LocalizerConfig& cfg, const MapView& map, Clock* clock,
+                        const Eigen::Isometry3d& prior_answer, Elsewhere* best);
+  ConfidenceEvidence elsewhere_evidence(const LocalizerConfig& cfg, const Eigen::Isometry3d& prior_answer,
+                                        const Elsewhere& best);
 };
 
 // The one layout of the workspace: run on a counting arena by required_bytes and budget, and on the
@@ -475,6 +498,49 @@ void Localizer::Impl::refine_answer(LocalizeResult& out) {
   }
 }
 
+// 11. With a prior, the check of a thin-margin answer: the whole map's search from this scan's
+// triangles (matching, the GSF filter, correspondences, hypotheses), then verification of only the
+// hypotheses away from the prior's answer. Returns whether one is left (into best, at its scored pose).
+bool Localizer::Impl::search_elsewhere(const LocalizerConfig& cfg, const MapView& map, Clock* clock,
+                                       const Eigen::Isometry3d& prior_answer, Elsewhere* best) {
+  LocalizeResult g;  // the search's counters (not reported)
+  correspondences.forget_selection();
+  vote_pairs = graph_pairs = 0;
+  matcher.set_region(nullptr, map.instances, centroids);
+  limit_matches(cfg);
+  vote_headings(cfg, map, g);
+  match_and_filter(cfg, map, clock, g);
+  const uint32_t C = select_correspondences(cfg, map, g);
+  if (C < cfg.hypotheses.min_inliers || generate_hypotheses(cfg, C, g) != Status::Ok) return false;
+  uint8_t keep[PoseHypotheses::kMaxHypotheses];
+  for (uint32_t h = 0; h < hypotheses.size(); ++h) keep[h] = !same_answer(prior_answer, hypotheses[h].map_T_scan);
+  hypotheses.retain(keep);
+  if (hypotheses.size() == 0) return false;
+  g.query_instances = instance_count;
+  answer.set_refine_distinct(true);
+  LocalizerConfig check = cfg;  // the check refines fewer: it asks only whether one beats the answer
+  check.verify.refine_top = std::min(cfg.verify.refine_top, cfg.confidence.prior_check_refine);
+  choose_answer(check, g);
+  best->pose = answer.answer_pose();
+  best->score = hypotheses[answer.chosen()].verification.score;
+  best->inliers = g.inliers;
+  return g.verified && !same_answer(prior_answer, best->pose);
+}
+
+// The confidence of the best pose elsewhere, against the prior's answer and its own rivals.
+ConfidenceEvidence Localizer::Impl::elsewhere_evidence(const LocalizerConfig& cfg,
+                                                       const Eigen::Isometry3d& prior_answer, const Elsewhere& best) {
+  if (answer.compact_points() == nullptr || answer.compact_point_count() == 0) return ConfidenceEvidence();
+  Eigen::Isometry3d rivals[AnswerSelector::kMaxRivals];
+  uint32_t n = 0;
+  rivals[n++] = prior_answer;
+  for (uint32_t k = 0; k < answer.rival_count() && n < AnswerSelector::kMaxRivals; ++k)
+    rivals[n++] = answer.rival_poses()[k];
+  const AnswerConfidence::Answer a{best.pose, rivals, n, best.inliers, instance_count};
+  return confidence.measure(answer.compact_points(), answer.compact_point_count(), semantic, answer.verify_weights(),
+                            cfg.verify.disagree_weight, a, cfg.verify.max_points);
+}
+
 Status Localizer::localize(const ScanView& scan, LocalizeResult* out) { return localize_in(scan, nullptr, out); }
 
 Status Localizer::localize(const ScanView& scan, const PositionPrior& prior, LocalizeResult* out_ptr) {
@@ -485,8 +551,10 @@ Status Localizer::localize(const ScanView& scan, const PositionPrior& prior, Loc
     return out.status = Status::InvalidArgument;
   }
   const Status s = localize_in(scan, &prior, &out);
-  if (s == Status::Ok && out.confident && out.confidence_evidence.z_rival < kPriorGlobalCheckZ)
-    check_outside_prior(scan, out);
+  const ConfidenceEvidence& e = out.confidence_evidence;
+  if (s == Status::Ok && out.confident && e.z_rival < kPriorGlobalCheckZ &&
+      e.agreement < config_.confidence.prior_check_agreement)
+    check_outside_prior(out);
   return s;
 }
 
@@ -495,22 +563,40 @@ Status Localizer::localize(const ScanView& scan, const PositionPrior& prior, Loc
 // then stand out against everything the search saw (suite seed 10, a hall: 2 confident wrong answers of
 // 104 with the prior 100 m off, and 1 with a right prior whose restricted search missed the true clique).
 // Where the answer's margin over its rivals is thin (z_rival below kPriorGlobalCheckZ; such wrong answers
-// had z_rival <= 3.0, the right ones' median is 4.8), a global search checks it: an answer the global
-// search does not give too keeps at most 1 - the global answer's confidence. The global search starts
-// from this scan's triangles (the stages before matching are not repeated). The result keeps the
-// prior's answer; its time includes the check.
-void Localizer::check_outside_prior(const ScanView& scan, LocalizeResult& out) {
-  LocalizeResult global;
-  localize_in(scan, nullptr, &global, true);  // the scan's voxels, instances, fields and triangles as they are
+// had z_rival <= 3.0, the right ones' median is 4.8), a global search checks it. It asks only what the
+// check needs: is there a pose elsewhere (beyond 5 m / 10 deg of the answer) that verification scores
+// higher? It starts from this scan's triangles (voxels, instances, fields and triangles are not
+// rebuilt), verifies only the global hypotheses elsewhere (as verification picks an answer: coarse,
+// full, pattern search), and only when the best of them beats the answer's score is its confidence
+// measured (against the prior's answer and its own rivals): the answer then keeps at most 1 - that. When
+// that pose lies in the prior's disc (the restricted search missed its clique), it replaces the answer,
+// with its own confidence. The result's time includes the check.
+void Localizer::check_outside_prior(LocalizeResult& out) {
+  Impl& im = *impl_;
+  const uint64_t t0 = now(clock_);
   out.prior_global_check = true;
-  out.times.total += global.times.total;
-  if (global.status != Status::Ok) return;  // nothing outside the prior explains the scan
-  const Eigen::Isometry3d d = out.map_T_scan.inverse() * global.map_T_scan;
-  constexpr double kSameM = 5.0, kSameRad = 10.0 * 3.14159265358979323846 / 180.0;  // the success criterion
-  if (d.translation().norm() < kSameM && Eigen::AngleAxisd(d.rotation()).angle() < kSameRad) return;
-  out.prior_contradicted = true;
-  out.confidence = std::min(out.confidence, 1.0 - global.confidence);
-  out.confident = out.confidence >= config_.confidence.min_probability;
+  const Eigen::Isometry3d answer = im.answer.answer_pose();  // as verification scored it
+  const float answer_score = im.hypotheses[im.answer.chosen()].verification.score;
+  Elsewhere best;
+  if (im.search_elsewhere(config_, map_, clock_, answer, &best) && best.score > answer_score) {
+    const ConfidenceEvidence e = im.elsewhere_evidence(config_, answer, best);
+    const double c = e.samples > 0 ? confidence_probability(e) : 0.0;
+    out.prior_contradicted = true;
+    const HypothesisConfig& hc = config_.hypotheses;
+    if (im.prior.contains(best.pose, hc.same_pose_m, hc.same_pose_deg)) {  // the restricted search missed it
+      out.map_T_scan = best.pose;                                          // verification's pose (not ICP-refined)
+      out.refined = false;
+      out.inliers = best.inliers;
+      im.settle_height(config_, im.graph_pairs, out);
+      out.map_frame_T_scan = to_map_frame(map_.georef, out.map_T_scan);
+      out.confidence_evidence = e;
+      out.confidence = c;
+    } else {
+      out.confidence = std::min(out.confidence, 1.0 - c);
+    }
+    out.confident = out.confidence >= config_.confidence.min_probability;
+  }
+  out.times.total += now(clock_) - t0;
 }
 
 Status Localizer::localize_in(const ScanView& scan, const PositionPrior* prior, LocalizeResult* out_ptr,
@@ -573,6 +659,7 @@ Status Localizer::localize_in(const ScanView& scan, const PositionPrior* prior, 
   lap(&out.times.clique);  // with the correspondence selection
   if (s != Status::Ok) return finish(Status::NoSolution);
   if (prior) im.drop_outside_prior(cfg, out);
+  im.answer.set_refine_distinct(prior != nullptr);  // a prior's hypotheses crowd at few places
   if (im.hypotheses.size() == 0) return finish(Status::NoSolution);
   im.choose_answer(cfg, out);
   im.settle_height(cfg, C, out);

@@ -137,8 +137,10 @@ class Localizer {
   // The same with a position prior (position_prior.h): only map triangles near the prior are matched and
   // only hypotheses inside it are answers. InvalidArgument for an invalid prior (validate()); NoSolution
   // when no hypothesis lies inside it. A wrong prior gives a wrong answer at low confidence or none: a
-  // confident answer with a thin margin over its rivals is checked by a global search (then the call costs
-  // a one-shot localize more; prior_global_check), and loses its confidence when that answers elsewhere.
+  // confident answer with a thin margin over its rivals and an agreement share below
+  // confidence.prior_check_agreement is checked by a global search from the scan's own triangles
+  // (prior_global_check): a pose elsewhere that verification scores higher takes the answer's confidence
+  // down to at most 1 - its own, or replaces the answer when it lies in the prior's disc (prior_contradicted).
   Status localize(const ScanView& scan, const PositionPrior& prior, LocalizeResult* out);
 
   // Tracking (detail/tracker.h): the pose of `scan` near `predicted_map_frame_T_scan` (the map's frame,
@@ -193,12 +195,12 @@ class Localizer {
   static Status bind_workspace(Arena& arena, const LocalizerConfig& config, Impl& impl, Budget* parts);
   // scan_ready: the last call built this scan's voxels, instances, fields and triangles; start at matching.
   Status localize_in(const ScanView& scan, const PositionPrior* prior, LocalizeResult* out, bool scan_ready = false);
-  void check_outside_prior(const ScanView& scan, LocalizeResult& out);
+  void check_outside_prior(LocalizeResult& out);
   void apply_window(const WindowOutcome& window, LocalizeResult& out) const;
   void check_with_window(const WindowOutcome& window, LocalizeResult& out) const;
   // A sequence scan's confident answer whose z_rival is below this is checked by the window (localizer.cpp).
   static constexpr float kWindowCheckZ = 4.0f;
-  // A prior's confident answer whose z_rival is below this is checked by a global search (localize.cpp).
+  // A prior's confident answer whose z_rival is below this is checked by a global search (localizer.cpp).
   static constexpr float kPriorGlobalCheckZ = 4.0f;
   LocalizerConfig config_{};
   MapView map_{};

@@ -256,6 +256,11 @@ struct RefineConfig {
 struct ConfidenceConfig {
   // The default decision rule: LocalizeResult::confident = confidence >= min_probability.
   float min_probability = 0.9f;
+  // With a position prior, a confident answer with a thin margin (z_rival < 4) is checked by a global
+  // search only when its agreement share is below this (1: every thin margin; docs/vehicle-modes.md).
+  float prior_check_agreement = 0.9f;
+  // That check pattern-refines at most this many of the global hypotheses away from the answer.
+  uint32_t prior_check_refine = 2;
 };
 
 // Tracking after a fix: Localizer::track (detail/tracker.h, docs/vehicle-modes.md).

@@ -51,6 +51,9 @@ class AnswerSelector {
                       const VerifyConfig& verify_config);
   uint32_t chosen() const { return chosen_; }
   void forget() { chosen_ = UINT32_MAX; }
+  // On: the pattern search skips a hypothesis within the same-pose tolerance of one it refined already
+  // (the same peak; a position prior's hypotheses crowd at its answer). Off by default (one-shot).
+  void set_refine_distinct(bool on) { refine_distinct_ = on; }
   // The verification weights of the last choose() (the stability weights given here before any).
   const float* verify_weights() const { return verify_weights_; }
   void set_verify_weights(const float* weights);
@@ -75,7 +78,8 @@ class AnswerSelector {
   // The verification's steps, in order (each ranks, then caps).
   bool prepare_scoring(const VoxelLayer& voxels, const float* weights, const VerifyConfig& vc, bool verify);
   uint32_t verify_hypotheses(PoseHypotheses& hyps, const PoseScorer& scorer, const VerifyConfig& vc,
-                             uint8_t* full_scored);
+                             const HypothesisConfig& hc, uint8_t* full_scored);
+  uint32_t distinct_of(const PoseHypotheses& hyps, const HypothesisConfig& hc, uint32_t* top, uint32_t n) const;
   uint32_t pick_answer_and_rivals(const PoseHypotheses& hyps, const uint8_t* full_scored, const HypothesisConfig& hc,
                                   uint32_t refined_count);
   static void rank_for_report(const PoseHypotheses& hyps, bool verify, const uint8_t* full_scored,
@@ -93,6 +97,7 @@ class AnswerSelector {
   Eigen::Isometry3d rival_pose_[kMaxRivals];
   uint32_t rival_count_ = 0;
   uint32_t compact_points_ = 0;
+  bool refine_distinct_ = false;
 };
 
 }  // namespace gsf
