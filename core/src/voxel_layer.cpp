@@ -205,7 +205,17 @@ int VoxelLayer::point_class(const float* p, uint32_t label, float min_r2, float 
 // x86-64 Linux: accumulate_points also as an AVX2 clone, picked at load time (ifunc). The softmax's exp
 // then runs 8 lanes a vector instead of 4; the clone does the same +, -, *, / on every lane in the same
 // order (no FMA: -ffp-contract=off, and AVX2 does not include it), so the layer is bitwise the same.
-#if defined(__x86_64__) && defined(__linux__) && defined(__GNUC__) && !defined(GSF_NO_TARGET_CLONES)
+// Not under a sanitizer: the clone's ifunc resolver runs while the dynamic loader relocates, before the
+// sanitizer's runtime is up, and its instrumented code crashes there (ThreadSanitizer: SIGSEGV at start).
+#if defined(__SANITIZE_THREAD__) || defined(__SANITIZE_ADDRESS__)
+#define GSF_SANITIZED_BUILD 1
+#elif defined(__has_feature)
+#if __has_feature(thread_sanitizer) || __has_feature(address_sanitizer) || __has_feature(memory_sanitizer)
+#define GSF_SANITIZED_BUILD 1
+#endif
+#endif
+#if defined(__x86_64__) && defined(__linux__) && defined(__GNUC__) && !defined(GSF_NO_TARGET_CLONES) && \
+    !defined(GSF_SANITIZED_BUILD)
 #define GSF_AVX2_CLONE __attribute__((target_clones("avx2", "default")))
 #else
 #define GSF_AVX2_CLONE
