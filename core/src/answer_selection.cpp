@@ -1,4 +1,5 @@
 #include "gsf/detail/answer_selection.h"
+#include "gsf/detail/pose_distance.h"
 
 #include <algorithm>
 #include <cmath>
@@ -25,8 +26,6 @@ uint32_t top_by_score(const PoseHypotheses& hyps, uint32_t H, const uint8_t* eli
   }
   return n;
 }
-
-double yaw_of(const Eigen::Isometry3d& T) { return std::atan2(T.linear()(1, 0), T.linear()(0, 0)); }
 
 }  // namespace
 
@@ -173,11 +172,7 @@ uint32_t AnswerSelector::distinct_of(const PoseHypotheses& hyps, const Hypothesi
     const Eigen::Isometry3d& b = hyps[top[k]].map_T_scan;
     bool twin = false;
     for (uint32_t j = 0; j < kept && !twin; ++j) {
-      const Eigen::Isometry3d& a = hyps[top[j]].map_T_scan;
-      const double dx = b.translation().x() - a.translation().x(), dy = b.translation().y() - a.translation().y();
-      double dyaw = std::fabs(yaw_of(b) - yaw_of(a));
-      if (dyaw > kPi) dyaw = 2.0 * kPi - dyaw;
-      twin = std::sqrt(dx * dx + dy * dy) <= hc.same_pose_m && dyaw <= same_rad;
+      twin = within_pose(hyps[top[j]].map_T_scan, b, hc.same_pose_m, same_rad);
     }
     if (!twin) top[kept++] = top[k];
   }
@@ -195,13 +190,9 @@ uint32_t AnswerSelector::pick_answer_and_rivals(const PoseHypotheses& hyps, cons
   const uint32_t nt = top_by_score(hyps, H, full_scored, H, top);
   const uint32_t best = nt > 0 ? top[0] : 0;
   const Eigen::Isometry3d& a = hyps[best].map_T_scan;
-  const double yaw_a = yaw_of(a), same_rad = double(hc.same_pose_deg) / kRadToDeg;
+  const double same_rad = double(hc.same_pose_deg) / kRadToDeg;
   for (uint32_t k = 1; k < nt && rival_count_ < kMaxRivals; ++k) {
-    const Eigen::Isometry3d& b = hyps[top[k]].map_T_scan;
-    const double dx = b.translation().x() - a.translation().x(), dy = b.translation().y() - a.translation().y();
-    double dyaw = std::fabs(yaw_of(b) - yaw_a);
-    if (dyaw > kPi) dyaw = 2.0 * kPi - dyaw;
-    if (std::sqrt(dx * dx + dy * dy) <= hc.same_pose_m && dyaw <= same_rad) continue;
+    if (within_pose(a, hyps[top[k]].map_T_scan, hc.same_pose_m, same_rad)) continue;
     rival_pose_[rival_count_++] = scoring_pose_of(top[k], refined_count);
   }
   return best;

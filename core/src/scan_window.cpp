@@ -1,4 +1,5 @@
 #include "gsf/detail/scan_window.h"
+#include "gsf/detail/pose_distance.h"
 
 #include <algorithm>
 #include <cmath>
@@ -11,14 +12,9 @@ namespace {
 
 constexpr double kPi = 3.14159265358979323846;
 
-double yaw_of(const Eigen::Isometry3d& T) { return std::atan2(T.linear()(1, 0), T.linear()(0, 0)); }
-
 // Within same_m and same_deg of each other in the bird's-eye view verification sees: one answer.
 bool same_pose(const Eigen::Isometry3d& a, const Eigen::Isometry3d& b, float same_m, float same_deg) {
-  const double dx = b.translation().x() - a.translation().x(), dy = b.translation().y() - a.translation().y();
-  double dyaw = std::fabs(yaw_of(b) - yaw_of(a));
-  if (dyaw > kPi) dyaw = 2.0 * kPi - dyaw;
-  return std::sqrt(dx * dx + dy * dy) <= same_m && dyaw <= double(same_deg) * kPi / 180.0;
+  return within_pose(a, b, same_m, double(same_deg) * kPi / 180.0);
 }
 
 }  // namespace

@@ -1,4 +1,5 @@
 #include "gsf/detail/tracker.h"
+#include "gsf/detail/pose_distance.h"
 
 #include <algorithm>
 #include <cmath>
@@ -11,18 +12,6 @@ double tracking_probability(const ConfidenceEvidence& evidence) {
   e.inlier_share = 1.0f;  // the inlier factor at its ceiling (s(a_i + b_i) = 1 - 6e-11): left out
   return confidence_probability(e);
 }
-
-namespace {
-
-// a and b within m metres (horizontally) and deg degrees of heading.
-bool near_pose(const Eigen::Isometry3d& a, const Eigen::Isometry3d& b, float m, float deg) {
-  const Eigen::Vector3d d = a.translation() - b.translation();
-  const Eigen::Matrix3d r = a.linear().transpose() * b.linear();
-  const double yaw = std::fabs(std::atan2(r(1, 0), r(0, 0))) * 57.29577951308232;
-  return d.head<2>().norm() <= double(m) && yaw <= double(deg);
-}
-
-}  // namespace
 
 TrackOutcome track_pose(const TrackScan& scan, const SemanticGridView& grid, const Eigen::Isometry3d& predicted,
                         const TrackConfig& tc, const VerifyConfig& vc, Refiner* refiner, AnswerConfidence& confidence,
@@ -48,7 +37,8 @@ TrackOutcome track_pose(const TrackScan& scan, const SemanticGridView& grid, con
     Eigen::Isometry3d refined;
     RefineStats rs;
     const Eigen::Isometry3d start =
-        near_pose(searched, predicted, tc.icp_start_m, tc.icp_start_deg) ? predicted : searched;
+        within_pose(searched, predicted, tc.icp_start_m, double(tc.icp_start_deg) / 57.29577951308232) ? predicted
+                                                                                                       : searched;
     if (refiner->refine(scan.voxels, start, &refined, &rs, tc.icp_points, tc.icp_iterations) == Status::Ok &&
         rs.accepted) {
       o.map_T_scan = refined;
