@@ -8,7 +8,6 @@ namespace gsf {
 namespace {
 
 constexpr double kRadToDeg = 57.29577951308232;
-constexpr double kPi = 3.14159265358979323846;
 
 // Indices of the best `cap` hypotheses by verification score (eligible[h] != 0, or all when null),
 // best first, ties to the earlier hypothesis. Returns how many (<= cap).
