@@ -31,7 +31,14 @@ import os
 
 # The factors of the model, in kConfidenceModel's order: evidence field and the range it is clipped to
 # (core/src/confidence.cpp clips the same way).
-FACTORS = [("z_rival", -3.0, 10.0), ("z_shift", -3.0, 10.0), ("z_turn", -3.0, 10.0), ("inlier_share", 0.0, 1.0)]
+# A factor may read several fields (s(offset + slope_1 x_1 + slope_2 x_2)); --factors joins them with '+'.
+FEATURES = {"z_rival": (-3.0, 10.0), "rival_margin": (0.0, 1.0), "log_margin": (-3.0, 0.0), "z_shift": (-3.0, 10.0), "z_turn": (-3.0, 10.0),
+            "inlier_share": (0.0, 1.0), "inliers": (3.0, 12.0), "known_share": (0.0, 1.0)}
+FACTORS = [["z_rival", "rival_margin"], ["z_shift"], ["z_turn"], ["inlier_share"]]
+
+
+def parameter_count():
+    return sum(1 + len(f) for f in FACTORS)
 
 
 def logistic(x):
@@ -80,19 +87,31 @@ def records(path, mode):
                 continue
             if distractor and q["success"]:
                 continue  # the other world happens to match here (same road grid): neither right nor wrong
-            z = tuple(min(hi, max(lo, evidence(e, name))) for name, lo, hi in FACTORS)
+            e = dict(e, inliers=e.get("inliers", q.get("inliers", 0)))
+            z = tuple(tuple(min(FEATURES[n][1], max(FEATURES[n][0], evidence(e, n))) for n in f) for f in FACTORS)
             out.append((z, bool(q["success"]) and not distractor, distractor))
     return out
 
 
 def evidence(e, name):
+    if name == "log_margin":
+        return math.log10(max(1e-3, float(e["rival_margin"])))
     return float(e[name])
+
+
+def factor_inputs(m, z):
+    """The logistic's argument per factor."""
+    out, i = [], 0
+    for xs in z:
+        out.append(m[i] + sum(m[i + 1 + j] * x for j, x in enumerate(xs)))
+        i += 1 + len(xs)
+    return out
 
 
 def probability(m, z):
     p = 1.0
-    for k, v in enumerate(z):
-        p *= logistic(m[2 * k] + m[2 * k + 1] * v)
+    for u in factor_inputs(m, z):
+        p *= logistic(u)
     return p
 
 
@@ -101,17 +120,20 @@ def loss_and_gradient(m, data, l2):
     n = len(m)
     loss, grad = 0.0, [0.0] * n
     for z, y, w in data:
-        s = [logistic(m[2 * k] + m[2 * k + 1] * v) for k, v in enumerate(z)]
+        s = [logistic(u) for u in factor_inputs(m, z)]
         p = 1.0
         for v in s:
             p *= v
         p = max(1e-12, min(1.0 - 1e-12, p))
         loss -= w * (math.log(p) if y else math.log(1.0 - p))
         scale = -w if y else w * p / (1.0 - p)  # d loss / d log p
-        for k, v in enumerate(z):
+        i = 0
+        for k, xs in enumerate(z):
             g = scale * (1.0 - s[k])  # d log s_k / d u_k = 1 - s_k
-            grad[2 * k] += g
-            grad[2 * k + 1] += g * v
+            grad[i] += g
+            for j, x in enumerate(xs):
+                grad[i + 1 + j] += g * x
+            i += 1 + len(xs)
     for i in range(n):
         loss += l2 * m[i] * m[i]
         grad[i] += 2.0 * l2 * m[i]
@@ -121,9 +143,12 @@ def loss_and_gradient(m, data, l2):
 def fit(data, l2=1e-3, iterations=400):
     """iRprop-: a per-parameter step that grows while the gradient keeps its sign and shrinks when it
     flips (a smooth loss of a few parameters; converges in a few hundred passes)."""
-    n = 2 * len(FACTORS)
-    # z factors start at s(2 + z); share factors (range 0..1) at s(10 (share - 0.5)).
-    m = [v for _, lo, hi in FACTORS for v in ((2.0, 1.0) if hi > 1.0 else (-5.0, 10.0))]
+    n = parameter_count()
+    # z factors start at s(2 + z); a factor of a share (range 0..1) alone at s(10 (share - 0.5)).
+    m = []
+    for f in FACTORS:
+        share = f[0] == "inlier_share"
+        m += [-5.0 if share else 2.0] + [10.0 if share and j == 0 else 1.0 for j in range(len(f))]
     step, last = [0.1] * n, [0.0] * n
     loss = 0.0
     for _ in range(iterations):
@@ -175,11 +200,14 @@ def main():
     ap.add_argument("--l2", type=float, default=1e-3)
     ap.add_argument("--results", default="results.json", help="per-world results file name in suite dirs")
     ap.add_argument("--distractor-dir", default="distractor", help="distractor directory name in suite dirs")
-    ap.add_argument("--factors", default=",".join(f[0] for f in FACTORS),
-                    help="evidence fields to use, a subset of the default in its order")
+    ap.add_argument("--factors", default=",".join("+".join(f) for f in FACTORS),
+                    help="the factors: comma separated, each one field or several joined by '+'")
     a = ap.parse_args()
     RESULTS, DISTRACTOR = a.results, a.distractor_dir
-    FACTORS = [f for f in FACTORS if f[0] in a.factors.split(",")]
+    FACTORS = [f.split("+") for f in a.factors.split(",")]
+    for n in (n for f in FACTORS for n in f):
+        if n not in FEATURES:
+            raise SystemExit(f"fit_confidence.py: unknown field '{n}' (one of {', '.join(FEATURES)})")
     train = {d: records(d, a.mode) for d in expand(a.train)}
     test = {d: records(d, a.mode) for d in expand(a.test)}
     if a.model:
@@ -194,7 +222,7 @@ def main():
         data = [(z, y, w_d if d else 1.0) for z, y, d in pooled]
         m, loss = fit(data, a.l2)
         print(f"fitted on {n_m} in-map and {n_d} distractor queries (weight {w_d:.3f} each), loss {loss:.1f}")
-        print("factors:", ", ".join(f[0] for f in FACTORS))
+        print("factors:", ", ".join("+".join(f) for f in FACTORS))
         print("const ConfidenceModel kConfidenceModel = {" + ", ".join(f"{v:.3f}f" for v in m) + "};")
     for label, runs in (("train", train), ("test", test)):
         for d, rs in runs.items():

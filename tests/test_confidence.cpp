@@ -87,7 +87,7 @@ std::vector<float> unit_weights(float w = 1.0f) { return std::vector<float>(kNum
 ConfidenceEvidence measure(AnswerConfidence& conf, const std::vector<VerifyPoint>& pts, const SemanticGridView& g,
                            const std::vector<float>& w, float lambda, const Eigen::Isometry3d* rivals, uint32_t nr) {
   const Eigen::Isometry3d answer = Eigen::Isometry3d::Identity();
-  const AnswerConfidence::Answer a{answer, rivals, nr, 10, 20};
+  const AnswerConfidence::Answer a{answer, rivals, nr, 10, 0.5f};
   return conf.measure(pts.data(), static_cast<uint32_t>(pts.size()), g, w.data(), lambda, a, 4096);
 }
 
@@ -108,11 +108,18 @@ TEST_CASE("Paired block statistic: k blocks that all favour the answer equally g
   CHECK(e.blocks == uint32_t(k));
   CHECK(e.known_share == 1.0f);
   CHECK(e.z_rival == Approx(std::sqrt(double(k))).epsilon(1e-6));
+  // Every sample loses (1 + lambda) w at the rival against w at the answer: a margin of 1 + lambda.
+  CHECK(e.rival_margin == Approx(4.0).epsilon(1e-6));
+  CHECK(e.inliers == 10u);
+  CHECK(e.inlier_share == 0.5f);
   // One block that favours the rival instead (its building is 40 m on in the map): D = (k - 1) d - d
   // over k blocks of |d|, so z = (k - 2) / sqrt(k).
   const BuildingBlocks other(k, true);
   const ConfidenceEvidence e2 = measure(conf, other.points, other.layer.view, unit_weights(), 3.0f, &rival, 1);
   CHECK(e2.z_rival == Approx((k - 2) / std::sqrt(double(k))).epsilon(1e-6));
+  // Its four samples disagree at the answer (-lambda w) and agree at the rival (+w): the margin is
+  // 4 (1 + lambda) w (k - 2) over 4 w (k - 1 + lambda).
+  CHECK(e2.rival_margin == Approx(4.0 * (k - 2) / (k - 1 + 3.0)).epsilon(1e-6));
 }
 
 TEST_CASE("The statistic is self-normalised: the evidence's scale and noise that hits both poses alike drop out") {
@@ -127,6 +134,7 @@ TEST_CASE("The statistic is self-normalised: the evidence's scale and noise that
   CHECK(heavy.z_rival == Approx(base.z_rival).epsilon(1e-5));
   CHECK(heavy.z_shift == Approx(base.z_shift).epsilon(1e-5));
   CHECK(heavy.z_turn == Approx(base.z_turn).epsilon(1e-5));
+  CHECK(heavy.rival_margin == Approx(base.rival_margin).epsilon(1e-5));
   // Mislabelled voxels (vegetation on the road, in the same blocks) disagree at the answer and at the
   // rivals alike: the agreement share at the answer drops, the comparison does not move.
   std::vector<VerifyPoint> noisy = scene.points;
@@ -160,7 +168,9 @@ TEST_CASE("The probability is a product of rising logistic factors, in [0, 1]") 
   ConfidenceEvidence e;
   e.samples = 1000;
   e.z_rival = e.z_shift = e.z_turn = 10.0f;
+  e.rival_margin = 1.0f;
   e.inlier_share = 1.0f;
+  e.inliers = kConfidenceInliersCeiling;
   const double top = confidence_probability(e);
   CHECK(top > 0.99);
   CHECK(top <= 1.0);
@@ -171,7 +181,15 @@ TEST_CASE("The probability is a product of rising logistic factors, in [0, 1]") 
     CHECK(p >= last);
     last = p;
   }
-  e.z_rival = 0.0f;  // no separation from the rival: a coin toss at best
+  last = 0.0;
+  for (float m = 0.0f; m <= 1.0f; m += 0.05f) {  // and with the rival's margin
+    e.rival_margin = m;
+    const double p = confidence_probability(e);
+    CHECK(p >= last);
+    last = p;
+  }
+  e.z_rival = 0.0f;  // no separation from the rival, a near-tie: a coin toss at best
+  e.rival_margin = 0.02f;
   CHECK(confidence_probability(e) < 0.5);
   e.z_rival = 10.0f;
   e.z_turn = -3.0f;  // a turned copy of the scan fits better: not a peak
@@ -179,10 +197,11 @@ TEST_CASE("The probability is a product of rising logistic factors, in [0, 1]") 
   e.z_turn = 10.0f;
   e.inlier_share = 0.5f;
   const double half = confidence_probability(e);
-  e.inlier_share = 0.0f;  // none of the scan's instances explained: a coincidence somewhere else
-  CHECK(confidence_probability(e) < 0.05);
+  e.inliers = 3;  // three instances explained, as a coincidence somewhere else can
   CHECK(confidence_probability(e) < half);
-  const ConfidenceModel flat{0, 0, 0, 0, 0, 0, 0, 0};  // every factor 1/2
+  e.inlier_share = 0.0f;  // none of the scan's instances explained
+  CHECK(confidence_probability(e) < 0.05);
+  const ConfidenceModel flat{0, 0, 0, 0, 0, 0, 0, 0, 0, 0};  // every factor 1/2
   CHECK(confidence_probability(e, flat) == Approx(0.0625));
 }
 

@@ -6,7 +6,8 @@
 namespace gsf {
 
 // bench/fit_confidence.py on the training suites (docs/confidence.md).
-const ConfidenceModel kConfidenceModel = {-1.817f, 3.540f, 3.391f, 1.827f, -10.350f, 3.164f, -3.891f, 27.352f};
+const ConfidenceModel kConfidenceModel = {-1.778f, 1.631f, 25.825f, 4.339f,  2.067f,
+                                          -8.628f, 2.958f, -5.834f, 12.460f, 0.748f};
 
 namespace {
 
@@ -19,6 +20,10 @@ static_assert(kBlocks <= 65536, "block indices are uint16");
 // z is clipped to this range before the logistic factors: beyond it the factors are flat, and a
 // comparison that moved no sample (z = 0 / 0) reads as no evidence either way.
 constexpr float kZMin = -3.0f, kZMax = 10.0f;
+// The margin and the inlier count are clipped too: a margin beyond 1 or 12 inliers say nothing more, and
+// 3 inliers is the least any answer has.
+constexpr float kMarginMax = 1.0f;
+constexpr float kInliersMin = 3.0f, kInliersMax = float(kConfidenceInliersCeiling);
 
 uint16_t block_index(float x, float y) {
   auto axis = [](float v) {
@@ -45,9 +50,7 @@ Eigen::Isometry3d turned(const Eigen::Isometry3d& T, double deg) {
 
 double logistic(double x) { return 1.0 / (1.0 + std::exp(-x)); }
 
-double factor(float offset, float slope, float v, float lo, float hi) {
-  return logistic(double(offset) + double(slope) * std::min(hi, std::max(lo, v)));
-}
+double clipped(float v, float lo, float hi) { return std::min(hi, std::max(lo, v)); }
 
 }  // namespace
 
@@ -62,10 +65,13 @@ struct AnswerConfidence::Sample {
 
 double confidence_probability(const ConfidenceEvidence& e, const ConfidenceModel& m) {
   if (e.samples == 0) return 0.0;
-  return factor(m.rival_offset, m.rival_slope, e.z_rival, kZMin, kZMax) *
-         factor(m.shift_offset, m.shift_slope, e.z_shift, kZMin, kZMax) *
-         factor(m.turn_offset, m.turn_slope, e.z_turn, kZMin, kZMax) *
-         factor(m.inlier_offset, m.inlier_slope, e.inlier_share, 0.0f, 1.0f);
+  const double rival = m.rival_offset + m.rival_slope * clipped(e.z_rival, kZMin, kZMax) +
+                       m.rival_margin_slope * clipped(e.rival_margin, 0.0f, kMarginMax);
+  const double shift = m.shift_offset + m.shift_slope * clipped(e.z_shift, kZMin, kZMax);
+  const double turn = m.turn_offset + m.turn_slope * clipped(e.z_turn, kZMin, kZMax);
+  const double inlier = m.inlier_offset + m.inlier_share_slope * clipped(e.inlier_share, 0.0f, 1.0f) +
+                        m.inlier_count_slope * clipped(float(e.inliers), kInliersMin, kInliersMax);
+  return logistic(rival) * logistic(shift) * logistic(turn) * logistic(inlier);
 }
 
 size_t AnswerConfidence::required_bytes(uint32_t max_points) { return counted_bytes<AnswerConfidence>(max_points); }
@@ -81,9 +87,10 @@ Status AnswerConfidence::bind(Arena& arena, uint32_t max_points) {
   return arena.overflowed() ? Status::BufferTooSmall : Status::Ok;
 }
 
-float AnswerConfidence::paired_z(const Sample& s, const Eigen::Isometry3d& other) {
+AnswerConfidence::Paired AnswerConfidence::paired(const Sample& s, const Eigen::Isometry3d& other) {
   verify_pose_evidence(s.points, s.n, s.grid, other, s.max_points, s.weights, s.disagree_weight, other_evidence_);
   for (uint32_t k = 0; k < samples_; ++k) block_sum_[block_of_[k]] += answer_evidence_[k] - other_evidence_[k];
+  Paired p;
   double sum = 0.0, sq = 0.0;
   for (uint32_t b = 0; b < block_count_; ++b) {
     const double d = block_sum_[blocks_[b]];
@@ -91,7 +98,9 @@ float AnswerConfidence::paired_z(const Sample& s, const Eigen::Isometry3d& other
     sq += d * d;
     block_sum_[blocks_[b]] = 0.0f;  // every block sum is zero between calls
   }
-  return sq > 0.0 ? static_cast<float>(sum / std::sqrt(sq)) : 0.0f;
+  p.z = sq > 0.0 ? static_cast<float>(sum / std::sqrt(sq)) : 0.0f;
+  p.margin = answer_magnitude_ > 0.0 ? static_cast<float>(sum / answer_magnitude_) : 0.0f;
+  return p;
 }
 
 ConfidenceEvidence AnswerConfidence::measure(const VerifyPoint* points, uint32_t n, const SemanticGridView& grid,
@@ -115,20 +124,31 @@ ConfidenceEvidence AnswerConfidence::measure(const VerifyPoint* points, uint32_t
   for (uint32_t b = 0; b < block_count_; ++b) block_sum_[blocks_[b]] = 0.0f;
   const PoseVerification at =
       verify_pose_evidence(points, n, grid, a.pose, max_points, weights, disagree_weight, answer_evidence_);
-  e.inlier_share = float(a.inliers) / float(std::max<uint32_t>(1, a.instances));
+  e.inliers = a.inliers;
+  e.inlier_share = a.inlier_share;
   e.samples = samples_;
   e.blocks = block_count_;
   e.known_share = float(at.scored) / float(samples_);
   e.agreement = at.agree + at.disagree > 0.0f ? at.agree / (at.agree + at.disagree) : 0.0f;
-  e.z_shift = e.z_turn = kZMax;
+  answer_magnitude_ = 0.0;
+  for (uint32_t k = 0; k < samples_; ++k) answer_magnitude_ += std::fabs(answer_evidence_[k]);
+  // Each kind keeps its closest comparison (smallest z); without a rival the closest probe stands in.
+  Paired shift{kZMax, 1.0f}, turn{kZMax, 1.0f};
+  auto keep_closest = [](Paired& closest, const Paired& p) {
+    if (p.z < closest.z) closest = p;
+  };
   for (double d : {2.0, 8.0}) {
     const double moves[4][2] = {{d, 0.0}, {-d, 0.0}, {0.0, d}, {0.0, -d}};
-    for (const auto& m : moves) e.z_shift = std::min(e.z_shift, paired_z(s, shifted(a.pose, m[0], m[1])));
+    for (const auto& m : moves) keep_closest(shift, paired(s, shifted(a.pose, m[0], m[1])));
   }
-  for (double deg : {10.0, -10.0, 180.0}) e.z_turn = std::min(e.z_turn, paired_z(s, turned(a.pose, deg)));
+  for (double deg : {10.0, -10.0, 180.0}) keep_closest(turn, paired(s, turned(a.pose, deg)));
+  e.z_shift = shift.z;
+  e.z_turn = turn.z;
   e.rivals = std::min(a.rival_count, kMaxRivals);
-  e.z_rival = e.rivals > 0 ? kZMax : std::min(e.z_shift, e.z_turn);
-  for (uint32_t r = 0; r < e.rivals; ++r) e.z_rival = std::min(e.z_rival, paired_z(s, a.rivals[r]));
+  Paired rival = e.rivals > 0 ? Paired{kZMax, 1.0f} : (shift.z <= turn.z ? shift : turn);
+  for (uint32_t r = 0; r < e.rivals; ++r) keep_closest(rival, paired(s, a.rivals[r]));
+  e.z_rival = rival.z;
+  e.rival_margin = rival.margin;
   return e;
 }
 

@@ -479,7 +479,7 @@ void Localizer::Impl::measure_confidence(const LocalizerConfig& cfg, LocalizeRes
   out.confidence = 0.0;  // without verification nothing vouches for the answer
   if (out.verified && answer.compact_points() != nullptr && answer.compact_point_count() > 0) {
     const AnswerConfidence::Answer a{answer.answer_pose(), answer.rival_poses(), answer.rival_count(), out.inliers,
-                                     out.query_instances};
+                                     float(out.inliers) / float(std::max<uint32_t>(1, out.query_instances))};
     out.confidence_evidence =
         confidence.measure(answer.compact_points(), answer.compact_point_count(), semantic, answer.verify_weights(),
                            cfg.verify.disagree_weight, a, cfg.verify.max_points);
@@ -536,7 +536,8 @@ ConfidenceEvidence Localizer::Impl::elsewhere_evidence(const LocalizerConfig& cf
   rivals[n++] = prior_answer;
   for (uint32_t k = 0; k < answer.rival_count() && n < AnswerSelector::kMaxRivals; ++k)
     rivals[n++] = answer.rival_poses()[k];
-  const AnswerConfidence::Answer a{best.pose, rivals, n, best.inliers, instance_count};
+  const AnswerConfidence::Answer a{best.pose, rivals, n, best.inliers,
+                                   float(best.inliers) / float(std::max<uint32_t>(1, instance_count))};
   return confidence.measure(answer.compact_points(), answer.compact_point_count(), semantic, answer.verify_weights(),
                             cfg.verify.disagree_weight, a, cfg.verify.max_points);
 }
@@ -735,10 +736,12 @@ uint32_t offered_candidates(const AnswerSelector& sel, const LocalizeResult& r, 
   uint32_t n = 0;
   out[n].map_T_scan = sel.answer_pose();
   out[n].map_T_scan.translation().z() = r.map_T_scan.translation().z();
+  out[n].inliers = r.inliers;
   out[n++].inlier_share = float(r.inliers) / instances;
   for (uint32_t k = 0; k < sel.rival_count() && n < max; ++k) {
     const Eigen::Isometry3d& p = sel.rival_poses()[k];
     float share = 0.0f;
+    uint32_t inliers = 0;
     double nearest = double(hc.same_pose_m) * hc.same_pose_m;
     const double yaw = std::atan2(p.linear()(1, 0), p.linear()(0, 0)) * 57.29577951308232;
     for (const HypothesisReport& h : r.hypothesis) {
@@ -747,8 +750,10 @@ uint32_t offered_candidates(const AnswerSelector& sel, const LocalizeResult& r, 
       if (h.inliers > 0 && d <= nearest && dyaw <= hc.same_pose_deg) {
         nearest = d;
         share = float(h.inliers) / instances;
+        inliers = h.inliers;
       }
     }
+    out[n].inliers = inliers;
     out[n].map_T_scan = p;
     out[n++].inlier_share = share;
   }
@@ -826,7 +831,8 @@ Status Localizer::localize_sequence(const ScanView& scan, const Eigen::Isometry3
   // its own candidates at other poses.
   WindowCandidate offer[ScanWindow::kMaxCandidates];
   uint32_t n = 0;
-  if (out.window_combined) offer[n++] = WindowCandidate{out.map_T_scan, out.confidence_evidence.inlier_share};
+  if (out.window_combined)
+    offer[n++] = WindowCandidate{out.map_T_scan, out.confidence_evidence.inlier_share, out.confidence_evidence.inliers};
   for (uint32_t k = 0; k < n_own && n < ScanWindow::kMaxCandidates; ++k) offer[n++] = own[k];
   im.window.set_candidates(offer, n);
   out.times.window = now(clock_) - t0;

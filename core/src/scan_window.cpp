@@ -100,20 +100,20 @@ void ScanWindow::set_candidates(const WindowCandidate* c, uint32_t n) {
 uint32_t ScanWindow::gather(const WindowCandidate* own, uint32_t n_own, float same_m, float same_deg) {
   const uint32_t cap = capacity_scans_ * capacity_candidates_;
   uint32_t n = 0;
-  auto add = [&](const Eigen::Isometry3d& pose, float share) {
+  auto add = [&](const Eigen::Isometry3d& pose, const WindowCandidate& c) {
     for (uint32_t k = 0; k < n; ++k)
       if (same_pose(scored_[k].pose, pose, same_m, same_deg)) {
-        scored_[k].inlier_share = std::max(scored_[k].inlier_share, share);
+        scored_[k].inlier_share = std::max(scored_[k].inlier_share, c.inlier_share);
+        scored_[k].inliers = std::max(scored_[k].inliers, c.inliers);
         return;
       }
-    if (n < cap) scored_[n++] = Scored{pose, PoseVerification(), share};
+    if (n < cap) scored_[n++] = Scored{pose, PoseVerification(), c.inlier_share, c.inliers};
   };
-  for (uint32_t k = 0; k < std::min(n_own, capacity_candidates_); ++k) add(own[k].map_T_scan, own[k].inlier_share);
+  for (uint32_t k = 0; k < std::min(n_own, capacity_candidates_); ++k) add(own[k].map_T_scan, own[k]);
   for (uint32_t s = held_ - 1; s-- > 0;) {
     const Slot& slot = slots_[s];
     const Eigen::Isometry3d scan_T_newest = slot.newest_T_scan.inverse();
-    for (uint32_t k = 0; k < slot.candidates; ++k)
-      add(slot.cand[k].map_T_scan * scan_T_newest, slot.cand[k].inlier_share);
+    for (uint32_t k = 0; k < slot.candidates; ++k) add(slot.cand[k].map_T_scan * scan_T_newest, slot.cand[k]);
   }
   return n;
 }
@@ -156,14 +156,13 @@ WindowOutcome ScanWindow::combine(const WindowCandidate* own, uint32_t n_own, co
   sort_by_score();
   Eigen::Isometry3d rivals[kMaxRivals];
   const uint32_t nr = pick_rivals(n, hc.same_pose_m, hc.same_pose_deg, rivals);
-  // The inlier factor reads inliers / instances: the best candidate's share, in thousandths.
-  const uint32_t inliers = static_cast<uint32_t>(std::lround(1000.0f * scored_[0].inlier_share));
-  const AnswerConfidence::Answer a{scored_[0].pose, rivals, nr, inliers, 1000};
+  const AnswerConfidence::Answer a{scored_[0].pose, rivals, nr, scored_[0].inliers, scored_[0].inlier_share};
   o.evidence = confidence.measure(points_, total, grid, weights, lambda, a, total);
   o.confidence = confidence_probability(o.evidence);
   o.map_T_scan = scored_[0].pose;
   o.verification = scored_[0].v;
   o.inlier_share = scored_[0].inlier_share;
+  o.inliers = scored_[0].inliers;
   o.combined = true;
   o.candidates = n;
   o.samples = total;

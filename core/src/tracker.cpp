@@ -9,7 +9,8 @@ namespace gsf {
 
 double tracking_probability(const ConfidenceEvidence& evidence) {
   ConfidenceEvidence e = evidence;
-  e.inlier_share = 1.0f;  // the inlier factor at its ceiling (s(a_i + b_i) = 1 - 6e-11): left out
+  e.inlier_share = 1.0f;  // the inlier factor at its ceiling (1 - 2e-7): left out
+  e.inliers = kConfidenceInliersCeiling;
   return confidence_probability(e);
 }
 
@@ -47,7 +48,7 @@ TrackOutcome track_pose(const TrackScan& scan, const SemanticGridView& grid, con
   }
   lap(&o.refine_ns);
   // 3. The probes at the result: is it a peak in position and heading?
-  const AnswerConfidence::Answer a{o.map_T_scan, nullptr, 0, 0, 0};
+  const AnswerConfidence::Answer a{o.map_T_scan, nullptr, 0, 0, 0.0f};
   const uint32_t probe_points = tc.probe_points > 0 ? std::min(tc.probe_points, vc.max_points) : vc.max_points;
   o.evidence = confidence.measure(scan.points, scan.n, grid, scan.weights, lambda, a, probe_points);
   o.confidence = tracking_probability(o.evidence);

@@ -91,9 +91,11 @@ void write_confidence_evidence(JsonWriter& j, const ConfidenceEvidence& e) {
   j.field("rivals", e.rivals);
   j.field("samples", e.samples);
   j.field("blocks", e.blocks);
+  j.field("inliers", e.inliers);
   j.field("inlier_share", e.inlier_share);
   j.field("known_share", e.known_share);
   j.field("agreement", e.agreement);
+  j.field("rival_margin", e.rival_margin);
   j.end_object();
 }
 

@@ -181,8 +181,10 @@ void write_window_record(JsonWriter& j, const WindowRecord& r) {
   j.end_array();
   j.field("window_candidates", r.candidates);
   j.field("z_rival", r.evidence.z_rival);
+  j.field("rival_margin", r.evidence.rival_margin);
   j.field("z_shift", r.evidence.z_shift);
   j.field("z_turn", r.evidence.z_turn);
+  j.field("inliers", r.evidence.inliers);
   j.field("inlier_share", r.evidence.inlier_share);
   j.field("samples", r.evidence.samples);
   j.field("translation_error_m", r.ok ? r.error.translation_m : -1.0);

@@ -28,11 +28,12 @@ namespace gsf {
 struct VerifyConfig;
 struct HypothesisConfig;
 
-// A pose a scan offers the window (map-local map_T_scan of that scan) and the share of that scan's
-// instances it explained (the confidence's inlier factor).
+// A pose a scan offers the window (map-local map_T_scan of that scan), the instances of that scan it
+// explained and their share of the scan's (the confidence's inlier factor).
 struct WindowCandidate {
   Eigen::Isometry3d map_T_scan = Eigen::Isometry3d::Identity();
   float inlier_share = 0.0f;
+  uint32_t inliers = 0;
 };
 
 // What combine() found.
@@ -44,6 +45,7 @@ struct WindowOutcome {
   ConfidenceEvidence evidence;
   double confidence = 0.0;
   float inlier_share = 0.0f;     // the answer's candidate's (the largest of the scans that offered it)
+  uint32_t inliers = 0;          // the same for its inliers
   uint32_t candidates = 0;       // distinct candidates scored
   uint32_t scans = 0;            // scans whose samples were combined (the newest included)
   uint32_t ids[kMaxScans] = {};  // their sequence numbers, newest first
@@ -93,6 +95,7 @@ class ScanWindow {
     Eigen::Isometry3d pose;
     PoseVerification v;
     float inlier_share;
+    uint32_t inliers;
   };
   void drop_oldest();
   uint32_t gather(const WindowCandidate* own, uint32_t n_own, float same_m, float same_deg);
