@@ -2,8 +2,9 @@
 """Fits the confidence model of core/src/confidence.cpp (kConfidenceModel) to recorded queries, and
 replays any model on held-out ones.
 
-The model (core/include/gsf/detail/confidence.h): P = s(a_r + b_r z_rival) s(a_s + b_s z_shift)
-s(a_t + b_t z_turn) s(a_i + b_i inlier_share), s the logistic function, each z clipped to [-3, 10].
+The model (core/include/gsf/detail/confidence.h): P = s(a_r + b_r z_rival + c_r rival_margin)
+s(a_s + b_s z_shift) s(a_t + b_t z_turn) s(a_i + b_i inlier_share), s the logistic function, each z
+clipped to [-3, 10], the margin to [0, 1]. --factors fits other forms (e.g. inlier_share+inliers).
 The evidence is the library's own measurement, written per query by `gsf evaluate --json`
 (diagnostics.confidence_evidence), so a fit needs no re-run of the localizer: fit on some runs, paste
 the printed C++ line, rebuild, and report on other runs (other seeds) from the library itself.
@@ -20,7 +21,7 @@ so there the other world can look the same.) --distractor-share sets their share
 
 Usage:
   bench/fit_confidence.py --train DIR [DIR ...] [--test DIR [DIR ...]] [--mode gsf] [--min-confidence 0.9]
-  bench/fit_confidence.py --model a_r,b_r,a_s,b_s,a_t,b_t,a_i,b_i --test DIR [DIR ...]   (replay only)
+  bench/fit_confidence.py --model=a_r,b_r,c_r,a_s,b_s,a_t,b_t,a_i,b_i --test DIR [DIR ...]   (replay only)
 Prints the fitted numbers as the C++ initializer of kConfidenceModel, then per DIR (train and test) the
 replayed rule: success, answered, precision, wrong, declined right, ECE. Standard library only."""
 import argparse

@@ -6,8 +6,7 @@
 namespace gsf {
 
 // bench/fit_confidence.py on the training suites (docs/confidence.md).
-const ConfidenceModel kConfidenceModel = {-1.778f, 1.631f, 25.825f, 4.339f,  2.067f,
-                                          -8.628f, 2.958f, -5.834f, 12.460f, 0.748f};
+const ConfidenceModel kConfidenceModel = {-1.807f, 1.680f, 25.434f, 3.395f, 1.858f, -10.573f, 3.205f, -3.963f, 27.180f};
 
 namespace {
 
@@ -20,10 +19,8 @@ static_assert(kBlocks <= 65536, "block indices are uint16");
 // z is clipped to this range before the logistic factors: beyond it the factors are flat, and a
 // comparison that moved no sample (z = 0 / 0) reads as no evidence either way.
 constexpr float kZMin = -3.0f, kZMax = 10.0f;
-// The margin and the inlier count are clipped too: a margin beyond 1 or 12 inliers say nothing more, and
-// 3 inliers is the least any answer has.
+// The margin is clipped too: beyond 1 (every sample's evidence gone at the rival) it says nothing more.
 constexpr float kMarginMax = 1.0f;
-constexpr float kInliersMin = 3.0f, kInliersMax = float(kConfidenceInliersCeiling);
 
 uint16_t block_index(float x, float y) {
   auto axis = [](float v) {
@@ -69,8 +66,7 @@ double confidence_probability(const ConfidenceEvidence& e, const ConfidenceModel
                        m.rival_margin_slope * clipped(e.rival_margin, 0.0f, kMarginMax);
   const double shift = m.shift_offset + m.shift_slope * clipped(e.z_shift, kZMin, kZMax);
   const double turn = m.turn_offset + m.turn_slope * clipped(e.z_turn, kZMin, kZMax);
-  const double inlier = m.inlier_offset + m.inlier_share_slope * clipped(e.inlier_share, 0.0f, 1.0f) +
-                        m.inlier_count_slope * clipped(float(e.inliers), kInliersMin, kInliersMax);
+  const double inlier = m.inlier_offset + m.inlier_slope * clipped(e.inlier_share, 0.0f, 1.0f);
   return logistic(rival) * logistic(shift) * logistic(turn) * logistic(inlier);
 }
 

@@ -9,8 +9,7 @@ namespace gsf {
 
 double tracking_probability(const ConfidenceEvidence& evidence) {
   ConfidenceEvidence e = evidence;
-  e.inlier_share = 1.0f;  // the inlier factor at its ceiling (1 - 2e-7): left out
-  e.inliers = kConfidenceInliersCeiling;
+  e.inlier_share = 1.0f;  // the inlier factor at its ceiling (s(a_i + b_i) = 1 - 6e-11): left out
   return confidence_probability(e);
 }
 

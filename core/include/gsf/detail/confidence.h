@@ -18,15 +18,14 @@
 //   z = sum_B D_B / sqrt(sum_B D_B^2),
 // a self-normalised (t-like) statistic: label noise that lowers both poses' agreement alike cancels in
 // D_B, and the spread of D_B over the blocks is the scan's own noise level. A fourth piece of evidence is
-// what the answer explains of the scan's instances: an answer in a map of somewhere else (a vehicle off
-// its map) can beat every other pose of that map, but it explains a few instances by coincidence (3-4
-// inliers, a fifth of the instances). Beside the rival's z, its margin m_r: the rival's shortfall summed
+// the share of the scan's instances the answer explains (its inliers over the query instances): an
+// answer in a map of somewhere else (a vehicle off its map) can beat every other pose of that map, but
+// it explains a few instances by coincidence. Beside the rival's z, its margin m_r: the rival's shortfall summed
 // over the samples, over the sum of |evidence at the answer| (z says how consistent the difference is
 // over the blocks, m_r how large it is; a near-tie with a wrong pose has m_r of a few hundredths). The
 // probability is a product of one logistic factor per piece of evidence, the answer must pass each:
-//   P = s(a_r + b_r z_rival + c_r m_r) s(a_s + b_s z_shift) s(a_t + b_t z_turn)
-//       s(a_i + b_i inlier_share + c_i inliers),
-// s(x) = 1 / (1 + e^-x), z of a kind being its closest comparison (the smallest z). The ten numbers are
+//   P = s(a_r + b_r z_rival + c_r m_r) s(a_s + b_s z_shift) s(a_t + b_t z_turn) s(a_i + b_i inlier_share),
+// s(x) = 1 / (1 + e^-x), z of a kind being its closest comparison (the smallest z). The nine numbers are
 // fitted on simulated suites of twelve segmentation-error and sensor families, with queries against other
 // worlds' maps among them (bench/fit_confidence.py; docs/confidence.md has the command and the data), and
 // checked on other seeds and on real data.
@@ -48,13 +47,10 @@ struct ConfidenceModel {
   float rival_offset, rival_slope, rival_margin_slope;
   float shift_offset, shift_slope;
   float turn_offset, turn_slope;
-  float inlier_offset, inlier_share_slope, inlier_count_slope;
+  float inlier_offset, inlier_slope;
 };
 // Fitted by bench/fit_confidence.py (docs/confidence.md).
 extern const ConfidenceModel kConfidenceModel;
-// The inlier count's factor reads at most this many (more say nothing more); evidence at the ceiling
-// (this count, share 1) leaves the inlier factor out, as tracking does.
-constexpr uint32_t kConfidenceInliersCeiling = 12;
 
 // P from the evidence (the model above).
 double confidence_probability(const ConfidenceEvidence& e, const ConfidenceModel& model = kConfidenceModel);
