@@ -17,8 +17,12 @@ per DIR and mode. Python standard library only; bench/suite_summary.py uses the 
 (in the repetitive zone), "near" (within reach of it) and "open" (elsewhere), from each query's in_zone /
 near_zone: where a single scan's declines and wrong answers are.
 
+With --model=a_r,b_r,... each query's confidence is recomputed from its recorded evidence with that model
+(bench/fit_confidence.py's form and default factors), and answered at --min-confidence (default 0.9): the
+tables and the diagram of a model other than the one of the binary that ran.
+
 Usage: bench/calibration.py DIR [DIR ...] [--mode gsf|all|a,b] [--min-confidence P] [--svg OUT.svg] [--brief]
-                            [--by-zone]"""
+                            [--by-zone] [--model=...]"""
 import argparse
 import glob
 import json
@@ -27,6 +31,7 @@ import os
 import sys
 
 BINS = 10
+MODEL = None  # --model: the fit_confidence.py model to replay, or None for the recorded confidence
 
 
 def result_files(path):
@@ -64,7 +69,15 @@ def has_pose(q):
 
 def confidence_of(q):
     """A query without a pose counts as confidence 0."""
-    return float(q["confidence"]) if has_pose(q) else 0.0
+    if not has_pose(q):
+        return 0.0
+    if MODEL is None:
+        return float(q["confidence"])
+    e = q.get("diagnostics", {}).get("confidence_evidence")
+    if not e or e.get("samples", 0) == 0:
+        return 0.0
+    import fit_confidence  # bench/, beside this file
+    return fit_confidence.probability(MODEL, fit_confidence.features(e, q))
 
 
 def answered(q, min_confidence=None):
@@ -321,7 +334,14 @@ def main():
     ap.add_argument("--svg", default="", help="write the reliability diagram here")
     ap.add_argument("--brief", action="store_true", help="summary lines only, no tables")
     ap.add_argument("--by-zone", action="store_true", help="also a summary line per zone / near / open query")
+    ap.add_argument("--model", help="replay this model (bench/fit_confidence.py's numbers) on the evidence")
     a = ap.parse_args()
+    if a.model:
+        global MODEL
+        sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+        MODEL = [float(v) for v in a.model.split(",")]
+        if a.min_confidence is None:
+            a.min_confidence = 0.9
     if a.min_confidence is not None and not 0 <= a.min_confidence <= 1:
         ap.error("--min-confidence must be in [0, 1]")
     pooled, series, marks, status = {}, [], set(), 0

@@ -88,10 +88,15 @@ def records(path, mode):
                 continue
             if distractor and q["success"]:
                 continue  # the other world happens to match here (same road grid): neither right nor wrong
-            e = dict(e, inliers=e.get("inliers", q.get("inliers", 0)))
-            z = tuple(tuple(min(FEATURES[n][1], max(FEATURES[n][0], evidence(e, n))) for n in f) for f in FACTORS)
+            z = features(e, q)
             out.append((z, bool(q["success"]) and not distractor, distractor))
     return out
+
+
+def features(e, q):
+    """The model's inputs from a query's confidence evidence, clipped, per factor."""
+    e = dict(e, inliers=e.get("inliers", q.get("inliers", 0)))
+    return tuple(tuple(min(FEATURES[n][1], max(FEATURES[n][0], evidence(e, n))) for n in f) for f in FACTORS)
 
 
 def evidence(e, name):
