@@ -7,10 +7,14 @@
 
 namespace gsf {
 
+// The one-shot model fitted 2026-11 (rival factor on the closest probe's z alone; see tracker.h).
+const ConfidenceModel kTrackingConfidenceModel = {-1.817f,  3.540f, 0.0f,    3.391f, 1.827f,
+                                                  -10.350f, 3.164f, -3.891f, 27.352f};
+
 double tracking_probability(const ConfidenceEvidence& evidence) {
   ConfidenceEvidence e = evidence;
   e.inlier_share = 1.0f;  // the inlier factor at its ceiling (s(a_i + b_i) = 1 - 6e-11): left out
-  return confidence_probability(e);
+  return confidence_probability(e, kTrackingConfidenceModel);
 }
 
 TrackOutcome track_pose(const TrackScan& scan, const SemanticGridView& grid, const Eigen::Isometry3d& predicted,

@@ -13,7 +13,10 @@
 //   3. the confidence's probe statistic at the result (confidence.h): the shifted and turned probes,
 //      no rivals (there are no other hypotheses). The inlier factor is left out: tracking forms no
 //      instances; it guards one-shot answers in a map of somewhere else, and a tracked pose follows a
-//      confident one.
+//      confident one. Its own model (kTrackingConfidenceModel): the one-shot model is fitted on answers
+//      that have rivals, and the rival's margin of a probe 2 m off (tracking's stand-in) is another
+//      quantity; the tracking model is the one-shot model of 2026-11 without the margin, with which
+//      tracking was measured (suite, real drives, lost odometry).
 // Loss is "not confident": the caller falls back to one-shot localization. A prediction far off ends
 // where the pattern search can reach (a few metres), which the probes judge as any wrong pose: no peak.
 #pragma once
@@ -54,7 +57,8 @@ TrackOutcome track_pose(const TrackScan& scan, const SemanticGridView& grid, con
                         const TrackConfig& config, const VerifyConfig& verify, Refiner* refiner,
                         AnswerConfidence& confidence, Clock* clock = nullptr);
 
-// P of a tracked pose: the confidence model's factors without the inlier factor (see above).
+// P of a tracked pose: kTrackingConfidenceModel's factors without the inlier factor (see above).
+extern const ConfidenceModel kTrackingConfidenceModel;
 double tracking_probability(const ConfidenceEvidence& evidence);
 
 }  // namespace gsf
