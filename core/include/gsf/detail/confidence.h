@@ -20,13 +20,14 @@
 // D_B, and the spread of D_B over the blocks is the scan's own noise level. A fourth piece of evidence is
 // the share of the scan's instances the answer explains (its inliers over the query instances): an
 // answer in a map of somewhere else (a vehicle off its map) can beat every other pose of that map, but
-// it explains a few instances by coincidence. Beside the rival's z, its margin m_r: the rival's shortfall summed
-// over the samples, over the sum of |evidence at the answer| (z says how consistent the difference is
-// over the blocks, m_r how large it is; a near-tie with a wrong pose has m_r of a few hundredths). The
-// probability is a product of one logistic factor per piece of evidence, the answer must pass each:
+// it explains a few instances by coincidence. Beside the rival's z, its margin m_r: the rival's
+// shortfall summed over the samples, over the sum of |evidence at the answer| (z says how consistent
+// the difference is over the blocks, m_r how large it is; a near-tie with a wrong pose has m_r of a few
+// hundredths). The probability is a product of one logistic factor per piece of evidence, the answer
+// must pass each:
 //   P = s(a_r + b_r z_rival + c_r m_r) s(a_s + b_s z_shift) s(a_t + b_t z_turn) s(a_i + b_i inlier_share),
 // s(x) = 1 / (1 + e^-x), z of a kind being its closest comparison (the smallest z). The nine numbers are
-// fitted on simulated suites of twelve segmentation-error and sensor families, with queries against other
+// fitted on simulated suites of thirteen segmentation-error and sensor families, with queries against other
 // worlds' maps among them (bench/fit_confidence.py; docs/confidence.md has the command and the data), and
 // checked on other seeds and on real data.
 #pragma once
