@@ -112,7 +112,7 @@ ConfidenceEvidence AnswerConfidence::measure(const VerifyPoint* points, uint32_t
   block_count_ = 0;
   for (uint32_t k = 0; k < samples_; ++k) {
     const uint16_t b = block_of_[k] = block_index(points[k * stride].x, points[k * stride].y);
-    if (block_sum_[b] == 0.0f) {  // first sample in the block: mark it (reset by paired_z's first pass)
+    if (block_sum_[b] == 0.0f) {  // first sample in the block: mark it (reset by paired()'s first pass)
       block_sum_[b] = 1.0f;
       blocks_[block_count_++] = b;
     }
