@@ -33,7 +33,7 @@ import os
 # The factors of the model, in kConfidenceModel's order: evidence field and the range it is clipped to
 # (core/src/confidence.cpp clips the same way).
 # A factor may read several fields (s(offset + slope_1 x_1 + slope_2 x_2)); --factors joins them with '+'.
-FEATURES = {"z_rival": (-3.0, 10.0), "rival_margin": (0.0, 1.0), "log_margin": (-3.0, 0.0), "z_shift": (-3.0, 10.0), "z_turn": (-3.0, 10.0),
+FEATURES = {"z_rival": (-3.0, 10.0), "rival_margin": (0.0, 1.0), "z_shift": (-3.0, 10.0), "z_turn": (-3.0, 10.0),
             "inlier_share": (0.0, 1.0), "inliers": (3.0, 12.0), "known_share": (0.0, 1.0)}
 FACTORS = [["z_rival", "rival_margin"], ["z_shift"], ["z_turn"], ["inlier_share"]]
 
@@ -100,8 +100,6 @@ def features(e, q):
 
 
 def evidence(e, name):
-    if name == "log_margin":
-        return math.log10(max(1e-3, float(e["rival_margin"])))
     return float(e[name])
 
 

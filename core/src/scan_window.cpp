@@ -162,7 +162,6 @@ WindowOutcome ScanWindow::combine(const WindowCandidate* own, uint32_t n_own, co
   o.map_T_scan = scored_[0].pose;
   o.verification = scored_[0].v;
   o.inlier_share = scored_[0].inlier_share;
-  o.inliers = scored_[0].inliers;
   o.combined = true;
   o.candidates = n;
   o.samples = total;

@@ -45,7 +45,6 @@ struct WindowOutcome {
   ConfidenceEvidence evidence;
   double confidence = 0.0;
   float inlier_share = 0.0f;     // the answer's candidate's (the largest of the scans that offered it)
-  uint32_t inliers = 0;          // the same for its inliers
   uint32_t candidates = 0;       // distinct candidates scored
   uint32_t scans = 0;            // scans whose samples were combined (the newest included)
   uint32_t ids[kMaxScans] = {};  // their sequence numbers, newest first
