@@ -89,6 +89,73 @@ TEST_CASE("The posterior mean interpolates the targets as noise goes to zero") {
   for (int i = 0; i < 20; ++i) CHECK(var[i] < 0.01f);
 }
 
+TEST_CASE("The factor is lower and reproduces K; a grid probes as its points alone; the mean only where observed") {
+  for (const uint32_t dims : {2u, 3u}) {
+    FieldConfig fc;
+    fc.input_dims = dims;
+    fc.inducing_points = 32;
+    Buffer buf(FieldSolver::required_bytes(fc, 64) + 64);
+    FieldSolver solver;
+    REQUIRE(solver.bind(buf.arena, fc, 64) == Status::Ok);
+    std::mt19937 rng(7 + dims);
+    std::uniform_real_distribution<float> u(-6, 6), p(0, 1);
+    const uint32_t n = 29;  // not a multiple of the vector width
+    std::vector<float> xyz(n * 3), y(n * kNumClasses);
+    std::vector<uint8_t> lab(n, 0);
+    for (uint32_t i = 0; i < n; ++i) {
+      for (int d = 0; d < 3; ++d) xyz[3 * i + d] = d < 2 ? u(rng) : 0.3f * u(rng);
+      for (int d = 0; d < kNumClasses; ++d) y[i * kNumClasses + d] = p(rng);
+    }
+    std::vector<float> in(kMaxInducing * 3), alpha(kMaxInducing * kNumClasses), chol(kMaxInducing * kMaxInducing);
+    uint32_t m = 0;
+    REQUIRE(solver.fit(xyz.data(), y.data(), lab.data(), n, in.data(), alpha.data(), chol.data(), &m) == Status::Ok);
+    REQUIRE(m == n);
+    // L is lower triangular and L L^T = K + noise I.
+    for (uint32_t i = 0; i < m; ++i)
+      for (uint32_t j = 0; j < m; ++j) {
+        if (j > i) {
+          CHECK(chol[i * m + j] == 0.0f);
+          continue;
+        }
+        double llt = 0.0;
+        for (uint32_t k = 0; k <= j; ++k) llt += double(chol[i * m + k]) * chol[j * m + k];
+        double d2 = 0.0;
+        for (uint32_t c = 0; c < dims; ++c) d2 += std::pow(double(in[3 * i + c]) - in[3 * j + c], 2);
+        const double k =
+            matern32(float(std::sqrt(d2)), fc.length_scale, fc.signal_variance) + (i == j ? fc.noise_variance : 0.0f);
+        CHECK(llt == Approx(k).margin(1e-5));
+      }
+    // A 6 x 6 grid probed at once equals each point probed alone, bit for bit (the grid is padded to
+    // whole vectors; every point is its own column of the solve).
+    const uint32_t G = 36;
+    std::vector<float> grid(G * 3);
+    fc.grid_nx = fc.grid_ny = 6;
+    make_probe_grid(fc, 0.4f, grid.data());
+    const FieldView field{in.data(), alpha.data(), m};
+    std::vector<float> mean(G * kNumClasses), var(G), mean1(kNumClasses), var1(1);
+    REQUIRE(solver.probe(field, chol.data(), grid.data(), G, mean.data(), var.data(), nullptr) == Status::Ok);
+    for (uint32_t s = 0; s < G; ++s) {
+      REQUIRE(solver.probe(field, chol.data(), &grid[3 * s], 1, mean1.data(), var1.data(), nullptr) == Status::Ok);
+      CHECK(var1[0] == var[s]);
+      for (int d = 0; d < kNumClasses; ++d) CHECK(mean1[d] == mean[s * kNumClasses + d]);
+    }
+    // With mean_max_var the mean is the same where the variance is at most it, and 0 elsewhere.
+    const float limit = 0.6f;
+    std::vector<float> mean_obs(G * kNumClasses, -1.0f), var_obs(G);
+    REQUIRE(solver.probe(field, chol.data(), grid.data(), G, mean_obs.data(), var_obs.data(), nullptr, limit) ==
+            Status::Ok);
+    uint32_t observed = 0;
+    for (uint32_t s = 0; s < G; ++s) {
+      CHECK(var_obs[s] == var[s]);
+      observed += var[s] <= limit;
+      for (int d = 0; d < kNumClasses; ++d)
+        CHECK(mean_obs[s * kNumClasses + d] == (var[s] <= limit ? mean[s * kNumClasses + d] : 0.0f));
+    }
+    CHECK(observed > 0);
+    CHECK(observed < G);  // the test sees both kinds of point
+  }
+}
+
 TEST_CASE("Algorithm 1 keeps class proportions, exact total, deterministic per seed") {
   std::vector<uint8_t> labels;
   const int counts[4] = {700, 200, 90, 10};

@@ -2,6 +2,7 @@
 
 #include <cmath>
 
+#include "avx2_clone.h"
 #include "fast_exp.h"
 #include "gsf/detail/sparsify.h"
 
@@ -10,27 +11,38 @@ namespace {
 
 constexpr float kSqrt3 = 1.7320508075688772f;
 
-// In-place lower Cholesky of a row-major m x m SPD matrix (double accumulation). Returns false if not PD.
-bool cholesky(float* a, uint32_t m) {
+// In-place lower Cholesky of a row-major m x m SPD matrix (double accumulation; only the lower triangle
+// is read, the upper one is zero on return). Returns false if not PD. Column by column: L's finished
+// columns are mirrored into the upper triangle, so column j's update runs over contiguous rows i and
+// vectorises; each entry still subtracts k = 0, 1, ... in order (the same bits as the row-wise loop).
+GSF_ALWAYS_INLINE bool cholesky(float* a, uint32_t m) {
+  double s[kMaxInducing];
   for (uint32_t j = 0; j < m; ++j) {
     double d = a[j * m + j];
     for (uint32_t k = 0; k < j; ++k) d -= double(a[j * m + k]) * a[j * m + k];
     if (!(d > 0.0)) return false;
     const double ljj = std::sqrt(d);
     a[j * m + j] = static_cast<float>(ljj);
-    for (uint32_t i = j + 1; i < m; ++i) {
-      double s = a[i * m + j];
-      for (uint32_t k = 0; k < j; ++k) s -= double(a[i * m + k]) * a[j * m + k];
-      a[i * m + j] = static_cast<float>(s / ljj);
+    for (uint32_t i = j + 1; i < m; ++i) s[i] = a[i * m + j];
+    for (uint32_t k = 0; k < j; ++k) {
+      const float* lk = a + size_t(k) * m;  // L's column k, mirrored: lk[i] = L_ik for i > k
+      const double ljk = lk[j];
+      for (uint32_t i = j + 1; i < m; ++i) s[i] -= double(lk[i]) * ljk;
     }
-    for (uint32_t k = j + 1; k < m; ++k) a[j * m + k] = 0.0f;
+    for (uint32_t i = j + 1; i < m; ++i) {
+      const float l = static_cast<float>(s[i] / ljj);
+      a[i * m + j] = l;
+      a[j * m + i] = l;
+    }
   }
+  for (uint32_t j = 0; j < m; ++j)
+    for (uint32_t k = j + 1; k < m; ++k) a[j * m + k] = 0.0f;
   return true;
 }
 
 // Solve L x = b in place (b: m x cols, row-major). Row-oriented so the inner loop runs over the
 // contiguous columns (vectorisable); float accumulation is ample for M <= 96 with noise on the diagonal.
-void forward_solve(const float* l, uint32_t m, float* b, uint32_t cols) {
+GSF_ALWAYS_INLINE void forward_solve(const float* l, uint32_t m, float* b, uint32_t cols) {
   for (uint32_t i = 0; i < m; ++i) {
     float* bi = b + size_t(i) * cols;
     const float* li = l + size_t(i) * m;
@@ -57,7 +69,7 @@ void forward_solve(const float* l, uint32_t m, float* b, uint32_t cols) {
 }
 
 // Solve L^T x = b in place.
-void backward_solve(const float* l, uint32_t m, float* b, uint32_t cols) {
+GSF_ALWAYS_INLINE void backward_solve(const float* l, uint32_t m, float* b, uint32_t cols) {
   for (uint32_t ii = m; ii-- > 0;) {
     float* bi = b + size_t(ii) * cols;
     for (uint32_t k = ii + 1; k < m; ++k) {
@@ -78,14 +90,14 @@ float matern32(float r, float length_scale, float signal_variance) {
 }
 
 namespace {
-// kernel(a, b_s) for the g points b_s of a probe grid, in two loops: squared distances (the grid is
-// x, y, z interleaved), then the kernel of each, a loop without branches that vectorises (sqrt,
-// divide and the exp). The same arithmetic as kernel().
+// kernel(a, b_s) for the g points b_s of a probe grid given by coordinate (gx, gy, gz), in two loops:
+// squared distances, then the kernel of each, a loop without branches; both vectorise (sqrt, divide
+// and the exp). The same arithmetic as kernel().
 template <bool kThreeD>
-void kernel_row(const float* a, const float* grid, uint32_t g, float length_scale, float signal_variance, float* row) {
+GSF_ALWAYS_INLINE void kernel_row(const float* a, const float* gx, const float* gy, const float* gz, uint32_t g,
+                                  float length_scale, float signal_variance, float* row) {
   for (uint32_t s = 0; s < g; ++s) {
-    const float* b = grid + 3 * s;
-    const float dx = a[0] - b[0], dy = a[1] - b[1], dz = kThreeD ? a[2] - b[2] : 0.0f;
+    const float dx = a[0] - gx[s], dy = a[1] - gy[s], dz = kThreeD ? a[2] - gz[s] : 0.0f;
     row[s] = dx * dx + dy * dy + dz * dz;
   }
   for (uint32_t s = 0; s < g; ++s) row[s] = matern32(std::sqrt(row[s]), length_scale, signal_variance);
@@ -157,20 +169,30 @@ float FieldSolver::kernel(const float* a, const float* b) const {
   return matern32(std::sqrt(dx * dx + dy * dy + dz * dz), config_.length_scale, config_.signal_variance);
 }
 
-Status FieldSolver::factor(const float* inputs, uint32_t m, float* chol) {
+// An AVX2 clone on x86-64 (avx2_clone.h), like probe(): the kernel rows and the Cholesky vectorise.
+GSF_AVX2_CLONE Status FieldSolver::factor(const float* inputs, uint32_t m, float* chol) {
   if (!bound_) return Status::NotInitialized;
   if (m == 0 || m > config_.inducing_points) return Status::InvalidArgument;
-  for (uint32_t i = 0; i < m; ++i)
-    for (uint32_t j = 0; j <= i; ++j) {
-      const float k = kernel(inputs + 3 * i, inputs + 3 * j) + (i == j ? config_.noise_variance : 0.0f);
-      chol[i * m + j] = k;
-      chol[j * m + i] = k;
-    }
+  // Row i's kernels to inputs 0..i in one kernel_row (the inputs by coordinate): the same values as
+  // kernel(); the noise on the diagonal. Only the lower triangle is filled: cholesky() reads no more.
+  float ix[kMaxInducing], iy[kMaxInducing], iz[kMaxInducing];
+  for (uint32_t i = 0; i < m; ++i) {
+    ix[i] = inputs[3 * i];
+    iy[i] = inputs[3 * i + 1];
+    iz[i] = inputs[3 * i + 2];
+  }
+  const float ls = config_.length_scale, sv = config_.signal_variance;
+  for (uint32_t i = 0; i < m; ++i) {
+    if (config_.input_dims == 3) kernel_row<true>(inputs + 3 * i, ix, iy, iz, i + 1, ls, sv, chol + size_t(i) * m);
+    else kernel_row<false>(inputs + 3 * i, ix, iy, iz, i + 1, ls, sv, chol + size_t(i) * m);
+    chol[size_t(i) * m + i] += config_.noise_variance;
+  }
   return cholesky(chol, m) ? Status::Ok : Status::InvalidInput;
 }
 
-Status FieldSolver::fit(const float* xyz, const float* targets, const uint8_t* labels, uint32_t n, float* inputs,
-                        float* alpha, float* chol, uint32_t* m_out) {
+// An AVX2 clone on x86-64 (avx2_clone.h): the two solves for alpha vectorise over the D outputs.
+GSF_AVX2_CLONE Status FieldSolver::fit(const float* xyz, const float* targets, const uint8_t* labels, uint32_t n,
+                                       float* inputs, float* alpha, float* chol, uint32_t* m_out) {
   *m_out = 0;
   if (!bound_) return Status::NotInitialized;
   if (n == 0) return Status::InvalidInput;
@@ -197,48 +219,59 @@ Status FieldSolver::fit(const float* xyz, const float* targets, const uint8_t* l
   return Status::Ok;
 }
 
-Status FieldSolver::probe(const FieldView& field, const float* chol, const float* grid, uint32_t g, float* mean,
-                          float* var, float* cov) {
+// An AVX2 clone on x86-64 (avx2_clone.h): the kernel rows, the mean and the solve run 8 lanes a vector,
+// bitwise the same probe (the GSF filter's hot path: most of its instructions are here).
+GSF_AVX2_CLONE Status FieldSolver::probe(const FieldView& field, const float* chol, const float* grid, uint32_t g,
+                                         float* mean, float* var, float* cov, float mean_max_var) {
   if (!bound_) return Status::NotInitialized;
   const uint32_t m = field.m;
   if (g == 0 || g > kMaxGridPoints || m > kMaxInducing) return Status::InvalidArgument;
   const float prior = config_.signal_variance;
-  // k* (m x g), then mean = k*^T alpha accumulated row by row (inner loop over the D outputs).
-  for (uint32_t i = 0; i < m; ++i) {
-    if (config_.input_dims == 3)
-      kernel_row<true>(field.inputs + 3 * i, grid, g, config_.length_scale, config_.signal_variance, kstar_ + i * g);
-    else
-      kernel_row<false>(field.inputs + 3 * i, grid, g, config_.length_scale, config_.signal_variance, kstar_ + i * g);
+  // k* (m x g), its rows padded to gp = a multiple of 8 points (<= kMaxGridPoints): the solve then runs
+  // whole vectors, no scalar tail (columns are independent; the padding points are never read back).
+  // The grid by coordinate first, so the distance loop reads contiguous floats.
+  const uint32_t gp = (g + 7u) & ~7u;
+  float gx[kMaxGridPoints], gy[kMaxGridPoints], gz[kMaxGridPoints];
+  for (uint32_t s = 0; s < gp; ++s) {
+    gx[s] = s < g ? grid[3 * s] : 0.0f;
+    gy[s] = s < g ? grid[3 * s + 1] : 0.0f;
+    gz[s] = s < g ? grid[3 * s + 2] : 0.0f;
   }
-  // One grid point at a time with its D sums in a local array (registers), so the m terms are not
-  // loaded from and stored to `mean` once each; every sum still adds i = 0, 1, ... in order from 0.
-  for (uint32_t s = 0; s < g; ++s) {
-    float acc[kNumClasses] = {};
-    for (uint32_t i = 0; i < m; ++i) {
-      const float ks = kstar_[size_t(i) * g + s];
-      const float* a = field.alpha + size_t(i) * kNumClasses;
-      for (int d = 0; d < kNumClasses; ++d) acc[d] += ks * a[d];
-    }
-    float* out = mean + size_t(s) * kNumClasses;
-    for (int d = 0; d < kNumClasses; ++d) out[d] = acc[d];
+  const float ls = config_.length_scale, sv = config_.signal_variance;
+  for (uint32_t i = 0; i < m; ++i) {
+    if (config_.input_dims == 3) kernel_row<true>(field.inputs + 3 * i, gx, gy, gz, gp, ls, sv, kstar_ + i * gp);
+    else kernel_row<false>(field.inputs + 3 * i, gx, gy, gz, gp, ls, sv, kstar_ + i * gp);
   }
   // V = L^-1 k* ; var_s = k(0) - |V_s|^2 ; cov = K** - V^T V
-  for (uint32_t i = 0; i < m * g; ++i) work_[i] = kstar_[i];
-  if (m > 0) forward_solve(chol, m, work_, g);
+  for (uint32_t i = 0; i < m * gp; ++i) work_[i] = kstar_[i];
+  if (m > 0) forward_solve(chol, m, work_, gp);
   for (uint32_t s = 0; s < g; ++s) var[s] = 0.0f;
   for (uint32_t i = 0; i < m; ++i) {
-    const float* w = work_ + size_t(i) * g;
+    const float* w = work_ + size_t(i) * gp;
     for (uint32_t s = 0; s < g; ++s) var[s] += w[s] * w[s];
   }
   for (uint32_t s = 0; s < g; ++s) {
     const float v = prior - var[s];
     var[s] = v > 0.0f ? v : 0.0f;
   }
+  // The mean, one grid point at a time with its D sums in a local array (registers), so the m terms
+  // are not loaded from and stored to `mean` once each; every sum still adds i = 0, 1, ... in order.
+  for (uint32_t s = 0; s < g; ++s) {
+    float acc[kNumClasses] = {};
+    if (var[s] <= mean_max_var)
+      for (uint32_t i = 0; i < m; ++i) {
+        const float ks = kstar_[size_t(i) * gp + s];
+        const float* a = field.alpha + size_t(i) * kNumClasses;
+        for (int d = 0; d < kNumClasses; ++d) acc[d] += ks * a[d];
+      }
+    float* out = mean + size_t(s) * kNumClasses;
+    for (int d = 0; d < kNumClasses; ++d) out[d] = acc[d];
+  }
   if (cov) {
     for (uint32_t s = 0; s < g; ++s)
       for (uint32_t t = 0; t <= s; ++t) {
         float q = 0.0f;
-        for (uint32_t i = 0; i < m; ++i) q += work_[i * g + s] * work_[i * g + t];
+        for (uint32_t i = 0; i < m; ++i) q += work_[i * gp + s] * work_[i * gp + t];
         const float c = kernel(grid + 3 * s, grid + 3 * t) - q;
         cov[s * g + t] = c;
         cov[t * g + s] = c;

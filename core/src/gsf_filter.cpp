@@ -76,12 +76,12 @@ float GsfFilter::similarity(const QueryFields& qf, uint32_t qi, const MapView& m
       f.inputs = qf.inputs + size_t(qi) * M * 3;
       f.alpha = qf.alpha + size_t(qi) * M * kNumClasses;
       f.m = qf.m[qi];
-      solver_->probe(f, qf.chol + size_t(qi) * M * M, grid_, G, mean, var, nullptr);
+      // The mean only at the observed points: the only ones compared.
+      solver_->probe(f, qf.chol + size_t(qi) * M * M, grid_, G, mean, var, nullptr, observed_max_var());
     }
     dequantize_instance_grid(map, mi, map_mean_, map_var_);
-    const ObservedW2 r =
-        w2_squared_diag_observed(mean, var, map_mean_, map_var_, G, weights_,
-                                 config_.observed_variance * field_.signal_variance, config_.covariance_weight);
+    const ObservedW2 r = w2_squared_diag_observed(mean, var, map_mean_, map_var_, G, weights_, observed_max_var(),
+                                                  config_.covariance_weight);
     if (r.used >= 4) omega = static_cast<float>(std::exp(-(r.w2 / r.used) / config_.tau));
   }
   if (float* slot = similarity_.find_or_insert(skey)) *slot = omega;

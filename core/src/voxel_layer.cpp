@@ -3,6 +3,7 @@
 #include <cmath>
 #include <cstring>
 
+#include "avx2_clone.h"
 #include "fast_exp.h"
 
 namespace gsf {
@@ -202,27 +203,9 @@ int VoxelLayer::point_class(const float* p, uint32_t label, float min_r2, float 
   return c;
 }
 
-// x86-64 Linux: accumulate_points also as an AVX2 clone, picked at load time (ifunc). The softmax's exp
-// then runs 8 lanes a vector instead of 4; the clone does the same +, -, *, / on every lane in the same
-// order (no FMA: -ffp-contract=off, and AVX2 does not include it), so the layer is bitwise the same.
-// Not under a sanitizer: the clone's ifunc resolver runs while the dynamic loader relocates, before the
-// sanitizer's runtime is up, and its instrumented code crashes there (ThreadSanitizer: SIGSEGV at start).
-#if defined(__SANITIZE_THREAD__) || defined(__SANITIZE_ADDRESS__)
-#define GSF_SANITIZED_BUILD 1
-#elif defined(__has_feature)
-#if __has_feature(thread_sanitizer) || __has_feature(address_sanitizer) || __has_feature(memory_sanitizer)
-#define GSF_SANITIZED_BUILD 1
-#endif
-#endif
-#if defined(__x86_64__) && defined(__linux__) && defined(__GNUC__) && !defined(GSF_NO_TARGET_CLONES) && \
-    !defined(GSF_SANITIZED_BUILD)
-#define GSF_AVX2_CLONE __attribute__((target_clones("avx2", "default")))
-#else
-#define GSF_AVX2_CLONE
-#endif
-
 // Every kept point into its voxel: sums of position and class probabilities (the softmax of its logits,
-// or 1 for its label) and the point count. Returns the number of voxels.
+// or 1 for its label) and the point count. Returns the number of voxels. An AVX2 clone on x86-64
+// (avx2_clone.h): the softmax's exp runs 8 lanes a vector instead of 4, bitwise the same layer.
 GSF_AVX2_CLONE uint32_t VoxelLayer::accumulate_points(const ScanView& scan, bool use_logits, VoxelStats* stats) {
   const float min_r2 = config_.min_range * config_.min_range;
   const float max_r2 = config_.max_range * config_.max_range;

@@ -12,6 +12,7 @@
 // outputs) that the 2-Wasserstein similarity compares (wasserstein.h).
 #pragma once
 #include <cstdint>
+#include <limits>
 
 #include "gsf/detail/arena.h"
 #include "gsf/detail/voxel_layer.h"
@@ -23,6 +24,7 @@ namespace gsf {
 
 constexpr uint32_t kMaxInducing = 96;
 constexpr uint32_t kMaxGridPoints = 128;
+static_assert(kMaxGridPoints % 8 == 0, "FieldSolver::probe pads the grid to a multiple of 8 points");
 
 Status validate(const FieldConfig& config);
 inline uint32_t grid_points(const FieldConfig& c) { return c.grid_nx * c.grid_ny * c.grid_layers; }
@@ -70,9 +72,11 @@ class FieldSolver {
   // Recompute the Cholesky factor of K + sigma^2 I for stored inputs (map side: not stored in the map).
   Status factor(const float* inputs, uint32_t m, float* chol_out);
 
-  // Posterior at G grid points: mean (G x D), variance (G), optionally full covariance (G x G).
+  // Posterior at G grid points: mean (G x D), variance (G), optionally full covariance (G x G). The
+  // mean only where the variance is at most mean_max_var (elsewhere 0): a caller that compares only
+  // observed points (the GSF filter) skips the rest, a third to half of a probe's work.
   Status probe(const FieldView& field, const float* chol, const float* grid_xyz, uint32_t g, float* mean_out,
-               float* var_out, float* cov_out);
+               float* var_out, float* cov_out, float mean_max_var = std::numeric_limits<float>::infinity());
 
   const FieldConfig& config() const { return config_; }
 

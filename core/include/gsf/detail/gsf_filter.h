@@ -115,6 +115,8 @@ class GsfFilter {
   // min_similarity; omega[v] gets each one evaluated. `all`: evaluate all three even after a failure.
   bool passes_gate(const QueryFields& fields, const uint32_t qv[3], const Triangle& mt, const MapView& map,
                    uint32_t bin, float min_similarity, bool all, float omega[3]);
+  // Grid points where the query field's variance exceeds this are not compared.
+  float observed_max_var() const { return config_.observed_variance * field_.signal_variance; }
   static uint64_t similarity_key(uint32_t qi, uint32_t mi, uint32_t yaw_bin) {
     return (uint64_t(qi) << 44) | (uint64_t(yaw_bin) << 32) | mi;
   }
