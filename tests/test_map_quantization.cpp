@@ -58,6 +58,13 @@ TEST_CASE("Grid means and variances dequantise within step / 2 + 2^-20 (|min| + 
     view.grid_var = q_var.data();
     view.counts.instances = 1;
     dequantize_instance_grid(view, 0, mean_back.data(), var_back.data());
+    // Only some grid points (the GSF filter's observed ones): those rows the same, the others untouched.
+    std::vector<uint8_t> only(G);
+    for (uint32_t s = 0; s < G; ++s) only[s] = s % 3 == 1;
+    std::vector<float> mean_only(mean.size(), -7.0f), var_only(G);
+    dequantize_instance_grid(view, 0, mean_only.data(), var_only.data(), only.data());
+    for (size_t k = 0; k < mean.size(); ++k) CHECK(mean_only[k] == (only[k / D] ? mean_back[k] : -7.0f));
+    for (uint32_t s = 0; s < G; ++s) CHECK(var_only[s] == var_back[s]);
     const float mean_bound = quantization_error_bound(in.mean_min, in.mean_step, kGridMeanLevels);
     const float var_bound = quantization_error_bound(in.var_min, in.var_step, kGridVarLevels);
     float worst_mean = 0.0f, worst_var = 0.0f;

@@ -12,14 +12,17 @@ constexpr double kTwoPi = 6.283185307179586;
 uint64_t now(Clock* c) { return c ? c->now_ns() : 0; }
 }  // namespace
 
-size_t GsfFilter::required_bytes(const GsfFilterConfig& config, const FieldConfig& field) {
-  return counted_bytes<GsfFilter>(config, field, nullptr);
+size_t GsfFilter::required_bytes(const GsfFilterConfig& config, const FieldConfig& field, uint32_t max_triangles) {
+  return counted_bytes<GsfFilter>(config, field, nullptr, max_triangles);
 }
 
-Status GsfFilter::bind(Arena& ar, const GsfFilterConfig& config, const FieldConfig& field, FieldSolver* solver) {
+Status GsfFilter::bind(Arena& ar, const GsfFilterConfig& config, const FieldConfig& field, FieldSolver* solver,
+                       uint32_t max_triangles) {
   config_ = config;
   field_ = field;
   solver_ = solver;
+  max_triangles_ = max_triangles;
+  below_gate_ = max_triangles > 0 ? ar.allocate<uint8_t>(max_triangles) : nullptr;
   const uint32_t G = grid_points(field);
   if (config.yaw_bins == 0 || config.probe_cache_slots == 0 || config.similarity_cache_slots == 0)
     return Status::InvalidArgument;
@@ -30,7 +33,8 @@ Status GsfFilter::bind(Arena& ar, const GsfFilterConfig& config, const FieldConf
   map_mean_ = ar.allocate<float>(size_t(G) * kNumClasses);
   map_var_ = ar.allocate<float>(G);
   if (ar.counting()) return Status::Ok;
-  if (!ok || !grid_ || !probe_mean_ || !probe_var_ || !map_mean_ || !map_var_ || !solver_)
+  if (!ok || !grid_ || !probe_mean_ || !probe_var_ || !map_mean_ || !map_var_ || !solver_ ||
+      (max_triangles > 0 && !below_gate_))
     return Status::BufferTooSmall;
   stability_weights(weights_);
   reset();
@@ -79,7 +83,11 @@ float GsfFilter::similarity(const QueryFields& qf, uint32_t qi, const MapView& m
       // The mean only at the observed points: the only ones compared.
       solver_->probe(f, qf.chol + size_t(qi) * M * M, grid_, G, mean, var, nullptr, observed_max_var());
     }
-    dequantize_instance_grid(map, mi, map_mean_, map_var_);
+    // The map's mean, too, only where the query field is observed.
+    const float max_var = observed_max_var();
+    uint8_t observed[kMaxGridPoints];
+    for (uint32_t s = 0; s < G; ++s) observed[s] = var[s] <= max_var;
+    dequantize_instance_grid(map, mi, map_mean_, map_var_, observed);
     const ObservedW2 r = w2_squared_diag_observed(mean, var, map_mean_, map_var_, G, weights_, observed_max_var(),
                                                   config_.covariance_weight);
     if (r.used >= 4) omega = static_cast<float>(std::exp(-(r.w2 / r.used) / config_.tau));
@@ -98,9 +106,14 @@ MatchFilterStats GsfFilter::filter_matches(const FixedVector<Triangle>& triangle
   MatchFilterStats st;
   const uint32_t T = triangles.size();
   const bool fill = params.use_gsf && params.fill_pairs > 0;
+  // Which triangles the fill pass must match again (all of them when the filter has no room to say).
+  const bool mark = fill && T <= max_triangles_;
+  if (mark)
+    for (uint32_t t = 0; t < T; ++t) below_gate_[t] = 0;
   for (int pass = 0; pass < (fill ? 2 : 1); ++pass) {
     if (pass == 1 && pairs.candidates() >= params.fill_pairs) break;
     for (uint32_t qt_id = 0; qt_id < T; ++qt_id) {
+      if (pass == 1 && mark && !below_gate_[qt_id]) continue;  // it has no match below the gate
       const Triangle& qt = triangles[qt_id];
       const uint64_t t0 = now(clock);
       const TriangleMatchStats ms =
@@ -125,8 +138,11 @@ MatchFilterStats GsfFilter::filter_matches(const FixedVector<Triangle>& triangle
         }
         float omega[3] = {1.0f, 1.0f, 1.0f};
         // Pass 0 keeps the matches that pass the gate, pass 1 (the fill) the others, with all three omegas.
-        if (params.use_gsf && passes_gate(qf, qv, mt, map, bin, params.min_similarity, pass == 1, omega) == (pass == 1))
+        if (params.use_gsf &&
+            passes_gate(qf, qv, mt, map, bin, params.min_similarity, pass == 1, omega) == (pass == 1)) {
+          if (pass == 0 && mark) below_gate_[qt_id] = 1;
           continue;
+        }
         ++(pass == 0 ? st.survivors : st.below_gate_matches);
         for (int v = 0; v < 3; ++v)
           if (!pairs.add(qv[v], mt.v[v], omega[v], pass == 0 ? 1u : 0u)) ++st.candidate_pairs_dropped;

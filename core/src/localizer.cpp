@@ -153,7 +153,8 @@ Status Localizer::bind_workspace(Arena& ar, const LocalizerConfig& config, Impl&
   if (im.matcher.bind(ar, config.match.max_matches_per_triangle) != Status::Ok) return Status::InvalidArgument;
   if (im.headings.bind(ar, config.gsf.yaw_bins) != Status::Ok) return Status::InvalidArgument;
   record(&b.match);
-  if (im.gsf.bind(ar, config.gsf, config.field, &im.solver) != Status::Ok && !ar.counting())
+  if (im.gsf.bind(ar, config.gsf, config.field, &im.solver, config.triangle.max_triangles) != Status::Ok &&
+      !ar.counting())
     return Status::InvalidArgument;
   record(&b.gsf_cache);
   if (im.correspondences.bind(ar, config.match.max_candidates, V) != Status::Ok && !ar.counting())

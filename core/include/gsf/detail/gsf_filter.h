@@ -70,10 +70,12 @@ struct MatchFilterStats {
 
 class GsfFilter {
  public:
-  static size_t required_bytes(const GsfFilterConfig& config, const FieldConfig& field);
+  static size_t required_bytes(const GsfFilterConfig& config, const FieldConfig& field, uint32_t max_triangles = 0);
   // `solver` (bound with the same FieldConfig) probes the query fields; it is shared with the stage
-  // that fits them and must outlive the filter.
-  Status bind(Arena& arena, const GsfFilterConfig& config, const FieldConfig& field, FieldSolver* solver);
+  // that fits them and must outlive the filter. max_triangles: the query triangles a scan can have, so
+  // the fill pass re-matches only those with a match below the gate (0: it re-matches every one).
+  Status bind(Arena& arena, const GsfFilterConfig& config, const FieldConfig& field, FieldSolver* solver,
+              uint32_t max_triangles = 0);
   void reset();  // forget the caches (a new scan)
   // Class weights of the W2 sum (default after bind: stability_weight(), paper Table III); a label set
   // with its own stabilities sets them here (copied).
@@ -131,6 +133,8 @@ class GsfFilter {
   float* probe_mean_ = nullptr;          // (slots + 1) x G x D; the last slot is scratch when the cache is full
   float* probe_var_ = nullptr;           // (slots + 1) x G
   float weights_[kNumClasses];
+  uint8_t* below_gate_ = nullptr;  // max_triangles_: 1 where pass 0 saw a match below the gate
+  uint32_t max_triangles_ = 0;
   uint32_t probe_used_ = 0, probe_overflow_ = 0, comparisons_ = 0;
 };
 

@@ -49,7 +49,9 @@ inline float quantization_error_bound(float min, float step, uint32_t levels) {
 void quantize_instance_grid(const float* mean, const float* var, uint64_t g, uint64_t d, MapInstance* in,
                             uint8_t* q_mean, uint16_t* q_var);
 
-// Instance i's grid as floats: mean G x D, var G (G = view.grid_points(), D = num_classes).
-void dequantize_instance_grid(const MapView& view, uint32_t i, float* mean, float* var);
+// Instance i's grid as floats: mean G x D, var G (G = view.grid_points(), D = num_classes). With
+// `only` (G flags), the mean only at the grid points flagged nonzero (the rest left as they are): the
+// GSF filter needs it only where the query field is observed.
+void dequantize_instance_grid(const MapView& view, uint32_t i, float* mean, float* var, const uint8_t* only = nullptr);
 
 }  // namespace gsf
