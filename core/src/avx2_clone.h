@@ -16,8 +16,10 @@
 #if defined(__x86_64__) && defined(__linux__) && defined(__GNUC__) && !defined(GSF_NO_TARGET_CLONES) && \
     !defined(GSF_SANITIZED_BUILD)
 #define GSF_AVX2_CLONE __attribute__((target_clones("avx2", "default")))
+#define GSF_VECTOR_FLOATS 8  // floats a vector of the widest clone holds (AVX2)
 #else
 #define GSF_AVX2_CLONE
+#define GSF_VECTOR_FLOATS 4  // SSE2, NEON
 #endif
 
 // A loop helper of a cloned function: inlined, so the clone compiles it for AVX2 too (a call would run

@@ -227,10 +227,12 @@ GSF_AVX2_CLONE Status FieldSolver::probe(const FieldView& field, const float* ch
   const uint32_t m = field.m;
   if (g == 0 || g > kMaxGridPoints || m > kMaxInducing) return Status::InvalidArgument;
   const float prior = config_.signal_variance;
-  // k* (m x g), its rows padded to gp = a multiple of 8 points (<= kMaxGridPoints): the solve then runs
-  // whole vectors, no scalar tail (columns are independent; the padding points are never read back).
-  // The grid by coordinate first, so the distance loop reads contiguous floats.
-  const uint32_t gp = (g + 7u) & ~7u;
+  // k* (m x g), its rows padded to gp = a multiple of the vector width (<= kMaxGridPoints): the solve
+  // then runs whole vectors, no scalar tail (columns are independent; the padding points are never read
+  // back). The grid by coordinate first, so the distance loop reads contiguous floats.
+  constexpr uint32_t kLanes = GSF_VECTOR_FLOATS;
+  static_assert(kMaxGridPoints % kLanes == 0, "the padded grid fits");
+  const uint32_t gp = (g + kLanes - 1) / kLanes * kLanes;
   float gx[kMaxGridPoints], gy[kMaxGridPoints], gz[kMaxGridPoints];
   for (uint32_t s = 0; s < gp; ++s) {
     gx[s] = s < g ? grid[3 * s] : 0.0f;

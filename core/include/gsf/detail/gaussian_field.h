@@ -24,7 +24,6 @@ namespace gsf {
 
 constexpr uint32_t kMaxInducing = 96;
 constexpr uint32_t kMaxGridPoints = 128;
-static_assert(kMaxGridPoints % 8 == 0, "FieldSolver::probe pads the grid to a multiple of 8 points");
 
 Status validate(const FieldConfig& config);
 inline uint32_t grid_points(const FieldConfig& c) { return c.grid_nx * c.grid_ny * c.grid_layers; }
