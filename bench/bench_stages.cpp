@@ -188,6 +188,16 @@ double median(std::vector<double> v) {
   return n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
 }
 
+// The p-quantile, linear between ranks (gsf evaluate's p95 is the same).
+double quantile(std::vector<double> v, double p) {
+  if (v.empty()) return 0;
+  std::sort(v.begin(), v.end());
+  const double pos = p * double(v.size() - 1);
+  const size_t lo = size_t(pos);
+  const size_t hi = std::min(lo + 1, v.size() - 1);
+  return v[lo] + (v[hi] - v[lo]) * (pos - double(lo));
+}
+
 struct Mode {
   const char* name;
   bool gsf, refine;
@@ -369,6 +379,14 @@ int main(int argc, char** argv) {
               median(modes[1].per_scan[kStages - 1]) / median(modes[0].per_scan[kStages - 1]), median(on_off));
   std::printf("GSF + refine / GSF on (total query): ratio of medians %.3f, median of per-scan ratios %.3f\n",
               median(modes[2].per_scan[kStages - 1]) / median(modes[1].per_scan[kStages - 1]), median(rf_on));
+  // The tail (issue 25, item 4): the slowest scans against the median, each mode on the same scans.
+  std::printf("tail (total query):");
+  for (int m = 0; m < 3; ++m) {
+    const std::vector<double>& t = modes[m].per_scan[kStages - 1];
+    std::printf("%s %s p95 %.0f us (%.2fx median), max %.0f us", m ? ";" : "", modes[m].name, quantile(t, 0.95) / 1e3,
+                quantile(t, 0.95) / median(t), quantile(t, 1.0) / 1e3);
+  }
+  std::printf("\n");
   std::printf(
       "floor median %.1f us; 'unattributed' = total minus the nine stage times (result assembly, "
       "correspondence ranking)\n",
