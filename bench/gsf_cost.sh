@@ -13,7 +13,7 @@
 # older build on the same worlds; --set passes config overrides to both modes.
 set -euo pipefail
 cd "$(dirname "$0")/.."
-[ $# -ge 1 ] || { sed -n 2,11p "$0"; exit 2; }
+[ $# -ge 1 ] || { sed -n 2,13p "$0"; exit 2; }
 dir=$1; shift
 seed=6; limit=0; repeat=3; bench=build/release/bench/bench_stages; overrides=""
 families="p0 p3 p8 p15 o10 o20 thin b16 b64 b128 cross cheap edge"
