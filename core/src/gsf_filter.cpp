@@ -54,6 +54,7 @@ float GsfFilter::similarity(const QueryFields& qf, uint32_t qi, const MapView& m
   float omega = 0.0f;
   if (qf.m[qi] > 0) {
     const uint32_t G = grid_points(field_), M = qf.stride_m;
+    const float max_var = observed_max_var();  // grid points above it are neither probed for a mean nor compared
     const uint64_t pkey = (uint64_t(qi) << 32) | yaw_bin;
     uint32_t slot;
     bool fresh = false;
@@ -81,15 +82,14 @@ float GsfFilter::similarity(const QueryFields& qf, uint32_t qi, const MapView& m
       f.alpha = qf.alpha + size_t(qi) * M * kNumClasses;
       f.m = qf.m[qi];
       // The mean only at the observed points: the only ones compared.
-      solver_->probe(f, qf.chol + size_t(qi) * M * M, grid_, G, mean, var, nullptr, observed_max_var());
+      solver_->probe(f, qf.chol + size_t(qi) * M * M, grid_, G, mean, var, nullptr, max_var);
     }
     // The map's mean, too, only where the query field is observed.
-    const float max_var = observed_max_var();
     uint8_t observed[kMaxGridPoints];
     for (uint32_t s = 0; s < G; ++s) observed[s] = var[s] <= max_var;
     dequantize_instance_grid(map, mi, map_mean_, map_var_, observed);
-    const ObservedW2 r = w2_squared_diag_observed(mean, var, map_mean_, map_var_, G, weights_, observed_max_var(),
-                                                  config_.covariance_weight);
+    const ObservedW2 r =
+        w2_squared_diag_observed(mean, var, map_mean_, map_var_, G, weights_, max_var, config_.covariance_weight);
     if (r.used >= 4) omega = static_cast<float>(std::exp(-(r.w2 / r.used) / config_.tau));
   }
   if (float* slot = similarity_.find_or_insert(skey)) *slot = omega;
