@@ -31,6 +31,7 @@
 #include <fcntl.h>
 #include <unistd.h>
 
+#include "gsf/evaluation.h"
 #include "gsf/localizer.h"
 #include "gsf/map_format.h"
 #include "gsf/pipeline.h"
@@ -186,16 +187,6 @@ double median(std::vector<double> v) {
   std::sort(v.begin(), v.end());
   const size_t n = v.size();
   return n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
-}
-
-// The p-quantile, linear between ranks (gsf evaluate's p95 is the same).
-double quantile(std::vector<double> v, double p) {
-  if (v.empty()) return 0;
-  std::sort(v.begin(), v.end());
-  const double pos = p * double(v.size() - 1);
-  const size_t lo = size_t(pos);
-  const size_t hi = std::min(lo + 1, v.size() - 1);
-  return v[lo] + (v[hi] - v[lo]) * (pos - double(lo));
 }
 
 struct Mode {
@@ -383,8 +374,9 @@ int main(int argc, char** argv) {
   std::printf("tail (total query):");
   for (int m = 0; m < 3; ++m) {
     const std::vector<double>& t = modes[m].per_scan[kStages - 1];
-    std::printf("%s %s p95 %.0f us (%.2fx median), max %.0f us", m ? ";" : "", modes[m].name, quantile(t, 0.95) / 1e3,
-                quantile(t, 0.95) / median(t), quantile(t, 1.0) / 1e3);
+    const double p95 = cli::percentile(t, 0.95);  // as gsf evaluate's p95
+    std::printf("%s %s p95 %.0f us (%.2fx median), max %.0f us", m ? ";" : "", modes[m].name, p95 / 1e3,
+                p95 / median(t), cli::percentile(t, 1.0) / 1e3);
   }
   std::printf("\n");
   std::printf(
