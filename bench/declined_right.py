@@ -1,7 +1,8 @@
 #!/usr/bin/env python3
 """Why the confidence declines right answers (issue 24): per family, the declined right answers (the
 query succeeded, t < 5 m and r < 10 deg, but confidence < --min-confidence) by the model's limiting
-factor (the smallest of its logistic factors: rival, shift, turn, inlier share), and for those the
+factor (the smallest of its logistic factors: rival, shift, turn, inlier share; with the right
+answers' median inlier share beside it), and for those the
 rival factor limits, where the best-scoring rival is: its distance and heading from the answer and its
 verified score over the answer's. A rival far away (another place or a flip) that scores nearly as
 well means the scan's own evidence is ambiguous, and declining is the rule working, not a calibration
@@ -50,12 +51,16 @@ def best_rival(hyps):
 
 def family_line(name, files, model, threshold):
     count = {"declined": 0, "far": 0, "near": 0, "close_score": 0}
+    right_shares = []  # inlier share of every right answer: is the factor alike over sensors?
     by_factor = dict.fromkeys(FACTOR_NAMES, 0)
     for f in files:
         for q in json.load(open(f))["modes"]["gsf"]["queries"]:
             d = q.get("diagnostics", {})
             e = d.get("confidence_evidence")
-            if not e or not q["success"] or q["confidence"] >= threshold:
+            if not e or not q["success"]:
+                continue
+            right_shares.append(e["inlier_share"])
+            if q["confidence"] >= threshold:
                 continue
             count["declined"] += 1
             u = fc.factor_inputs(model, fc.features(e, q))
@@ -71,9 +76,11 @@ def family_line(name, files, model, threshold):
             if a["verified_score"] > 0 and r["verified_score"] >= 0.9 * a["verified_score"]:
                 count["close_score"] += 1
     factors = " ".join(f"{k}={v}" for k, v in by_factor.items())
+    right_shares.sort()
+    share = right_shares[len(right_shares) // 2] if right_shares else 0.0
     return (f"{name} declined_right={count['declined']} limiting: {factors}; rival-limited with the best rival "
             f"> 10 m or > 20 deg away: {count['far']}, nearer: {count['near']}, scoring >= 0.9 of the answer: "
-            f"{count['close_score']}")
+            f"{count['close_score']}; right answers' median inlier share {share:.2f}")
 
 
 def main():
