@@ -196,6 +196,26 @@ TEST_CASE("On a lattice, priors 30-100 m off never give a confident answer; righ
   CHECK(right_prior + 1 >= right_free);
 }
 
+// The restricted search's rivals all lie in the disc, so a thin margin over them says nothing about a
+// copy of the scene outside it: every confident answer with a prior either beats its rivals by
+// Localizer::kPriorGlobalCheckZ or went through the global check, however well it agrees with the map
+// (a gate on the agreement share let a confident answer 110 m off through on a suite world: CHANGELOG).
+TEST_CASE("A confident answer with a prior and a thin margin has always been checked globally") {
+  for (const gsf_test::TinyWorld* w : {&tiny_world(), &gsf_test::tiny_lattice_world()}) {
+    Ready r(*w);
+    for (uint32_t k = 0; k < w->queries.size(); ++k)
+      for (double off : {0.0, 8.0, 40.0}) {
+        LocalizeResult out;
+        if (r.loc.localize(w->queries[k].view(), prior_near(w->queries[k].truth, off, 15.0f, k), &out) != Status::Ok)
+          continue;
+        if (!out.confident || out.prior_global_check) continue;
+        INFO("query " << k << ", prior " << off << " m off: z_rival " << out.confidence_evidence.z_rival
+                      << ", agreement " << out.confidence_evidence.agreement);
+        CHECK(out.confidence_evidence.z_rival >= Localizer::kPriorGlobalCheckZ);
+      }
+  }
+}
+
 TEST_CASE("A heading in the prior keeps the right answer; the opposite heading gives no confident one") {
   const auto& w = tiny_world();
   Ready r(w);

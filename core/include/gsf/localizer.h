@@ -137,8 +137,8 @@ class Localizer {
   // The same with a position prior (position_prior.h): only map triangles near the prior are matched and
   // only hypotheses inside it are answers. InvalidArgument for an invalid prior (validate()); NoSolution
   // when no hypothesis lies inside it. A wrong prior gives a wrong answer at low confidence or none: a
-  // confident answer with a thin margin over its rivals and an agreement share below
-  // confidence.prior_check_agreement is checked by a global search from the scan's own triangles
+  // confident answer with a thin margin over its rivals (z_rival below kPriorGlobalCheckZ), however well
+  // it agrees with the map, is checked by a global search from the scan's own triangles
   // (prior_global_check): a pose elsewhere that verification scores higher takes the answer's confidence
   // down to at most 1 - its own, or replaces the answer when it lies in the prior's disc (prior_contradicted).
   Status localize(const ScanView& scan, const PositionPrior& prior, LocalizeResult* out);
@@ -190,6 +190,9 @@ class Localizer {
   const LocalizerConfig& config() const { return config_; }
   size_t workspace_bytes() const { return workspace_used_; }
 
+  // A prior's confident answer whose z_rival is below this is checked by a global search (localizer.cpp).
+  static constexpr float kPriorGlobalCheckZ = 4.0f;
+
  private:
   struct Impl;  // stage objects, bound into the arena (defined in localizer.cpp only)
   static Status bind_workspace(Arena& arena, const LocalizerConfig& config, Impl& impl, Budget* parts);
@@ -200,8 +203,6 @@ class Localizer {
   void check_with_window(const WindowOutcome& window, LocalizeResult& out) const;
   // A sequence scan's confident answer whose z_rival is below this is checked by the window (localizer.cpp).
   static constexpr float kWindowCheckZ = 4.0f;
-  // A prior's confident answer whose z_rival is below this is checked by a global search (localizer.cpp).
-  static constexpr float kPriorGlobalCheckZ = 4.0f;
   LocalizerConfig config_{};
   MapView map_{};
   size_t workspace_used_ = 0;  // bytes of the caller's buffer init() bound

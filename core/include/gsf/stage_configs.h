@@ -256,12 +256,9 @@ struct RefineConfig {
 struct ConfidenceConfig {
   // The default decision rule: LocalizeResult::confident = confidence >= min_probability.
   float min_probability = 0.9f;
-  // With a position prior, a confident answer with a thin margin (z_rival < 4) is checked by a global
-  // search only when its agreement share is below this (1: every thin margin). An absolute level: label
-  // noise lowers agreement, so noisy scans are checked more (slower, not less safe); a copy of the scene
-  // inside a wrong prior would agree as well as the truth and go unchecked (docs/vehicle-modes.md).
-  float prior_check_agreement = 0.9f;
-  // That check pattern-refines at most this many of the global hypotheses away from the answer.
+  // With a position prior, a confident answer with a thin margin (z_rival below
+  // Localizer::kPriorGlobalCheckZ) is checked by a global search, which pattern-refines at most this many
+  // of the global hypotheses away from the answer.
   uint32_t prior_check_refine = 2;
 };
 
