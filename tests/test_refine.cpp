@@ -4,6 +4,7 @@
 // the same nearest map points as the plain 27-cell search (reference_refine below), ties included.
 #include <catch2/catch.hpp>
 
+#include <algorithm>
 #include <cmath>
 #include <cstring>
 #include <vector>
@@ -330,4 +331,33 @@ TEST_CASE("A tie between cells goes to the lower (dx, dy, dz) index, as in the p
   CHECK(ref_st.inliers == 8);
   CHECK(st.rmse == Approx(1.0 / 512).epsilon(1e-6));  // the x-normal points below, not the z-normal ones
   CHECK(st.rmse == ref_st.rmse);
+}
+
+TEST_CASE("The map's ground under a point: the plane of its level points, kerbs, walls and a roof left out") {
+  // A street on a 5% grade along x (2.86 deg), a kerb 0.15 m up beyond |y| > 6, walls at y = +-12, a
+  // flat roof 5 m above the street on one side, at 0.25 m spacing.
+  const double grade = 0.05;
+  std::vector<float> xyzl;
+  auto add = [&](double x, double y, double z) { xyzl.insert(xyzl.end(), {float(x), float(y), float(z), 0.0f}); };
+  for (double x = -30; x <= 30; x += 0.25)
+    for (double y = -11.5; y <= 11.5; y += 0.25) add(x, y, grade * x + (std::fabs(y) > 6 ? 0.15 : 0.0));
+  for (double x = -30; x <= 30; x += 0.25)
+    for (double z = 0.25; z <= 6; z += 0.25) {
+      add(x, 12.0, grade * x + z);
+      add(x, -12.0, grade * x + z);
+    }
+  for (double x = 5; x <= 15; x += 0.25)
+    for (double y = 8; y <= 11.5; y += 0.25) add(x, y, grade * x + 5.0);
+  const Layer layer(xyzl, 1.0f);
+  float up[3] = {0, 0, 0};
+  REQUIRE(layer.view.ground_near(3.0f, 1.0f, 20.0f, 50, up) > 1000);
+  const Eigen::Vector3d truth = Eigen::Vector3d(-grade, 0.0, 1.0).normalized();
+  const double err = std::acos(std::min(1.0, Eigen::Vector3d(up[0], up[1], up[2]).dot(truth))) * 180.0 / M_PI;
+  INFO("up " << up[0] << " " << up[1] << " " << up[2] << ", " << err << " deg off the street's normal");
+  CHECK(err < 0.2);
+  // Away from the layer's tiles, or asking for more points than there are: nothing, up untouched.
+  float none[3] = {7, 8, 9};
+  CHECK(layer.view.ground_near(500.0f, 500.0f, 20.0f, 50, none) == 0);
+  CHECK(layer.view.ground_near(3.0f, 1.0f, 20.0f, 1u << 30, none) == 0);
+  CHECK(none[0] == 7.0f);
 }

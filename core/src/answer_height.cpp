@@ -1,6 +1,12 @@
 #include "gsf/detail/answer_height.h"
 
+#include <Eigen/Eigenvalues>
+
 #include <algorithm>
+#include <cmath>
+
+#include "gsf/detail/semantic_grid.h"
+#include "gsf/detail/voxel_layer.h"
 
 namespace gsf {
 
@@ -32,6 +38,65 @@ uint32_t consensus_height(const float* a, const float* b, const float* w, uint32
   }
   T->translation().z() = scratch[k].offset;
   return m;
+}
+
+namespace {
+
+// Plane through the ground voxels near the sensor (with band > 0: only those within band of `plane`):
+// its normal (pointing up) and offset into *out (n . p + d = 0). Returns how many voxels it fitted.
+uint32_t fit_ground(const VoxelLayer& voxels, const Eigen::Vector4d& plane, double band, Eigen::Vector4d* out) {
+  const double r2 = double(kGroundRadiusM) * kGroundRadiusM;
+  Eigen::Vector3d sum = Eigen::Vector3d::Zero();
+  Eigen::Matrix3d outer = Eigen::Matrix3d::Zero();
+  uint32_t m = 0;
+  for (uint32_t i = 0; i < voxels.size(); ++i) {
+    const Voxel& v = voxels.voxel(i);
+    if (!(class_bit(v.label) & kGroundClasses)) continue;
+    const Eigen::Vector3d p(v.centroid[0], v.centroid[1], v.centroid[2]);
+    if (p.x() * p.x() + p.y() * p.y() > r2) continue;
+    if (band > 0.0 && std::fabs(plane.head<3>().dot(p) + plane.w()) > band) continue;
+    sum += p;
+    outer += p * p.transpose();
+    ++m;
+  }
+  if (m < kGroundMinVoxels) return m;
+  const Eigen::Vector3d mean = sum / double(m);
+  const Eigen::Matrix3d cov = outer / double(m) - mean * mean.transpose();
+  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig(cov);
+  Eigen::Vector3d n = eig.eigenvectors().col(0);  // the smallest eigenvalue's: the plane's normal
+  if (n.z() < 0.0) n = -n;
+  *out << n, -n.dot(mean);
+  return m;
+}
+
+}  // namespace
+
+bool scan_ground_up(const VoxelLayer& voxels, Eigen::Vector3d* up) {
+  Eigen::Vector4d first, second;
+  if (!up || fit_ground(voxels, Eigen::Vector4d::Zero(), 0.0, &first) < kGroundMinVoxels ||
+      fit_ground(voxels, first, kGroundBandM, &second) < kGroundMinVoxels)
+    return false;
+  *up = second.head<3>();
+  return true;
+}
+
+void level_answer(const Eigen::Vector3d& scan_up, const Eigen::Vector3d& map_up, Eigen::Isometry3d* T) {
+  if (!T) return;
+  const double yaw = std::atan2(T->linear()(1, 0), T->linear()(0, 0));
+  // Level the scan (its up to the vertical), turn about the vertical, tilt the vertical onto map_up; the
+  // turn is solved so the result reads verification's yaw (a few fixed-point steps: the tilt is small).
+  const Eigen::Matrix3d level =
+      Eigen::Quaterniond::FromTwoVectors(scan_up.normalized(), Eigen::Vector3d::UnitZ()).toRotationMatrix();
+  const Eigen::Matrix3d lean =
+      Eigen::Quaterniond::FromTwoVectors(Eigen::Vector3d::UnitZ(), map_up.normalized()).toRotationMatrix();
+  double turn = yaw;
+  Eigen::Matrix3d R = Eigen::Matrix3d::Identity();
+  for (int k = 0; k < 4; ++k) {
+    R = lean * Eigen::AngleAxisd(turn, Eigen::Vector3d::UnitZ()).toRotationMatrix() * level;
+    const double err = std::remainder(yaw - std::atan2(R(1, 0), R(0, 0)), 2.0 * 3.14159265358979323846);
+    turn += err;
+  }
+  T->linear() = lean * Eigen::AngleAxisd(turn, Eigen::Vector3d::UnitZ()).toRotationMatrix() * level;
 }
 
 }  // namespace gsf

@@ -17,6 +17,7 @@
 #include "gsf/detail/pole_extraction.h"
 #include "gsf/detail/pose_hypotheses.h"
 #include "gsf/detail/refine.h"
+#include "gsf/detail/refine_layer.h"
 #include "gsf/detail/scan_window.h"
 #include "gsf/detail/semantic_grid.h"
 #include "gsf/detail/tracker.h"
@@ -100,7 +101,7 @@ struct Localizer::Impl {
   Status generate_hypotheses(const LocalizerConfig& cfg, uint32_t C, LocalizeResult& out);
   void drop_outside_prior(const LocalizerConfig& cfg, LocalizeResult& out);
   void choose_answer(const LocalizerConfig& cfg, LocalizeResult& out);
-  void settle_height(const LocalizerConfig& cfg, uint32_t C, LocalizeResult& out);
+  void settle_height(const LocalizerConfig& cfg, const MapView& map, uint32_t C, LocalizeResult& out);
   void measure_confidence(const LocalizerConfig& cfg, LocalizeResult& out);
   void refine_answer(LocalizeResult& out);
   // The global check of a prior's answer (Localizer::check_outside_prior).
@@ -467,9 +468,27 @@ void Localizer::Impl::choose_answer(const LocalizerConfig& cfg, LocalizeResult& 
     out.hypothesis[k] = hypothesis_report(hypotheses[choice.rank[k]], choice.fully_verified[k]);
 }
 
-// 9b. The answer's height from every correspondence it explains (answer_height.h): verification chose
-// x, y and yaw but cannot see height.
-void Localizer::Impl::settle_height(const LocalizerConfig& cfg, uint32_t C, LocalizeResult& out) {
+// 9b. The answer's roll and pitch from the scan's and the map's ground, its height from every
+// correspondence it explains (answer_height.h): verification chose x, y and yaw but sees neither.
+void Localizer::Impl::settle_height(const LocalizerConfig& cfg, const MapView& map, uint32_t C, LocalizeResult& out) {
+  // The scan's own ground laid on the map's under the answer (answer_height.h); a ground leaning beyond
+  // the upright prior's limit (a slope beside the road, mislabelled ground) is not trusted: the vertical
+  // then. Without the scan's ground the hypothesis keeps its own roll and pitch.
+  const double max_tilt = cfg.hypotheses.max_tilt_deg > 0.0f ? double(cfg.hypotheses.max_tilt_deg) : 180.0;
+  auto leans = [max_tilt](const Eigen::Vector3d& up) {
+    return std::acos(std::min(1.0, up.z())) * 57.29577951308232 > max_tilt;
+  };
+  Eigen::Vector3d scan_up = Eigen::Vector3d::UnitZ();
+  if (scan_ground_up(voxels, &scan_up)) {
+    if (leans(scan_up)) scan_up = Eigen::Vector3d::UnitZ();
+    float g[3];
+    const Eigen::Vector3d at = out.map_T_scan.translation();
+    Eigen::Vector3d map_up = Eigen::Vector3d::UnitZ();
+    if (refine_layer_view(map).ground_near(float(at.x()), float(at.y()), kGroundRadiusM, kGroundMinVoxels, g) > 0)
+      map_up = Eigen::Vector3d(g[0], g[1], g[2]);
+    if (leans(map_up)) map_up = Eigen::Vector3d::UnitZ();
+    level_answer(scan_up, map_up, &out.map_T_scan);
+  }
   out.height_votes =
       consensus_height(correspondences.query_xyz(), correspondences.map_xyz(), correspondences.weights(), C,
                        cfg.hypotheses.tls_threshold, cfg.hypotheses.min_inliers, height_samples, &out.map_T_scan);
@@ -589,7 +608,7 @@ void Localizer::check_outside_prior(LocalizeResult& out) {
       out.map_T_scan = best.pose;                                          // verification's pose (not ICP-refined)
       out.refined = false;
       out.inliers = best.inliers;
-      im.settle_height(config_, im.graph_pairs, out);
+      im.settle_height(config_, map_, im.graph_pairs, out);
       out.map_frame_T_scan = to_map_frame(map_.georef, out.map_T_scan);
       out.confidence_evidence = e;
       out.confidence = c;
@@ -664,7 +683,7 @@ Status Localizer::localize_in(const ScanView& scan, const PositionPrior* prior, 
   im.answer.set_refine_distinct(prior != nullptr);  // a prior's hypotheses crowd at few places
   if (im.hypotheses.size() == 0) return finish(Status::NoSolution);
   im.choose_answer(cfg, out);
-  im.settle_height(cfg, C, out);
+  im.settle_height(cfg, map_, C, out);
   lap(&out.times.pose);
   im.measure_confidence(cfg, out);
   lap(&out.times.confidence);

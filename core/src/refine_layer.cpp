@@ -77,6 +77,66 @@ void RefineLayerView::find(const RefineCell& c, uint32_t* begin, uint32_t* end, 
   *end = first + hi;
 }
 
+uint32_t RefineLayerView::ground_near(float x, float y, float radius, uint32_t min_points, float up[3]) const {
+  if (tile_count == 0 || !(radius > 0.0f) || !(cell > 0.0f)) return 0;
+  const float tile_m = cell * float(kRefineTileCells);
+  const int32_t tx0 = int32_t(std::floor((x - radius) / tile_m)), tx1 = int32_t(std::floor((x + radius) / tile_m));
+  const int32_t ty0 = int32_t(std::floor((y - radius) / tile_m)), ty1 = int32_t(std::floor((y + radius) / tile_m));
+  const float r2 = radius * radius, cos_max = 0.906f;  // cos 25 deg
+  double plane[3] = {0.0, 0.0, 0.0};                   // z = a dx + b dy + c (dx, dy from x, y)
+  uint32_t kept = 0;
+  for (int pass = 0; pass < 4; ++pass) {
+    const double band = pass == 1 ? 2.0 : (pass == 2 ? 0.5 : 0.25);  // pass 0: every level point, its mean
+    double s[6] = {}, sz[3] = {};  // normal equations of (dx, dy, 1): xx xy x yy y n; z x, z y, z
+    uint32_t n = 0;
+    for (int32_t tx = tx0; tx <= tx1; ++tx)
+      for (int32_t ty = ty0; ty <= ty1; ++ty) {
+        uint32_t key;
+        if (!semantic_tile_key(tx, ty, &key)) continue;
+        const uint32_t t = lower_bound_index(tile_count, [&](uint32_t k) { return tiles[k].key < key; });
+        if (t >= tile_count || tiles[t].key != key) continue;
+        const uint32_t last = t + 1 < tile_count ? tiles[t + 1].first_point : point_count;
+        for (uint32_t i = tiles[t].first_point; i < last; ++i) {
+          float nrm[3], p[3];
+          normal(points[i], nrm);
+          if (!(std::fabs(nrm[2]) >= cos_max)) continue;
+          position(t, i, p);
+          const double dx = double(p[0]) - x, dy = double(p[1]) - y;
+          if (dx * dx + dy * dy > r2) continue;
+          if (pass > 0 && std::fabs(double(p[2]) - (plane[0] * dx + plane[1] * dy + plane[2])) > band) continue;
+          s[0] += dx * dx, s[1] += dx * dy, s[2] += dx, s[3] += dy * dy, s[4] += dy, s[5] += 1.0;
+          sz[0] += p[2] * dx, sz[1] += p[2] * dy, sz[2] += p[2];
+          ++n;
+        }
+      }
+    if (n < min_points || n < 3) return 0;
+    if (pass == 0) {
+      plane[2] = sz[2] / double(n);  // a level start at the mean height
+      continue;
+    }
+    // Solve the 3x3 symmetric system by Cramer's rule (well conditioned: points spread over metres).
+    const double A[3][3] = {{s[0], s[1], s[2]}, {s[1], s[3], s[4]}, {s[2], s[4], s[5]}};
+    auto det3 = [](const double M[3][3]) {
+      return M[0][0] * (M[1][1] * M[2][2] - M[1][2] * M[2][1]) - M[0][1] * (M[1][0] * M[2][2] - M[1][2] * M[2][0]) +
+             M[0][2] * (M[1][0] * M[2][1] - M[1][1] * M[2][0]);
+    };
+    const double d = det3(A);
+    if (!(std::fabs(d) > 1e-9)) return 0;
+    for (int c = 0; c < 3; ++c) {
+      double M[3][3];
+      for (int r = 0; r < 3; ++r)
+        for (int k = 0; k < 3; ++k) M[r][k] = k == c ? sz[r] : A[r][k];
+      plane[c] = det3(M) / d;
+    }
+    kept = n;
+  }
+  const double len = std::sqrt(plane[0] * plane[0] + plane[1] * plane[1] + 1.0);
+  up[0] = float(-plane[0] / len);
+  up[1] = float(-plane[1] / len);
+  up[2] = float(1.0 / len);
+  return kept;
+}
+
 void RefineLayerView::position(uint32_t t, uint32_t i, float xyz[3]) const {
   const uint32_t key = tiles[t].key;
   const int32_t n = static_cast<int32_t>(kRefineTileCells);

@@ -54,6 +54,11 @@ struct RefineLayerView {
   static void normal(const MapRefinePoint& p, float n[3]);
   // The tile a point index belongs to (binary search over first_point).
   uint32_t tile_of(uint32_t i) const;
+  // The map's ground around (x, y) (map-local, bird's-eye, within `radius`): a plane z = a x + b y + c
+  // fitted to the points whose normal is within 25 deg of vertical, three times, keeping those within
+  // 2, 0.5 and then 0.25 m of the last fit (kerbs, a roof edge, a wall's foot). Its upward unit normal
+  // into up; returns how many points the last fit kept (up unchanged when fewer than min_points).
+  uint32_t ground_near(float x, float y, float radius, uint32_t min_points, float up[3]) const;
   // Structural checks for untrusted arrays: cell size, keys strictly increasing, first points monotone
   // from 0 within point_count, cells non-decreasing in each tile, normals zero or near unit length.
   Status validate() const;
