@@ -361,3 +361,16 @@ TEST_CASE("The map's ground under a point: the plane of its level points, kerbs,
   CHECK(layer.view.ground_near(3.0f, 1.0f, 20.0f, 1u << 30, none) == 0);
   CHECK(none[0] == 7.0f);
 }
+
+TEST_CASE("The map's ground lookup refuses a disc wider than its tile limit (bounded work)") {
+  std::vector<float> xyzl;
+  for (double x = -40; x <= 40; x += 0.5)
+    for (double y = -40; y <= 40; y += 0.5) xyzl.insert(xyzl.end(), {float(x), float(y), 0.0f, 0.0f});
+  const Layer layer(xyzl, 1.0f);
+  float up[3] = {7, 8, 9};
+  CHECK(layer.view.ground_near(0.0f, 0.0f, 20.0f, 50, up) > 0);  // 20 m at 16 m tiles: 3-4 a side
+  CHECK(up[2] > 0.999f);
+  float none[3] = {7, 8, 9};
+  CHECK(layer.view.ground_near(0.0f, 0.0f, 40.0f, 50, none) == 0);  // 80 m across: 6 tiles a side
+  CHECK(none[0] == 7.0f);
+}

@@ -82,6 +82,8 @@ uint32_t RefineLayerView::ground_near(float x, float y, float radius, uint32_t m
   const float tile_m = cell * float(kRefineTileCells);
   const int32_t tx0 = int32_t(std::floor((x - radius) / tile_m)), tx1 = int32_t(std::floor((x + radius) / tile_m));
   const int32_t ty0 = int32_t(std::floor((y - radius) / tile_m)), ty1 = int32_t(std::floor((y + radius) / tile_m));
+  // Bounded work: a radius of up to about two tiles (16 at the default 1 m cell and 20 m radius).
+  if (int64_t(tx1) - tx0 + 1 > kGroundMaxTilesPerSide || int64_t(ty1) - ty0 + 1 > kGroundMaxTilesPerSide) return 0;
   const float r2 = radius * radius, cos_max = 0.906f;  // cos 25 deg
   double plane[3] = {0.0, 0.0, 0.0};                   // z = a dx + b dy + c (dx, dy from x, y)
   uint32_t kept = 0;

@@ -27,8 +27,9 @@
 
 namespace gsf {
 
-constexpr uint32_t kRefineTileCells = 16;   // columns per tile side (4 bits each of the cell id)
-constexpr int32_t kRefineTileZCells = 256;  // z cells a tile spans above its z base (8 bits)
+constexpr uint32_t kRefineTileCells = 16;      // columns per tile side (4 bits each of the cell id)
+constexpr int32_t kRefineTileZCells = 256;     // z cells a tile spans above its z base (8 bits)
+constexpr int64_t kGroundMaxTilesPerSide = 4;  // RefineLayerView::ground_near's limit
 
 // MapRefineTile and MapRefinePoint, the layer's records, are in map_format.h.
 
@@ -57,7 +58,8 @@ struct RefineLayerView {
   // The map's ground around (x, y) (map-local, bird's-eye, within `radius`): a plane z = a x + b y + c
   // fitted to the points whose normal is within 25 deg of vertical, three times, keeping those within
   // 2, 0.5 and then 0.25 m of the last fit (kerbs, a roof edge, a wall's foot). Its upward unit normal
-  // into up; returns how many points the last fit kept (up unchanged when fewer than min_points).
+  // into up; returns how many points the last fit kept (up unchanged when fewer than min_points, or
+  // when the disc spans more than kGroundMaxTilesPerSide tiles a side: bounded work).
   uint32_t ground_near(float x, float y, float radius, uint32_t min_points, float up[3]) const;
   // Structural checks for untrusted arrays: cell size, keys strictly increasing, first points monotone
   // from 0 within point_count, cells non-decreasing in each tile, normals zero or near unit length.
