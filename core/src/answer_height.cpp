@@ -89,14 +89,15 @@ void level_answer(const Eigen::Vector3d& scan_up, const Eigen::Vector3d& map_up,
       Eigen::Quaterniond::FromTwoVectors(scan_up.normalized(), Eigen::Vector3d::UnitZ()).toRotationMatrix();
   const Eigen::Matrix3d lean =
       Eigen::Quaterniond::FromTwoVectors(Eigen::Vector3d::UnitZ(), map_up.normalized()).toRotationMatrix();
+  auto turned = [&](double turn) -> Eigen::Matrix3d {
+    return lean * Eigen::AngleAxisd(turn, Eigen::Vector3d::UnitZ()).toRotationMatrix() * level;
+  };
   double turn = yaw;
-  Eigen::Matrix3d R = Eigen::Matrix3d::Identity();
   for (int k = 0; k < 4; ++k) {
-    R = lean * Eigen::AngleAxisd(turn, Eigen::Vector3d::UnitZ()).toRotationMatrix() * level;
-    const double err = std::remainder(yaw - std::atan2(R(1, 0), R(0, 0)), 2.0 * 3.14159265358979323846);
-    turn += err;
+    const Eigen::Matrix3d R = turned(turn);
+    turn += std::remainder(yaw - std::atan2(R(1, 0), R(0, 0)), 2.0 * 3.14159265358979323846);
   }
-  T->linear() = lean * Eigen::AngleAxisd(turn, Eigen::Vector3d::UnitZ()).toRotationMatrix() * level;
+  T->linear() = turned(turn);
 }
 
 }  // namespace gsf

@@ -484,7 +484,7 @@ void Localizer::Impl::settle_height(const LocalizerConfig& cfg, const MapView& m
     float g[3];
     const Eigen::Vector3d at = out.map_T_scan.translation();
     Eigen::Vector3d map_up = Eigen::Vector3d::UnitZ();
-    if (refine_layer_view(map).ground_near(float(at.x()), float(at.y()), kGroundRadiusM, kGroundMinVoxels, g) > 0)
+    if (refine_layer_view(map).ground_near(float(at.x()), float(at.y()), kGroundRadiusM, kGroundMinMapPoints, g) > 0)
       map_up = Eigen::Vector3d(g[0], g[1], g[2]);
     if (leans(map_up)) map_up = Eigen::Vector3d::UnitZ();
     level_answer(scan_up, map_up, &out.map_T_scan);

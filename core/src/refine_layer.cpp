@@ -2,6 +2,8 @@
 
 #include <cmath>
 
+#include <Eigen/Dense>
+
 #include "gsf/detail/semantic_grid.h"
 
 namespace gsf {
@@ -43,6 +45,11 @@ int8_t quantize_normal_component(float n) {
   return static_cast<int8_t>(q < -127.0f ? -127.0f : (q > 127.0f ? 127.0f : q));
 }
 
+uint32_t RefineLayerView::tile_with_key(uint32_t key) const {
+  const uint32_t t = lower_bound_index(tile_count, [&](uint32_t k) { return tiles[k].key < key; });
+  return t < tile_count && tiles[t].key == key ? t : tile_count;
+}
+
 uint32_t RefineLayerView::tile_of(uint32_t i) const {
   // The last tile whose first point is <= i.
   const uint32_t t = lower_bound_index(tile_count, [&](uint32_t k) { return tiles[k].first_point <= i; });
@@ -58,8 +65,8 @@ void RefineLayerView::find(const RefineCell& c, uint32_t* begin, uint32_t* end, 
   if (hint && *hint < tile_count && tiles[*hint].key == key) {
     t = *hint;
   } else {
-    t = lower_bound_index(tile_count, [&](uint32_t k) { return tiles[k].key < key; });
-    if (t >= tile_count || tiles[t].key != key) return;
+    t = tile_with_key(key);
+    if (t == tile_count) return;
     if (hint) *hint = t;
   }
   const int64_t lz = int64_t(c.z) - tiles[t].z_base;
@@ -82,59 +89,53 @@ uint32_t RefineLayerView::ground_near(float x, float y, float radius, uint32_t m
   const float tile_m = cell * float(kRefineTileCells);
   const int32_t tx0 = int32_t(std::floor((x - radius) / tile_m)), tx1 = int32_t(std::floor((x + radius) / tile_m));
   const int32_t ty0 = int32_t(std::floor((y - radius) / tile_m)), ty1 = int32_t(std::floor((y + radius) / tile_m));
-  // Bounded work: a radius of up to about two tiles (16 at the default 1 m cell and 20 m radius).
+  // Bounded work: at most kGroundMaxTilesPerSide tiles a side (a 20 m radius at the default 1 m cell
+  // spans 3-4 tiles of 16 m), looked up once for the four passes.
   if (int64_t(tx1) - tx0 + 1 > kGroundMaxTilesPerSide || int64_t(ty1) - ty0 + 1 > kGroundMaxTilesPerSide) return 0;
+  uint32_t near[kGroundMaxTilesPerSide * kGroundMaxTilesPerSide];
+  uint32_t near_count = 0;
+  for (int32_t tx = tx0; tx <= tx1; ++tx)
+    for (int32_t ty = ty0; ty <= ty1; ++ty) {
+      uint32_t key;
+      const uint32_t t = semantic_tile_key(tx, ty, &key) ? tile_with_key(key) : tile_count;
+      if (t < tile_count) near[near_count++] = t;
+    }
   const float r2 = radius * radius, cos_max = 0.906f;  // cos 25 deg
-  double plane[3] = {0.0, 0.0, 0.0};                   // z = a dx + b dy + c (dx, dy from x, y)
+  Eigen::Vector3d plane = Eigen::Vector3d::Zero();     // z = a dx + b dy + c (dx, dy from x, y)
   uint32_t kept = 0;
   for (int pass = 0; pass < 4; ++pass) {
     const double band = pass == 1 ? 2.0 : (pass == 2 ? 0.5 : 0.25);  // pass 0: every level point, its mean
-    double s[6] = {}, sz[3] = {};  // normal equations of (dx, dy, 1): xx xy x yy y n; z x, z y, z
+    Eigen::Matrix3d A = Eigen::Matrix3d::Zero();                     // normal equations of (dx, dy, 1)
+    Eigen::Vector3d b = Eigen::Vector3d::Zero();
     uint32_t n = 0;
-    for (int32_t tx = tx0; tx <= tx1; ++tx)
-      for (int32_t ty = ty0; ty <= ty1; ++ty) {
-        uint32_t key;
-        if (!semantic_tile_key(tx, ty, &key)) continue;
-        const uint32_t t = lower_bound_index(tile_count, [&](uint32_t k) { return tiles[k].key < key; });
-        if (t >= tile_count || tiles[t].key != key) continue;
-        const uint32_t last = t + 1 < tile_count ? tiles[t + 1].first_point : point_count;
-        for (uint32_t i = tiles[t].first_point; i < last; ++i) {
-          float nrm[3], p[3];
-          normal(points[i], nrm);
-          if (!(std::fabs(nrm[2]) >= cos_max)) continue;
-          position(t, i, p);
-          const double dx = double(p[0]) - x, dy = double(p[1]) - y;
-          if (dx * dx + dy * dy > r2) continue;
-          if (pass > 0 && std::fabs(double(p[2]) - (plane[0] * dx + plane[1] * dy + plane[2])) > band) continue;
-          s[0] += dx * dx, s[1] += dx * dy, s[2] += dx, s[3] += dy * dy, s[4] += dy, s[5] += 1.0;
-          sz[0] += p[2] * dx, sz[1] += p[2] * dy, sz[2] += p[2];
-          ++n;
-        }
+    for (uint32_t k = 0; k < near_count; ++k) {
+      const uint32_t t = near[k];
+      const uint32_t last = t + 1 < tile_count ? tiles[t + 1].first_point : point_count;
+      for (uint32_t i = tiles[t].first_point; i < last; ++i) {
+        float nrm[3], p[3];
+        normal(points[i], nrm);
+        if (!(std::fabs(nrm[2]) >= cos_max)) continue;
+        position(t, i, p);
+        const Eigen::Vector3d J(double(p[0]) - x, double(p[1]) - y, 1.0);
+        if (J.x() * J.x() + J.y() * J.y() > r2) continue;
+        if (pass > 0 && std::fabs(double(p[2]) - plane.dot(J)) > band) continue;
+        A += J * J.transpose();
+        b += double(p[2]) * J;
+        ++n;
       }
+    }
     if (n < min_points || n < 3) return 0;
     if (pass == 0) {
-      plane[2] = sz[2] / double(n);  // a level start at the mean height
+      plane = Eigen::Vector3d(0.0, 0.0, b.z() / double(n));  // a level start at the mean height
       continue;
     }
-    // Solve the 3x3 symmetric system by Cramer's rule (well conditioned: points spread over metres).
-    const double A[3][3] = {{s[0], s[1], s[2]}, {s[1], s[3], s[4]}, {s[2], s[4], s[5]}};
-    auto det3 = [](const double M[3][3]) {
-      return M[0][0] * (M[1][1] * M[2][2] - M[1][2] * M[2][1]) - M[0][1] * (M[1][0] * M[2][2] - M[1][2] * M[2][0]) +
-             M[0][2] * (M[1][0] * M[2][1] - M[1][1] * M[2][0]);
-    };
-    const double d = det3(A);
-    if (!(std::fabs(d) > 1e-9)) return 0;
-    for (int c = 0; c < 3; ++c) {
-      double M[3][3];
-      for (int r = 0; r < 3; ++r)
-        for (int k = 0; k < 3; ++k) M[r][k] = k == c ? sz[r] : A[r][k];
-      plane[c] = det3(M) / d;
-    }
+    if (!(std::fabs(A.determinant()) > 1e-9)) return 0;  // the points on a line: no plane
+    plane = A.inverse() * b;                             // 3 x 3: the closed-form inverse
     kept = n;
   }
-  const double len = std::sqrt(plane[0] * plane[0] + plane[1] * plane[1] + 1.0);
-  up[0] = float(-plane[0] / len);
-  up[1] = float(-plane[1] / len);
+  const double len = std::sqrt(plane.x() * plane.x() + plane.y() * plane.y() + 1.0);
+  up[0] = float(-plane.x() / len);
+  up[1] = float(-plane.y() / len);
   up[2] = float(1.0 / len);
   return kept;
 }

@@ -47,6 +47,7 @@ uint32_t consensus_height(const float* a, const float* b, const float* w, uint32
 constexpr float kGroundRadiusM = 20.0f;
 constexpr float kGroundBandM = 0.25f;
 constexpr uint32_t kGroundMinVoxels = 50;
+constexpr uint32_t kGroundMinMapPoints = 50;  // level map points RefineLayerView::ground_near must keep
 bool scan_ground_up(const VoxelLayer& voxels, Eigen::Vector3d* up);
 
 // T with the roll and pitch that map `scan_up` (sensor frame) to `map_up` (the map's ground normal under

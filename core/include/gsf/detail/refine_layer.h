@@ -55,6 +55,8 @@ struct RefineLayerView {
   static void normal(const MapRefinePoint& p, float n[3]);
   // The tile a point index belongs to (binary search over first_point).
   uint32_t tile_of(uint32_t i) const;
+  // The index of the tile with this key (binary search), tile_count when the layer has none.
+  uint32_t tile_with_key(uint32_t key) const;
   // The map's ground around (x, y) (map-local, bird's-eye, within `radius`): a plane z = a x + b y + c
   // fitted to the points whose normal is within 25 deg of vertical, three times, keeping those within
   // 2, 0.5 and then 0.25 m of the last fit (kerbs, a roof edge, a wall's foot). Its upward unit normal
