@@ -730,8 +730,9 @@ Status Localizer::track(const ScanView& scan, const Eigen::Isometry3d& predicted
   im.answer.prepare(im.voxels, im.weights, cfg.verify);
   const TrackScan ts{im.answer.compact_points(), im.answer.compact_point_count(), im.voxels,
                      im.answer.verify_weights()};
-  const TrackOutcome o = track_pose(ts, im.semantic, to_map_local(map_.georef, predicted), cfg.track, cfg.verify,
-                                    im.track_refine ? &im.refiner : nullptr, im.confidence, clock_);
+  const TrackOutcome o =
+      track_pose(ts, im.semantic, to_map_local(map_.georef, predicted), cfg.track, cfg.verify,
+                 cfg.confidence.min_probability, im.track_refine ? &im.refiner : nullptr, im.confidence, clock_);
   out.times.pose = o.search_ns + (now(clock_) - t - o.search_ns - o.refine_ns - o.probe_ns);  // with the copy
   out.times.refine = o.refine_ns;
   out.times.confidence = o.probe_ns;

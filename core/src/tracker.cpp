@@ -17,45 +17,79 @@ double tracking_probability(const ConfidenceEvidence& evidence) {
   return confidence_probability(e, kTrackingConfidenceModel);
 }
 
+namespace {
+
+// ICP from `start`; true with the accepted result in *refined.
+bool icp_from(Refiner* refiner, const TrackScan& scan, const Eigen::Isometry3d& start, const TrackConfig& tc,
+              Eigen::Isometry3d* refined) {
+  RefineStats rs;
+  return refiner != nullptr &&
+         refiner->refine(scan.voxels, start, refined, &rs, tc.icp_points, tc.icp_iterations) == Status::Ok &&
+         rs.accepted;
+}
+
+bool within_icp_start(const Eigen::Isometry3d& a, const Eigen::Isometry3d& b, const TrackConfig& tc) {
+  return within_pose(a, b, tc.icp_start_m, double(tc.icp_start_deg) / 57.29577951308232);
+}
+
+// Within what the pattern search can reach from the prediction: its steps halve each round, so it moves
+// at most step x (2 - 2^(1 - rounds)) in position and heading.
+bool within_search_reach(const Eigen::Isometry3d& pose, const Eigen::Isometry3d& predicted, const TrackConfig& tc) {
+  const double reach = 2.0 - std::ldexp(1.0, 1 - int(tc.search_rounds));
+  return within_pose(pose, predicted, reach * tc.search_step_m, reach * double(tc.search_step_deg) / 57.29577951308232);
+}
+
+}  // namespace
+
 TrackOutcome track_pose(const TrackScan& scan, const SemanticGridView& grid, const Eigen::Isometry3d& predicted,
-                        const TrackConfig& tc, const VerifyConfig& vc, Refiner* refiner, AnswerConfidence& confidence,
-                        Clock* clock) {
+                        const TrackConfig& tc, const VerifyConfig& vc, double min_probability, Refiner* refiner,
+                        AnswerConfidence& confidence, Clock* clock) {
   TrackOutcome o;
   uint64_t t = clock ? clock->now_ns() : 0;
   auto lap = [&](uint64_t* ns) {
     const uint64_t n = clock ? clock->now_ns() : 0;
-    *ns = n - t;
+    *ns += n - t;
     t = n;
   };
   const float lambda = vc.disagree_weight;
+  const uint32_t probe_points = tc.probe_points > 0 ? std::min(tc.probe_points, vc.max_points) : vc.max_points;
+  auto probe = [&](const Eigen::Isometry3d& pose) {
+    const AnswerConfidence::Answer a{pose, nullptr, 0, 0, 0.0f};
+    o.evidence = confidence.measure(scan.points, scan.n, grid, scan.weights, lambda, a, probe_points);
+    o.confidence = tracking_probability(o.evidence);
+    lap(&o.probe_ns);
+  };
+  // 0. A good prediction needs no search: ICP from it, and when ICP stays near it (as the search would have,
+  // which then hands ICP the prediction too) and the probes vouch for the result, that is the answer.
+  Eigen::Isometry3d refined;
+  const bool icp_ok = icp_from(refiner, scan, predicted, tc, &refined);
+  const bool icp_first = icp_ok && within_search_reach(refined, predicted, tc);
+  lap(&o.refine_ns);
+  if (icp_first) {
+    probe(refined);
+    if (o.confidence >= min_probability) {
+      o.map_T_scan = refined;
+      o.refined = true;
+      return o;
+    }
+  }
   // 1. Pattern search of the verification score around the prediction (coarse rounds on a sample).
   Eigen::Isometry3d searched = predicted;
-  o.verification = verify_pose_refined(scan.points, scan.n, grid, predicted, vc.max_points, scan.weights,
-                                       tc.search_rounds, tc.search_step_m, tc.search_step_deg, &searched,
-                                       vc.search_divisor, vc.polish_divisor, nullptr, lambda);
+  verify_pose_refined(scan.points, scan.n, grid, predicted, vc.max_points, scan.weights, tc.search_rounds,
+                      tc.search_step_m, tc.search_step_deg, &searched, vc.search_divisor, vc.polish_divisor, nullptr,
+                      lambda);
   o.map_T_scan = searched;
   lap(&o.search_ns);
   // 2. ICP for the last decimetres. The score is flat within a semantic cell, so the search wanders in
-  // it: when it ends within icp_start_m / icp_start_deg of the prediction, ICP starts from the prediction.
-  if (refiner != nullptr) {
-    Eigen::Isometry3d refined;
-    RefineStats rs;
-    const Eigen::Isometry3d start =
-        within_pose(searched, predicted, tc.icp_start_m, double(tc.icp_start_deg) / 57.29577951308232) ? predicted
-                                                                                                       : searched;
-    if (refiner->refine(scan.voxels, start, &refined, &rs, tc.icp_points, tc.icp_iterations) == Status::Ok &&
-        rs.accepted) {
-      o.map_T_scan = refined;
-      o.refined = true;
-    }
+  // it: when it ends near the prediction, ICP starts from the prediction (step 0 already ran it).
+  const bool reuse_step0 = within_icp_start(searched, predicted, tc);
+  if (reuse_step0 ? icp_ok : icp_from(refiner, scan, searched, tc, &refined)) {
+    o.map_T_scan = refined;
+    o.refined = true;
   }
   lap(&o.refine_ns);
   // 3. The probes at the result: is it a peak in position and heading?
-  const AnswerConfidence::Answer a{o.map_T_scan, nullptr, 0, 0, 0.0f};
-  const uint32_t probe_points = tc.probe_points > 0 ? std::min(tc.probe_points, vc.max_points) : vc.max_points;
-  o.evidence = confidence.measure(scan.points, scan.n, grid, scan.weights, lambda, a, probe_points);
-  o.confidence = tracking_probability(o.evidence);
-  lap(&o.probe_ns);
+  if (!(icp_first && reuse_step0)) probe(o.map_T_scan);  // else step 0 probed this very pose
   return o;
 }
 

@@ -2,14 +2,18 @@
 // change between versions. The stable interface is localizer.h, config.h, map_format.h, scan.h, status.h,
 // platform.h, class_table.h, georeference.h, stage_configs.h, stage_results.h and the C API gsf.h.
 // Tracking: the pose of a scan near a predicted pose (the last pose and odometry), without the global
-// search (docs/vehicle-modes.md). Three steps, each bounded:
+// search (docs/vehicle-modes.md). Each step bounded:
+//   0. point-to-plane ICP from the prediction against the map's refinement layer (refine.h); when it is
+//      accepted, ends within the pattern search's reach of the prediction (where step 1 would have
+//      looked) and the probes of step 3 vouch for it (confidence >= min_probability), that is the
+//      answer: a good prediction needs no search. Otherwise:
 //   1. a bird's-eye pattern search of whole-scan verification around the prediction (semantic_grid.h:
 //      verify_pose_refined, steps of search_step_m / search_step_deg halved each round), which takes a
 //      prediction a few metres and degrees off to within about a cell of the map's semantic layer;
-//   2. point-to-plane ICP against the map's refinement layer (refine.h), for centimetres, when the map
-//      has that layer (accepted only within its correction limit, as for one-shot); it starts from the
-//      prediction when the search ended within TrackConfig::icp_start_m / icp_start_deg of it (the
-//      score is flat within a cell, where the search wanders up to a metre), else from the search's pose;
+//   2. ICP, for centimetres, when the map has that layer (accepted only within its correction limit, as
+//      for one-shot): step 0's result when the search ended within TrackConfig::icp_start_m /
+//      icp_start_deg of the prediction (the score is flat within a cell, where the search wanders up to
+//      a metre; ICP from the prediction did better), else ICP from the search's pose;
 //   3. the confidence's probe statistic at the result (confidence.h): the shifted and turned probes,
 //      no rivals (there are no other hypotheses). The inlier factor is left out: tracking forms no
 //      instances; it guards one-shot answers in a map of somewhere else, and a tracked pose follows a
@@ -36,8 +40,7 @@ namespace gsf {
 // What track() found.
 struct TrackOutcome {
   Eigen::Isometry3d map_T_scan = Eigen::Isometry3d::Identity();
-  PoseVerification verification;  // the result's whole-scan verification (the pattern search's pose)
-  bool refined = false;           // ICP ran and its result was accepted
+  bool refined = false;  // ICP ran and its result was accepted
   ConfidenceEvidence evidence;
   double confidence = 0.0;
   uint64_t search_ns = 0, refine_ns = 0, probe_ns = 0;  // the three steps' times (0 without a clock)
@@ -52,9 +55,9 @@ struct TrackScan {
   const float* weights;  // this scan's verification weights
 };
 
-// The three steps above. refiner: nullptr (or without a map layer) skips step 2. clock: optional.
+// The steps above. refiner: nullptr (or without a map layer) skips steps 0 and 2. clock: optional.
 TrackOutcome track_pose(const TrackScan& scan, const SemanticGridView& grid, const Eigen::Isometry3d& predicted,
-                        const TrackConfig& config, const VerifyConfig& verify, Refiner* refiner,
+                        const TrackConfig& config, const VerifyConfig& verify, double min_probability, Refiner* refiner,
                         AnswerConfidence& confidence, Clock* clock = nullptr);
 
 // P of a tracked pose: kTrackingConfidenceModel's factors without the inlier factor (see above).
