@@ -144,9 +144,10 @@ class Localizer {
   Status localize(const ScanView& scan, const PositionPrior& prior, LocalizeResult* out);
 
   // Tracking (detail/tracker.h): the pose of `scan` near `predicted_map_frame_T_scan` (the map's frame,
-  // as LocalizeResult::map_frame_T_scan: e.g. the last pose times odometry), by a pattern search of
-  // whole-scan verification, ICP against the map's refinement layer (config.track.refine) and the
-  // confidence's probes. Bounded work, no global search. Loss = !out->confident: fall back to
+  // as LocalizeResult::map_frame_T_scan: e.g. the last pose times odometry): ICP from the prediction
+  // against the map's refinement layer (config.track.refine), kept when the confidence's probes vouch
+  // for it; otherwise a pattern search of whole-scan verification, ICP and the probes again. Bounded
+  // work, no global search. Loss = !out->confident: fall back to
   // localize(). InvalidArgument for a prediction that is not a rigid pose (non-finite, a rotation off by
   // more than 1e-3) or lies over 1000 km from the map's origin, Unsupported for a map without a semantic
   // layer.
