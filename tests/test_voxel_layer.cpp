@@ -401,6 +401,27 @@ TEST_CASE("The same scan twice gives bitwise identical layers, whatever the aren
   CHECK(std::equal(g1.begin(), g1.begin() + n1, g2.begin()));  // same order, not just the same set
 }
 
+TEST_CASE("Without the gather index the voxels are the same bits and gather_within matches nothing") {
+  VoxelConfig vc;
+  ArenaBuffer b1(VoxelLayer::required_bytes(vc)), b2(VoxelLayer::required_bytes(vc));
+  VoxelLayer with, without;
+  REQUIRE(with.bind(b1.arena, vc) == Status::Ok);
+  REQUIRE(without.bind(b2.arena, vc) == Status::Ok);
+  const Cloud c = street(17);
+  VoxelStats s1, s2;
+  REQUIRE(with.build(c.view(), &s1) == Status::Ok);
+  REQUIRE(without.build(street(3).view(), nullptr) == Status::Ok);  // an indexed layer before
+  REQUIRE(without.build(c.view(), &s2, false) == Status::Ok);
+  REQUIRE(with.size() == without.size());
+  CHECK(std::memcmp(with.voxels(), without.voxels(), sizeof(Voxel) * with.size()) == 0);
+  CHECK(s2.unindexed_voxels == 0);
+  std::vector<uint32_t> out(with.size());
+  const float center[3] = {0.0f, 0.0f, 0.0f};
+  CHECK(with.gather_within(center, 20.0f, true, out.data(), with.size()) > 100);
+  CHECK(without.gather_within(center, 20.0f, true, out.data(), without.size()) == 0);  // nothing stale
+  CHECK(without.gather_within(center, INFINITY, false, out.data(), without.size()) == 0);
+}
+
 TEST_CASE("prob_samples: the softmax of a voxel's first k points, then of every 2nd, 4th, ... point") {
   // The documented rule, written out: the point finding n points in its voxel adds its softmax when
   // n < k or n is a multiple of 2^bit_width(n / k).

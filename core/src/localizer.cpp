@@ -90,7 +90,7 @@ struct Localizer::Impl {
   bool track_refine = false;                 // track() refines with ICP (the refiner has the map's layer)
 
   // The stages of localize(), in order (defined below, each with its comment).
-  Status build_voxels(const ScanView& scan, LocalizeResult& out);
+  Status build_voxels(const ScanView& scan, LocalizeResult& out, bool gather_index = true);
   Status find_instances(const LocalizerConfig& cfg, LocalizeResult& out);
   void fit_query_fields(const LocalizerConfig& cfg, LocalizeResult& out);
   Status build_query_triangles(LocalizeResult& out);
@@ -302,8 +302,8 @@ HypothesisReport hypothesis_report(const PoseHypothesis& p, bool fully_verified)
 // ---- The query pipeline, one stage per function; localize() below calls them in order. ----
 
 // 1. Metric-semantic layer.
-Status Localizer::Impl::build_voxels(const ScanView& scan, LocalizeResult& out) {
-  const Status s = voxels.build(scan, nullptr);
+Status Localizer::Impl::build_voxels(const ScanView& scan, LocalizeResult& out, bool gather_index) {
+  const Status s = voxels.build(scan, nullptr, gather_index);
   out.scan_voxels = voxels.size();
   if (s == Status::CapacityExceeded) out.capacity_truncated = true;
   return s == Status::CapacityExceeded ? Status::Ok : s;
@@ -723,7 +723,7 @@ Status Localizer::track(const ScanView& scan, const Eigen::Isometry3d& predicted
     labels_only.logits = nullptr;
     labels_only.logit_dim = 0;
   }
-  const Status s = im.build_voxels(labels_only, out);
+  const Status s = im.build_voxels(labels_only, out, false);  // no instances: no gathers
   out.times.voxel = now(clock_) - t;
   t = now(clock_);
   if (s != Status::Ok) return finish(s);

@@ -148,7 +148,7 @@ uint32_t VoxelLayer::find(const float p[3]) const {
   return index_find(k);
 }
 
-Status VoxelLayer::build(const ScanView& scan, VoxelStats* stats_out) {
+Status VoxelLayer::build(const ScanView& scan, VoxelStats* stats_out, bool gather_index) {
   VoxelStats stats;
   if (stats_out) *stats_out = stats;  // early returns report zeros, never a previous scan's numbers
   count_ = 0;
@@ -162,7 +162,7 @@ Status VoxelLayer::build(const ScanView& scan, VoxelStats* stats_out) {
   if (use_logits && scan.logit_dim != static_cast<uint32_t>(kNumClasses)) return Status::InvalidArgument;
   count_ = accumulate_points(scan, use_logits, &stats);
   average_voxels(use_logits ? config_.prob_samples : 0);
-  stats.unindexed_voxels = build_columns();
+  stats.unindexed_voxels = gather_index ? build_columns() : 0;
   stats.voxels = count_;
   if (stats_out) *stats_out = stats;
   if (count_ == 0) return Status::InvalidInput;
