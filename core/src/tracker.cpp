@@ -19,6 +19,8 @@ double tracking_probability(const ConfidenceEvidence& evidence) {
 
 namespace {
 
+constexpr double kDegPerRad = 57.29577951308232;
+
 // ICP from `start`; true with the accepted result in *refined.
 bool icp_from(Refiner* refiner, const TrackScan& scan, const Eigen::Isometry3d& start, const TrackConfig& tc,
               Eigen::Isometry3d* refined) {
@@ -29,14 +31,14 @@ bool icp_from(Refiner* refiner, const TrackScan& scan, const Eigen::Isometry3d& 
 }
 
 bool within_icp_start(const Eigen::Isometry3d& a, const Eigen::Isometry3d& b, const TrackConfig& tc) {
-  return within_pose(a, b, tc.icp_start_m, double(tc.icp_start_deg) / 57.29577951308232);
+  return within_pose(a, b, tc.icp_start_m, double(tc.icp_start_deg) / kDegPerRad);
 }
 
 // Within what the pattern search can reach from the prediction: its steps halve each round, so it moves
 // at most step x (2 - 2^(1 - rounds)) in position and heading.
 bool within_search_reach(const Eigen::Isometry3d& pose, const Eigen::Isometry3d& predicted, const TrackConfig& tc) {
   const double reach = 2.0 - std::ldexp(1.0, 1 - int(tc.search_rounds));
-  return within_pose(pose, predicted, reach * tc.search_step_m, reach * double(tc.search_step_deg) / 57.29577951308232);
+  return within_pose(pose, predicted, reach * tc.search_step_m, reach * double(tc.search_step_deg) / kDegPerRad);
 }
 
 }  // namespace
