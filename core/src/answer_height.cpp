@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <cmath>
 
+#include "gsf/detail/angles.h"
 #include "gsf/detail/semantic_grid.h"
 #include "gsf/detail/voxel_layer.h"
 
@@ -95,7 +96,7 @@ void level_answer(const Eigen::Vector3d& scan_up, const Eigen::Vector3d& map_up,
   double turn = yaw;
   for (int k = 0; k < 4; ++k) {
     const Eigen::Matrix3d R = turned(turn);
-    turn += std::remainder(yaw - std::atan2(R(1, 0), R(0, 0)), 2.0 * 3.14159265358979323846);
+    turn += std::remainder(yaw - std::atan2(R(1, 0), R(0, 0)), 2.0 * kPi);
   }
   T->linear() = turned(turn);
 }

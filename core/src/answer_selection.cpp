@@ -1,4 +1,5 @@
 #include "gsf/detail/answer_selection.h"
+#include "gsf/detail/angles.h"
 #include "gsf/detail/pose_distance.h"
 
 #include <algorithm>
@@ -6,8 +7,6 @@
 
 namespace gsf {
 namespace {
-
-constexpr double kRadToDeg = 57.29577951308232;
 
 // Indices of the best `cap` hypotheses by verification score (eligible[h] != 0, or all when null),
 // best first, ties to the earlier hypothesis. Returns how many (<= cap).
@@ -165,7 +164,7 @@ uint32_t AnswerSelector::verify_hypotheses(PoseHypotheses& hyps, const PoseScore
 // kept one; returns how many.
 uint32_t AnswerSelector::distinct_of(const PoseHypotheses& hyps, const HypothesisConfig& hc, uint32_t* top,
                                      uint32_t n) const {
-  const double same_rad = double(hc.same_pose_deg) / kRadToDeg;
+  const double same_rad = double(hc.same_pose_deg) / kDegPerRad;
   uint32_t kept = 0;
   for (uint32_t k = 0; k < n; ++k) {
     const Eigen::Isometry3d& b = hyps[top[k]].map_T_scan;
@@ -189,7 +188,7 @@ uint32_t AnswerSelector::pick_answer_and_rivals(const PoseHypotheses& hyps, cons
   const uint32_t nt = top_by_score(hyps, H, full_scored, H, top);
   const uint32_t best = nt > 0 ? top[0] : 0;
   const Eigen::Isometry3d& a = hyps[best].map_T_scan;
-  const double same_rad = double(hc.same_pose_deg) / kRadToDeg;
+  const double same_rad = double(hc.same_pose_deg) / kDegPerRad;
   for (uint32_t k = 1; k < nt && rival_count_ < kMaxRivals; ++k) {
     if (within_pose(a, hyps[top[k]].map_T_scan, hc.same_pose_m, same_rad)) continue;
     rival_pose_[rival_count_++] = scoring_pose_of(top[k], refined_count);

@@ -3,6 +3,8 @@
 #include <algorithm>
 #include <cmath>
 
+#include "gsf/detail/angles.h"
+
 namespace gsf {
 
 // bench/fit_confidence.py on the training suites (docs/confidence.md).
@@ -40,8 +42,7 @@ Eigen::Isometry3d shifted(const Eigen::Isometry3d& T, double forward, double lef
 // The answer turned about the sensor (map_T_scan * Rz keeps the scan origin where it is).
 Eigen::Isometry3d turned(const Eigen::Isometry3d& T, double deg) {
   Eigen::Isometry3d c = T;
-  c.linear() =
-      T.linear() * Eigen::AngleAxisd(deg * 3.14159265358979323846 / 180.0, Eigen::Vector3d::UnitZ()).toRotationMatrix();
+  c.linear() = T.linear() * Eigen::AngleAxisd(deg_to_rad(deg), Eigen::Vector3d::UnitZ()).toRotationMatrix();
   return c;
 }
 

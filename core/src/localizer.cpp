@@ -4,6 +4,7 @@
 #include <cmath>
 #include <new>
 
+#include "gsf/detail/angles.h"
 #include "gsf/detail/answer_height.h"
 #include "gsf/detail/answer_selection.h"
 #include "gsf/detail/arena.h"
@@ -42,7 +43,7 @@ struct Elsewhere {
 // Two poses are the same answer within the success criterion (5 m, 10 deg).
 bool same_answer(const Eigen::Isometry3d& a, const Eigen::Isometry3d& b) {
   const Eigen::Isometry3d d = a.inverse() * b;
-  constexpr double kSameM = 5.0, kSameRad = 10.0 * 3.14159265358979323846 / 180.0;
+  constexpr double kSameM = 5.0, kSameRad = deg_to_rad(10.0);
   return d.translation().norm() < kSameM && Eigen::AngleAxisd(d.rotation()).angle() < kSameRad;
 }
 
@@ -280,11 +281,10 @@ static_assert(AnswerChoice::kMaxRanked == kMaxReportedHypotheses, "every ranked 
 
 // A pose hypothesis as LocalizeResult reports it.
 HypothesisReport hypothesis_report(const PoseHypothesis& p, bool fully_verified) {
-  constexpr double kRadToDeg = 57.29577951308232;
   HypothesisReport r;
   r.x = static_cast<float>(p.map_T_scan.translation().x());
   r.y = static_cast<float>(p.map_T_scan.translation().y());
-  r.yaw_deg = static_cast<float>(std::atan2(p.map_T_scan.linear()(1, 0), p.map_T_scan.linear()(0, 0)) * kRadToDeg);
+  r.yaw_deg = static_cast<float>(std::atan2(p.map_T_scan.linear()(1, 0), p.map_T_scan.linear()(0, 0)) * kDegPerRad);
   r.clique_size = p.clique_size;
   r.inliers = p.inliers;
   r.support = static_cast<float>(p.support);
@@ -476,7 +476,7 @@ void Localizer::Impl::settle_height(const LocalizerConfig& cfg, const MapView& m
   // then. Without the scan's ground the hypothesis keeps its own roll and pitch.
   const double max_tilt = cfg.hypotheses.max_tilt_deg > 0.0f ? double(cfg.hypotheses.max_tilt_deg) : 180.0;
   auto leans = [max_tilt](const Eigen::Vector3d& up) {
-    return std::acos(std::min(1.0, up.z())) * 57.29577951308232 > max_tilt;
+    return std::acos(std::min(1.0, up.z())) * kDegPerRad > max_tilt;
   };
   Eigen::Vector3d scan_up = Eigen::Vector3d::UnitZ();
   if (scan_ground_up(voxels, &scan_up)) {
@@ -764,7 +764,7 @@ uint32_t offered_candidates(const AnswerSelector& sel, const LocalizeResult& r, 
     float share = 0.0f;
     uint32_t inliers = 0;
     double nearest = double(hc.same_pose_m) * hc.same_pose_m;
-    const double yaw = std::atan2(p.linear()(1, 0), p.linear()(0, 0)) * 57.29577951308232;
+    const double yaw = std::atan2(p.linear()(1, 0), p.linear()(0, 0)) * kDegPerRad;
     for (const HypothesisReport& h : r.hypothesis) {
       const double dx = h.x - p.translation().x(), dy = h.y - p.translation().y(), d = dx * dx + dy * dy;
       const double dyaw = std::fabs(std::remainder(double(h.yaw_deg) - yaw, 360.0));
@@ -809,7 +809,7 @@ void Localizer::check_with_window(const WindowOutcome& w, LocalizeResult& out) c
   out.window_candidates = w.candidates;
   if (!w.combined) return;
   const Eigen::Isometry3d d = out.map_T_scan.inverse() * w.map_T_scan;
-  constexpr double kSameM = 5.0, kSameRad = 10.0 * 3.14159265358979323846 / 180.0;  // the success criterion
+  constexpr double kSameM = 5.0, kSameRad = deg_to_rad(10.0);  // the success criterion
   if (d.translation().norm() < kSameM && Eigen::AngleAxisd(d.rotation()).angle() < kSameRad) return;
   out.window_contradicted = true;
   if (w.confidence > out.confidence) return apply_window(w, out);

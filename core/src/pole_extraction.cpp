@@ -3,6 +3,8 @@
 #include <algorithm>
 #include <cmath>
 
+#include "gsf/detail/angles.h"
+
 namespace gsf {
 namespace {
 
@@ -278,7 +280,7 @@ void PoleExtraction::judge_chain(const Hosts& h, uint32_t root, uint32_t* m, uin
     syz += (p[1] - my) * dz;
   }
   const double bx = szz > 0 ? sxz / szz : 0.0, by = szz > 0 ? syz / szz : 0.0;
-  const double tilt = std::atan(std::sqrt(bx * bx + by * by)) * (180.0 / 3.14159265358979323846);
+  const double tilt = std::atan(std::sqrt(bx * bx + by * by)) * kDegPerRad;
   if (!(tilt <= config_.max_tilt_deg)) {
     ++stats->rejected_tilt;
     return;
@@ -317,7 +319,7 @@ void PoleExtraction::judge_chain(const Hosts& h, uint32_t root, uint32_t* m, uin
   info.levels = shape.levels;
   info.kind = kind;
   info.first_voxel = shape.first;
-  info.score = static_cast<float>(height * std::cos(tilt * (3.14159265358979323846 / 180.0)) / (1.0 + info.ring));
+  info.score = static_cast<float>(height * std::cos(tilt * kRadPerDeg) / (1.0 + info.ring));
   keep_best(in, info, stats);
 }
 

@@ -4,6 +4,7 @@
 #include <cmath>
 #include <new>
 
+#include "gsf/detail/angles.h"
 #include "gsf/detail/pose_solver.h"
 
 namespace gsf {
@@ -14,8 +15,6 @@ namespace {
 // fields masked to 21 bits (callers that step to neighbouring bins check the range first).
 int64_t shift_coord(double v, float bin) { return static_cast<int64_t>(std::floor(v / bin)) + (1 << 20); }
 uint64_t shift_key(int64_t x, int64_t y) { return (uint64_t(x & 0x1FFFFF) << 21) | uint64_t(y & 0x1FFFFF); }
-
-constexpr double kPi = 3.14159265358979323846;
 
 Eigen::Vector3d point(const float* p, uint32_t i) { return Eigen::Vector3d(p[3 * i], p[3 * i + 1], p[3 * i + 2]); }
 double yaw_of(const Eigen::Isometry3d& T) { return std::atan2(T.linear()(1, 0), T.linear()(0, 0)); }
@@ -163,8 +162,8 @@ Status PoseHypotheses::generate(const float* a, const float* b, const float* w, 
         c.max_hypotheses < max_h_ ? c.max_hypotheses : max_h_,
         4.0 * double(c.tls_threshold) * c.tls_threshold,
         double(c.tls_threshold) * c.tls_threshold,
-        double(c.same_pose_deg) * kPi / 180.0,
-        double(c.max_tilt_deg) * kPi / 180.0,
+        deg_to_rad(double(c.same_pose_deg)),
+        deg_to_rad(double(c.max_tilt_deg)),
         HypothesisStats()};
   // 1. Peeled maximum cliques (the first is the paper's answer).
   graph_.build(a, b, n, c.consistency_eps, c.consistency_z_weight);
@@ -325,7 +324,7 @@ uint32_t PoseHypotheses::distinct_headings(const Run& r) const {
 void PoseHypotheses::find_heading_cliques(Run& r) {
   const HypothesisConfig& c = r.c;
   if (c.heading_cliques == 0 || count_ == 0 || count_ >= r.K || distinct_headings(r) >= c.shift_headings) return;
-  const double separation = double(c.heading_separation_deg) * kPi / 180.0;
+  const double separation = deg_to_rad(double(c.heading_separation_deg));
   const float min_pair = c.tls_threshold;  // shorter pairs cannot tell a heading to within the separation
   uint32_t cleared = 0;                    // hypotheses whose heading's edges are gone
   allow_all(r.n);

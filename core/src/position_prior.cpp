@@ -2,11 +2,10 @@
 
 #include <cmath>
 
+#include "gsf/detail/angles.h"
+
 namespace gsf {
 namespace {
-
-constexpr double kPi = 3.14159265358979323846;
-constexpr double kDegToRad = kPi / 180.0;
 
 // |a - b| wrapped to [0, pi].
 double angle_between(double a, double b) {
@@ -32,8 +31,8 @@ PriorRegion prior_region(const PositionPrior& p, const MapGeoreference& georef) 
   r.cy = static_cast<float>(p.y - georef.origin[1]);
   r.radius = p.radius_m;
   r.has_heading = p.has_heading;
-  r.heading = static_cast<float>(double(p.heading_deg) * kDegToRad);
-  r.tolerance = static_cast<float>(double(p.heading_tolerance_deg) * kDegToRad);
+  r.heading = static_cast<float>(double(p.heading_deg) * kRadPerDeg);
+  r.tolerance = static_cast<float>(double(p.heading_tolerance_deg) * kRadPerDeg);
   return r;
 }
 
@@ -42,7 +41,7 @@ bool PriorRegion::contains(const Eigen::Isometry3d& T, double slack_m, double sl
   if (dx * dx + dy * dy > r * r) return false;
   if (!has_heading) return true;
   const double yaw = std::atan2(T.linear()(1, 0), T.linear()(0, 0));
-  return angle_between(yaw, heading) <= double(tolerance) + slack_deg * kDegToRad;
+  return angle_between(yaw, heading) <= double(tolerance) + slack_deg * kRadPerDeg;
 }
 
 }  // namespace gsf

@@ -1,4 +1,5 @@
 #include "gsf/detail/scan_window.h"
+#include "gsf/detail/angles.h"
 #include "gsf/detail/pose_distance.h"
 
 #include <algorithm>
@@ -10,11 +11,9 @@
 namespace gsf {
 namespace {
 
-constexpr double kPi = 3.14159265358979323846;
-
 // Within same_m and same_deg of each other in the bird's-eye view verification sees: one answer.
 bool same_pose(const Eigen::Isometry3d& a, const Eigen::Isometry3d& b, float same_m, float same_deg) {
-  return within_pose(a, b, same_m, double(same_deg) * kPi / 180.0);
+  return within_pose(a, b, same_m, deg_to_rad(double(same_deg)));
 }
 
 }  // namespace

@@ -3,6 +3,7 @@
 #include <cmath>
 #include <cstdint>
 
+#include "gsf/detail/angles.h"
 #include "gsf/detail/voxel_layer.h"
 
 namespace gsf {
@@ -285,7 +286,7 @@ PoseVerification search_pose(const Source& src, const SemanticGridView& grid, co
   bool any_move = false;
   uint32_t points = rounds > 1 ? coarse : polish;
   float best_score = score_pose(src, grid, best, points, weights, disagree_weight).score;
-  double step = step_m, turn = double(step_deg) * 3.14159265358979323846 / 180.0;
+  double step = step_m, turn = deg_to_rad(double(step_deg));
   for (uint32_t r = 0; r < rounds; ++r, step *= 0.5, turn *= 0.5) {
     if (r + 1 == rounds && points != polish) {  // the last, finest round on its own sample
       points = polish;

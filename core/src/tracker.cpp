@@ -1,4 +1,5 @@
 #include "gsf/detail/tracker.h"
+#include "gsf/detail/angles.h"
 #include "gsf/detail/pose_distance.h"
 
 #include <algorithm>
@@ -18,8 +19,6 @@ double tracking_probability(const ConfidenceEvidence& evidence) {
 }
 
 namespace {
-
-constexpr double kDegPerRad = 57.29577951308232;
 
 // ICP from `start`; true with the accepted result in *refined.
 bool icp_from(Refiner* refiner, const TrackScan& scan, const Eigen::Isometry3d& start, const TrackConfig& tc,

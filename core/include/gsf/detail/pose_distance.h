@@ -7,6 +7,8 @@
 
 #include <Eigen/Geometry>
 
+#include "gsf/detail/angles.h"
+
 namespace gsf {
 
 // The heading (yaw about z) of a pose's rotation.
@@ -14,7 +16,6 @@ inline double yaw_of(const Eigen::Isometry3d& T) { return std::atan2(T.linear()(
 
 // a and b within max_m metres horizontally and max_rad radians of heading (wrapped to [0, pi]).
 inline bool within_pose(const Eigen::Isometry3d& a, const Eigen::Isometry3d& b, double max_m, double max_rad) {
-  constexpr double kPi = 3.14159265358979323846;
   const double dx = b.translation().x() - a.translation().x(), dy = b.translation().y() - a.translation().y();
   double dyaw = std::fabs(yaw_of(b) - yaw_of(a));
   if (dyaw > kPi) dyaw = 2.0 * kPi - dyaw;
