@@ -124,6 +124,28 @@ TEST_CASE("Refinement pulls a nearby pose onto the map and is accepted") {
   CHECK(degrees(refined, f.truth) < 0.5);
 }
 
+TEST_CASE("Refinement that starts on the truth settles and goes straight to the last radius") {
+  // From the truth the first update is tiny: the middle radii would find the same pairs again, so the
+  // refiner runs the first and the last iteration only and stays on the truth. From 1 m off it needs
+  // the whole schedule.
+  Fixture f;
+  REQUIRE(f.rc.iterations >= 4);
+  const Layer map(street_corner(1.0f), f.rc.cell);
+  ArenaBuffer buf(Refiner::required_bytes(f.rc));
+  Refiner r;
+  REQUIRE(r.bind(buf.arena, f.rc) == Status::Ok);
+  REQUIRE(r.set_map(map.view) == Status::Ok);
+  RefineStats st;
+  const Eigen::Isometry3d refined = f.run(r, f.truth, &st);
+  CHECK(st.accepted);
+  CHECK(st.iterations == 2);
+  CHECK(metres(refined, f.truth) < 0.05);
+  CHECK(degrees(refined, f.truth) < 0.2);
+  RefineStats far_st;
+  f.run(r, perturbed(f.truth), &far_st);
+  CHECK(far_st.iterations > 2);
+}
+
 TEST_CASE("Refinement refuses a correction beyond max_correction and returns the initial pose") {
   Fixture f;
   f.rc.max_correction = 0.3f;  // the needed correction is about 1 m
@@ -231,7 +253,7 @@ Eigen::Isometry3d reference_refine(const VoxelLayer& layer, const RefineLayerVie
       err += r * r;
       ++inl;
     }
-    st->iterations = it + 1;
+    ++st->iterations;
     st->inliers = inl;
     st->rmse = inl ? std::sqrt(err / inl) : 0;
     if (inl < 6) break;
@@ -242,6 +264,8 @@ Eigen::Isometry3d reference_refine(const VoxelLayer& layer, const RefineLayerVie
     if (angle > 1e-12) s.linear() = Eigen::AngleAxisd(angle, dx.head<3>() / angle).toRotationMatrix();
     s.translation() = dx.tail<3>();
     t = s * t;
+    // Settled (a move under 1 cm and a turn under 0.05 deg): straight to the last radius.
+    if (dx.tail<3>().norm() < 0.01 && angle < 0.05 * M_PI / 180.0 && it + 2 < c.iterations) it = c.iterations - 2;
   }
   st->accepted = st->inliers >= c.min_inliers && (t.translation() - initial.translation()).norm() <= c.max_correction;
   return st->accepted ? t : initial;

@@ -5,6 +5,7 @@
 
 #include <Eigen/Cholesky>
 
+#include "gsf/detail/angles.h"
 #include "gsf/semantic_classes.h"
 
 namespace gsf {
@@ -63,10 +64,14 @@ Status Refiner::refine(const VoxelLayer& layer, const Eigen::Isometry3d& initial
     Eigen::Matrix<double, 6, 1> g = Eigen::Matrix<double, 6, 1>::Zero();
     double err = 0;
     const uint32_t inl = add_point_to_plane_terms(t, q, r2, &tile_hint, &H, &g, &err);
-    st.iterations = it + 1;
+    ++st.iterations;  // iterations run (a settled refinement skips some)
     st.inliers = inl;
     st.rmse = inl ? std::sqrt(err / inl) : 0;
-    if (inl < 6 || !apply_update(H, g, &t)) break;
+    bool settled = false;
+    if (inl < 6 || !apply_update(H, g, &t, &settled)) break;
+    // Settled at this radius: the remaining middle radii would find the same correspondences again, so
+    // go straight to the last (tightest) one, which drops the far pairs.
+    if (settled && it + 2 < config_.iterations) it = config_.iterations - 2;
   }
   st.accepted =
       st.inliers >= config_.min_inliers && (t.translation() - initial.translation()).norm() <= config_.max_correction;
@@ -131,11 +136,16 @@ uint32_t Refiner::add_point_to_plane_terms(const Eigen::Isometry3d& t, uint32_t 
 }
 
 // The 6x6 solve and the pose update (small rotation, then translation) applied to *t. False when the
-// solution is not finite.
+// solution is not finite. *settled: the update moved the pose by less than kSettledM and turned it by
+// less than kSettledRad, a thirtieth and a twentieth of what tracking calls precise (0.3 m, 1 deg), so
+// more iterations at the same radius would not change the answer. (3 mm / 0.01 deg gave the same
+// tracked precision on the suite's worlds for 3% more instructions a tracked scan.)
 bool Refiner::apply_update(const Eigen::Matrix<double, 6, 6>& H, const Eigen::Matrix<double, 6, 1>& g,
-                           Eigen::Isometry3d* t) {
+                           Eigen::Isometry3d* t, bool* settled) {
+  constexpr double kSettledM = 0.01, kSettledRad = 0.05 * kRadPerDeg;
   const Eigen::Matrix<double, 6, 1> dx = H.ldlt().solve(-g);
   if (!dx.allFinite()) return false;
+  *settled = dx.tail<3>().norm() < kSettledM && dx.head<3>().norm() < kSettledRad;
   Eigen::Isometry3d update = Eigen::Isometry3d::Identity();
   const double angle = dx.head<3>().norm();
   if (angle > 1e-12) update.linear() = Eigen::AngleAxisd(angle, dx.head<3>() / angle).toRotationMatrix();

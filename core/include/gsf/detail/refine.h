@@ -10,7 +10,8 @@
 // of long-term classes, a bounded number of Gauss-Newton iterations with a shrinking correspondence
 // radius, nearest neighbours from the 27 surrounding cells (visited nearest first, cells farther than
 // the best so far skipped, each cell's point range looked up once while the query point stays in its
-// cell), a 6x6 solve per iteration.
+// cell), a 6x6 solve per iteration. An update under 1 cm and 0.05 deg ends the middle radii: the last
+// (tightest) radius runs next, so a start already on the map (tracking) costs two iterations, not all.
 // The refined pose is accepted only if it keeps enough inliers and stays within max_correction of the
 // global pose; otherwise the global pose is returned unchanged (refinement never makes it worse by
 // jumping to a different place).
@@ -59,7 +60,7 @@ class Refiner {
                                     Eigen::Matrix<double, 6, 6>* H, Eigen::Matrix<double, 6, 1>* g, double* err);
   const MapRefinePoint* find_nearest(uint32_t i, const float pf[3], float r2, uint32_t* tile_hint, float nearest[3]);
   static bool apply_update(const Eigen::Matrix<double, 6, 6>& H, const Eigen::Matrix<double, 6, 1>& g,
-                           Eigen::Isometry3d* t);
+                           Eigen::Isometry3d* t, bool* settled);
   bool long_term(int label) const { return (classes_ ? classes_->stability(label) : stability_weight(label)) >= 1.0f; }
   RefineConfig config_{};
   const ClassTable* classes_ = nullptr;
