@@ -6,7 +6,9 @@ answers' median inlier share beside it), and for those the
 rival factor limits, where the best-scoring rival is: its distance and heading from the answer and its
 verified score over the answer's. A rival far away (another place or a flip) that scores nearly as
 well means the scan's own evidence is ambiguous, and declining is the rule working, not a calibration
-defect; a rival close to the answer would be a defect (both would be right).
+defect; a rival close to the answer would be a defect (both would be right). Beside it, the share of
+right answers answered by place: on open road, near the world's repetitive zone (hall, avenue, row,
+lattice) and in it (the query's in_zone / near_zone flags), where a single scan can be ambiguous.
 
 Reads the per-query JSON of `gsf evaluate` (diagnostics.confidence_evidence and .hypotheses).
 
@@ -23,6 +25,7 @@ import re
 import fit_confidence as fc
 
 FACTOR_NAMES = ["rival", "shift", "turn", "inlier"]
+PLACES = ["open", "near", "zone"]  # open road, near the repetitive zone, in it
 FAMILY_ORDER = "p0 p3 p8 p15 o10 o20 thin b16 b64 b128 cross cheap edge".split()  # bench/families.sh's
 
 
@@ -53,6 +56,7 @@ def family_line(name, files, model, threshold):
     count = {"declined": 0, "far": 0, "near": 0, "close_score": 0}
     right_shares = []  # inlier share of every right answer: is the factor alike over sensors?
     by_factor = dict.fromkeys(FACTOR_NAMES, 0)
+    by_place = {p: [0, 0] for p in PLACES}  # [right answers, answered]
     for f in files:
         for q in json.load(open(f))["modes"]["gsf"]["queries"]:
             d = q.get("diagnostics", {})
@@ -60,7 +64,10 @@ def family_line(name, files, model, threshold):
             if not e or not q["success"]:
                 continue
             right_shares.append(e["inlier_share"])
+            place = by_place["zone" if q.get("in_zone") else "near" if q.get("near_zone") else "open"]
+            place[0] += 1
             if q["confidence"] >= threshold:
+                place[1] += 1
                 continue
             count["declined"] += 1
             u = fc.factor_inputs(model, fc.features(e, q))
@@ -80,7 +87,8 @@ def family_line(name, files, model, threshold):
     share = right_shares[len(right_shares) // 2] if right_shares else 0.0
     return (f"{name} declined_right={count['declined']} limiting: {factors}; rival-limited with the best rival "
             f"> 10 m or > 20 deg away: {count['far']}, nearer: {count['near']}, scoring >= 0.9 of the answer: "
-            f"{count['close_score']}; right answers' median inlier share {share:.2f}")
+            f"{count['close_score']}; right answers' median inlier share {share:.2f}; answered of right: "
+            + ", ".join(f"{p} {100.0 * a / max(1, n):.1f}% of {n}" for p, (n, a) in by_place.items()))
 
 
 def main():
