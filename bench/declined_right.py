@@ -8,7 +8,8 @@ verified score over the answer's. A rival far away (another place or a flip) tha
 well means the scan's own evidence is ambiguous, and declining is the rule working, not a calibration
 defect; a rival close to the answer would be a defect (both would be right). Beside it, the share of
 right answers answered by place: on open road, near the world's repetitive zone (hall, avenue, row,
-lattice) and in it (the query's in_zone / near_zone flags), where a single scan can be ambiguous.
+lattice) and in it (the query's in_zone / near_zone flags), where a single scan can be ambiguous; and
+the best rival's inlier count over the answer's (median) for the declined right and the wrong answers.
 
 Reads the per-query JSON of `gsf evaluate` (diagnostics.confidence_evidence and .hypotheses).
 
@@ -52,15 +53,30 @@ def best_rival(hyps):
     return a, None
 
 
+def median(values):
+    v = sorted(values)
+    return v[len(v) // 2] if v else float("nan")
+
+
+def add_inlier_ratio(out, diagnostics):
+    """The best rival's inlier count over the answer's (instance-level evidence beside the verification's)."""
+    a, r = best_rival(diagnostics.get("hypotheses", []))
+    if r is not None and a["inliers"] > 0:
+        out.append(r["inliers"] / a["inliers"])
+
+
 def family_line(name, files, model, threshold):
     count = {"declined": 0, "far": 0, "near": 0, "close_score": 0}
     right_shares = []  # inlier share of every right answer: is the factor alike over sensors?
     by_factor = dict.fromkeys(FACTOR_NAMES, 0)
     by_place = {p: [0, 0] for p in PLACES}  # [right answers, answered]
+    inlier_ratio = {"declined right": [], "wrong above 0.5": []}  # best rival's inliers / the answer's
     for f in files:
         for q in json.load(open(f))["modes"]["gsf"]["queries"]:
             d = q.get("diagnostics", {})
             e = d.get("confidence_evidence")
+            if e and not q["success"] and q["confidence"] > 0.5:
+                add_inlier_ratio(inlier_ratio["wrong above 0.5"], d)
             if not e or not q["success"]:
                 continue
             right_shares.append(e["inlier_share"])
@@ -70,6 +86,7 @@ def family_line(name, files, model, threshold):
                 place[1] += 1
                 continue
             count["declined"] += 1
+            add_inlier_ratio(inlier_ratio["declined right"], d)
             u = fc.factor_inputs(model, fc.features(e, q))
             limiting = FACTOR_NAMES[min(range(4), key=lambda k: u[k])]
             by_factor[limiting] += 1
@@ -88,7 +105,9 @@ def family_line(name, files, model, threshold):
     return (f"{name} declined_right={count['declined']} limiting: {factors}; rival-limited with the best rival "
             f"> 10 m or > 20 deg away: {count['far']}, nearer: {count['near']}, scoring >= 0.9 of the answer: "
             f"{count['close_score']}; right answers' median inlier share {share:.2f}; answered of right: "
-            + ", ".join(f"{p} {100.0 * a / max(1, n):.1f}% of {n}" for p, (n, a) in by_place.items()))
+            + ", ".join(f"{p} {100.0 * a / max(1, n):.1f}% of {n}" for p, (n, a) in by_place.items())
+            + "; best rival's inliers over the answer's, median: "
+            + ", ".join(f"{k} {median(v):.2f} of {len(v)}" for k, v in inlier_ratio.items()))
 
 
 def main():
