@@ -14,9 +14,12 @@ for p in "${presets[@]}"; do
     continue
   fi
   echo "=== [$p] configure + build"
+  t0=$(date +%s)
   cmake --preset "$p" >/dev/null
   cmake --build --preset "$p"
+  t1=$(date +%s)
   echo "=== [$p] test"
   ctest --preset "$p"
+  echo "=== [$p] build $((t1 - t0)) s, test $(($(date +%s) - t1)) s"
 done
 echo "scripts/test.sh: all presets passed (${presets[*]})"
