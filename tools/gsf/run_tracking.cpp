@@ -31,6 +31,7 @@ struct ScanRecord {
   std::string status;
   bool answered = false, success = false, precise = false, loss = false;
   PoseError error;
+  Eigen::Vector3d error_in_scan = Eigen::Vector3d::Zero();  // the position error along the true scan's x, y, z
   double confidence = 0, time_ms = 0, track_ms = 0;
   StageMs track_stages;  // of the track() call (voxel, pose = pattern search, refine = ICP, confidence = probes)
 };
@@ -64,6 +65,7 @@ void judge_scan(const LocalizeResult& r, const Eigen::Isometry3d& truth, ScanRec
   rec->answered = r.status == Status::Ok && r.confident;
   if (r.status != Status::Ok) return;
   rec->error = pose_error(r.map_frame_T_scan, truth);
+  rec->error_in_scan = truth.linear().transpose() * (r.map_frame_T_scan.translation() - truth.translation());
   rec->success = is_success(rec->error);
   rec->precise = rec->error.translation_m < kTrackTranslation && rec->error.rotation_deg < kTrackRotationDeg;
 }
@@ -201,6 +203,10 @@ void write_tracking_json(const std::string& path, const EvalOptions& o, const Tr
     j.field("loss", r.loss);
     j.field("translation_error_m", r.status == "Ok" ? r.error.translation_m : -1.0);
     j.field("rotation_error_deg", r.status == "Ok" ? r.error.rotation_deg : -1.0);
+    j.key("error_in_scan_m");  // forward, left, up of the true scan (a bias shows which way it pulls)
+    j.begin_array();
+    for (int k = 0; k < 3; ++k) j.value(r.error_in_scan[k]);
+    j.end_array();
     j.field("time_ms", r.time_ms);
     j.end_object();
   }
