@@ -808,9 +808,7 @@ void Localizer::check_with_window(const WindowOutcome& w, LocalizeResult& out) c
   out.window_checked = true;
   out.window_candidates = w.candidates;
   if (!w.combined) return;
-  const Eigen::Isometry3d d = out.map_T_scan.inverse() * w.map_T_scan;
-  constexpr double kSameM = 5.0, kSameRad = deg_to_rad(10.0);  // the success criterion
-  if (d.translation().norm() < kSameM && Eigen::AngleAxisd(d.rotation()).angle() < kSameRad) return;
+  if (same_answer(out.map_T_scan, w.map_T_scan)) return;
   out.window_contradicted = true;
   if (w.confidence > out.confidence) return apply_window(w, out);
   out.confidence = std::min(out.confidence, 1.0 - w.confidence);
