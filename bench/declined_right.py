@@ -8,7 +8,8 @@ verified score over the answer's. A rival far away (another place or a flip) tha
 well means the scan's own evidence is ambiguous, and declining is the rule working, not a calibration
 defect; a rival close to the answer would be a defect (both would be right). Beside it, the share of
 right answers answered by place: on open road, near the world's repetitive zone (hall, avenue, row,
-lattice) and in it (the query's in_zone / near_zone flags), where a single scan can be ambiguous; and
+lattice) and in it (the query's in_zone / near_zone flags), where a single scan can be ambiguous, with
+the answered wrong ones by place; and
 the best rival's inlier count over the answer's (median) for the declined right and the wrong answers.
 
 Reads the per-query JSON of `gsf evaluate` (diagnostics.confidence_evidence and .hypotheses).
@@ -70,17 +71,22 @@ def family_line(name, files, model, threshold):
     right_shares = []  # inlier share of every right answer: is the factor alike over sensors?
     by_factor = dict.fromkeys(FACTOR_NAMES, 0)
     by_place = {p: [0, 0] for p in PLACES}  # [right answers, answered]
+    wrong_by_place = {p: [0, 0] for p in PLACES}  # [answered, answered and wrong]
     inlier_ratio = {"declined right": [], "wrong above 0.5": []}  # best rival's inliers / the answer's
     for f in files:
         for q in json.load(open(f))["modes"]["gsf"]["queries"]:
             d = q.get("diagnostics", {})
             e = d.get("confidence_evidence")
+            where = "zone" if q.get("in_zone") else "near" if q.get("near_zone") else "open"
+            if e and q["confidence"] >= threshold:
+                wrong_by_place[where][0] += 1
+                wrong_by_place[where][1] += not q["success"]
             if e and not q["success"] and q["confidence"] > 0.5:
                 add_inlier_ratio(inlier_ratio["wrong above 0.5"], d)
             if not e or not q["success"]:
                 continue
             right_shares.append(e["inlier_share"])
-            place = by_place["zone" if q.get("in_zone") else "near" if q.get("near_zone") else "open"]
+            place = by_place[where]
             place[0] += 1
             if q["confidence"] >= threshold:
                 place[1] += 1
@@ -105,7 +111,9 @@ def family_line(name, files, model, threshold):
     return (f"{name} declined_right={count['declined']} limiting: {factors}; rival-limited with the best rival "
             f"> 10 m or > 20 deg away: {count['far']}, nearer: {count['near']}, scoring >= 0.9 of the answer: "
             f"{count['close_score']}; right answers' median inlier share {share:.2f}; answered of right: "
-            + ", ".join(f"{p} {100.0 * a / max(1, n):.1f}% of {n}" for p, (n, a) in by_place.items())
+            + ", ".join(f"{p} {100.0 * answered / max(1, n):.1f}% of {n}" for p, (n, answered) in by_place.items())
+            + "; answered wrong: "
+            + ", ".join(f"{p} {wrong} of {n}" for p, (n, wrong) in wrong_by_place.items())
             + "; best rival's inliers over the answer's, median: "
             + ", ".join(f"{k} {median(v):.2f} of {len(v)}" for k, v in inlier_ratio.items()))
 

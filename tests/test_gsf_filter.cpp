@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "arena_buffer.h"
+#include "gsf/detail/angles.h"
 #include "gsf/detail/gaussian_field.h"
 #include "gsf/detail/gsf_filter.h"
 #include "gsf/detail/map_quantization.h"
@@ -15,8 +16,6 @@
 using namespace gsf;
 
 namespace {
-
-constexpr double kPi = 3.14159265358979323846;
 
 void rotate_xy(const float* p, double yaw, float* out) {
   const double c = std::cos(yaw), s = std::sin(yaw);

@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "arena_buffer.h"
+#include "gsf/detail/angles.h"
 #include "gsf/detail/fixed_vector.h"
 #include "gsf/detail/heading_votes.h"
 #include "gsf/detail/triangle.h"
@@ -23,7 +24,6 @@ using gsf_test::ArenaBuffer;
 
 namespace {
 
-constexpr double kPi = 3.14159265358979323846;
 constexpr uint32_t kBins = 36;  // 10 degree bins, the default gsf.yaw_bins
 
 // The map: triangle A (instances 0-2, poles) and triangle B (instances 3-5, trunks), scalene (no two sides

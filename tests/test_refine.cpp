@@ -127,7 +127,7 @@ TEST_CASE("Refinement pulls a nearby pose onto the map and is accepted") {
 TEST_CASE("Refinement that starts on the truth settles and goes straight to the last radius") {
   // From the truth the first update is tiny: the middle radii would find the same pairs again, so the
   // refiner runs the first and the last iteration only and stays on the truth. From 1 m off it needs
-  // the whole schedule.
+  // more than those two.
   Fixture f;
   REQUIRE(f.rc.iterations >= 4);
   const Layer map(street_corner(1.0f), f.rc.cell);

@@ -2,12 +2,12 @@
 
 #include <cmath>
 
+#include "gsf/detail/angles.h"
 #include "gsf/detail/map_quantization.h"
 #include "gsf/detail/wasserstein.h"
 
 namespace gsf {
 namespace {
-constexpr double kTwoPi = 6.283185307179586;
 
 uint64_t now(Clock* c) { return c ? c->now_ns() : 0; }
 }  // namespace

@@ -2,10 +2,9 @@
 
 #include <cmath>
 
+#include "gsf/detail/angles.h"
+
 namespace gsf {
-namespace {
-constexpr double kTwoPi = 6.283185307179586;
-}  // namespace
 
 uint32_t triangle_yaw_bin(const float* q[3], const float* m[3], uint32_t bins) {
   float qc[2] = {0, 0}, mc[2] = {0, 0};

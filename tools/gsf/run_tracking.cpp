@@ -203,10 +203,12 @@ void write_tracking_json(const std::string& path, const EvalOptions& o, const Tr
     j.field("loss", r.loss);
     j.field("translation_error_m", r.status == "Ok" ? r.error.translation_m : -1.0);
     j.field("rotation_error_deg", r.status == "Ok" ? r.error.rotation_deg : -1.0);
-    j.key("error_in_scan_m");  // forward, left, up of the true scan (a bias shows which way it pulls)
-    j.begin_array();
-    for (int k = 0; k < 3; ++k) j.value(r.error_in_scan[k]);
-    j.end_array();
+    if (r.status == "Ok") {  // forward, left, up of the true scan (a bias shows which way it pulls)
+      j.key("error_in_scan_m");
+      j.begin_array();
+      for (int k = 0; k < 3; ++k) j.value(r.error_in_scan[k]);
+      j.end_array();
+    }
     j.field("time_ms", r.time_ms);
     j.end_object();
   }
