@@ -145,9 +145,9 @@ bool Refiner::apply_update(const Eigen::Matrix<double, 6, 6>& H, const Eigen::Ma
   constexpr double kSettledM = 0.01, kSettledRad = 0.05 * kRadPerDeg;
   const Eigen::Matrix<double, 6, 1> dx = H.ldlt().solve(-g);
   if (!dx.allFinite()) return false;
-  *settled = dx.tail<3>().norm() < kSettledM && dx.head<3>().norm() < kSettledRad;
   Eigen::Isometry3d update = Eigen::Isometry3d::Identity();
   const double angle = dx.head<3>().norm();
+  *settled = dx.tail<3>().norm() < kSettledM && angle < kSettledRad;
   if (angle > 1e-12) update.linear() = Eigen::AngleAxisd(angle, dx.head<3>() / angle).toRotationMatrix();
   update.translation() = dx.tail<3>();
   *t = update * *t;
