@@ -11,6 +11,7 @@
 
 #include "arena_buffer.h"
 #include "fuzz_seed_map.h"
+#include "gsf/detail/angles.h"
 #include "gsf/detail/semantic_grid.h"
 #include "gsf/detail/voxel_layer.h"
 #include "gsf/map_format.h"
@@ -58,6 +59,23 @@ TEST_CASE("Verification picks the true lattice shift given one distinguishing bu
   Eigen::Isometry3d nan_pose = Eigen::Isometry3d::Identity();
   nan_pose.translation().x() = std::nan("");
   CHECK(verify_pose(voxels, layer.view, nan_pose, 4096, weights).scored == 0);
+}
+
+TEST_CASE("count_observed counts the points a pose puts on the map's observed cells") {
+  const LatticeLayer layer;  // observed everywhere over x in [0, 64), y in [-16, 16)
+  const float nan = std::nanf("");
+  const float xyz[] = {10, 0, 1, 30, 5, 0, 63.5f, -15.5f, 2, 100, 0, 0, -0.5f, 3, 0, nan, 0, 0};
+  Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
+  CHECK(count_observed(layer.view, T, xyz, 6) == 3);
+  CHECK(count_observed(layer.view, T, xyz, 1) == 1);  // only the first n points are read
+  T.translation().x() = 40.0;  // (10, 0) -> (50, 0) stays, (-0.5, 3) -> (39.5, 3) comes in, the others leave
+  CHECK(count_observed(layer.view, T, xyz, 6) == 2);
+  // A half turn about (32, 0): (x, y) -> (64 - x, -y). The first three stay on the layer, (100, 0) and
+  // (-0.5, 3) land at (-36, 0) and (64.5, -3), off it.
+  T.linear() = Eigen::AngleAxisd(kPi, Eigen::Vector3d::UnitZ()).toRotationMatrix();
+  T.translation().x() = 64.0;
+  CHECK(count_observed(layer.view, T, xyz, 6) == 3);
+  CHECK(count_observed(SemanticGridView(), Eigen::Isometry3d::Identity(), xyz, 6) == 0);  // no layer: none
 }
 
 TEST_CASE("The pattern search's sample sizes: defaults as before, coarse to fine, and no re-score when it stays") {

@@ -8,7 +8,7 @@
 namespace gsf {
 
 // bench/fit_confidence.py on the training suites (docs/confidence.md).
-const ConfidenceModel kConfidenceModel = {-1.807f, 1.680f, 25.434f, 3.395f, 1.858f, -10.573f, 3.205f, -3.963f, 27.180f};
+const ConfidenceModel kConfidenceModel = {-1.765f, 1.636f, 25.672f, 3.421f, 1.850f, -10.703f, 3.227f, -6.235f, 37.715f};
 
 namespace {
 

@@ -110,6 +110,7 @@ struct Localizer::Impl {
                         const Eigen::Isometry3d& prior_answer, Elsewhere* best);
   ConfidenceEvidence elsewhere_evidence(const LocalizerConfig& cfg, const Eigen::Isometry3d& prior_answer,
                                         const Elsewhere& best);
+  float inlier_share_at(const Eigen::Isometry3d& map_T_scan, uint32_t inliers) const;
 };
 
 // The one layout of the workspace: run on a counting arena by required_bytes and budget, and on the
@@ -499,13 +500,23 @@ void Localizer::Impl::measure_confidence(const LocalizerConfig& cfg, LocalizeRes
   out.confidence = 0.0;  // without verification nothing vouches for the answer
   if (out.verified && answer.compact_points() != nullptr && answer.compact_point_count() > 0) {
     const AnswerConfidence::Answer a{answer.answer_pose(), answer.rival_poses(), answer.rival_count(), out.inliers,
-                                     float(out.inliers) / float(std::max<uint32_t>(1, out.query_instances))};
+                                     inlier_share_at(answer.answer_pose(), out.inliers)};
     out.confidence_evidence =
         confidence.measure(answer.compact_points(), answer.compact_point_count(), semantic, answer.verify_weights(),
                            cfg.verify.disagree_weight, a, cfg.verify.max_points);
     out.confidence = confidence_probability(out.confidence_evidence);
   }
   out.confident = out.confidence >= cfg.confidence.min_probability;
+}
+
+// The share of the scan's instances a pose explains: its inliers over the instances that land on the map's
+// observed cells there. An instance beyond the mapped area (a real scan sees past the mapped street's
+// ends) can match nothing at any pose, so counting it would read a right answer at the map's edge as
+// doubtful. Never below the inliers (a cell-sized slip at the layer's border).
+float Localizer::Impl::inlier_share_at(const Eigen::Isometry3d& map_T_scan, uint32_t inliers) const {
+  const uint32_t seen =
+      semantic.empty() ? instance_count : count_observed(semantic, map_T_scan, centroids, instance_count);
+  return float(inliers) / float(std::max({seen, inliers, 1u}));
 }
 
 // 10. Refinement against the map's point layer (accepted only within its correction limit).
@@ -556,8 +567,7 @@ ConfidenceEvidence Localizer::Impl::elsewhere_evidence(const LocalizerConfig& cf
   rivals[n++] = prior_answer;
   for (uint32_t k = 0; k < answer.rival_count() && n < AnswerSelector::kMaxRivals; ++k)
     rivals[n++] = answer.rival_poses()[k];
-  const AnswerConfidence::Answer a{best.pose, rivals, n, best.inliers,
-                                   float(best.inliers) / float(std::max<uint32_t>(1, instance_count))};
+  const AnswerConfidence::Answer a{best.pose, rivals, n, best.inliers, inlier_share_at(best.pose, best.inliers)};
   return confidence.measure(answer.compact_points(), answer.compact_point_count(), semantic, answer.verify_weights(),
                             cfg.verify.disagree_weight, a, cfg.verify.max_points);
 }
@@ -748,20 +758,20 @@ Status Localizer::track(const ScanView& scan, const Eigen::Isometry3d& predicted
 namespace {
 
 // The poses a one-shot result offers the window: its answer (at the pose verification scored, with the
-// answer's height), then its rivals, each with the share of the scan's instances it explained (a rival's:
-// the reported hypothesis nearest it within the same-pose tolerance; 0 without one).
+// answer's height), then its rivals, each with the share of the scan's instances it explained
+// (share_at(pose, inliers): Impl::inlier_share_at; a rival's inliers are the reported hypothesis nearest
+// it within the same-pose tolerance, 0 without one).
+template <class ShareAt>
 uint32_t offered_candidates(const AnswerSelector& sel, const LocalizeResult& r, const HypothesisConfig& hc,
-                            uint32_t max, WindowCandidate* out) {
+                            uint32_t max, const ShareAt& share_at, WindowCandidate* out) {
   if (r.status != Status::Ok || !r.verified || max == 0) return 0;
-  const float instances = float(std::max<uint32_t>(1, r.query_instances));
   uint32_t n = 0;
   out[n].map_T_scan = sel.answer_pose();
   out[n].map_T_scan.translation().z() = r.map_T_scan.translation().z();
   out[n].inliers = r.inliers;
-  out[n++].inlier_share = float(r.inliers) / instances;
+  out[n++].inlier_share = share_at(sel.answer_pose(), r.inliers);
   for (uint32_t k = 0; k < sel.rival_count() && n < max; ++k) {
     const Eigen::Isometry3d& p = sel.rival_poses()[k];
-    float share = 0.0f;
     uint32_t inliers = 0;
     double nearest = double(hc.same_pose_m) * hc.same_pose_m;
     const double yaw = std::atan2(p.linear()(1, 0), p.linear()(0, 0)) * kDegPerRad;
@@ -770,13 +780,12 @@ uint32_t offered_candidates(const AnswerSelector& sel, const LocalizeResult& r, 
       const double dyaw = std::fabs(std::remainder(double(h.yaw_deg) - yaw, 360.0));
       if (h.inliers > 0 && d <= nearest && dyaw <= hc.same_pose_deg) {
         nearest = d;
-        share = float(h.inliers) / instances;
         inliers = h.inliers;
       }
     }
     out[n].inliers = inliers;
     out[n].map_T_scan = p;
-    out[n++].inlier_share = share;
+    out[n++].inlier_share = inliers > 0 ? share_at(p, inliers) : 0.0f;
   }
   return n;
 }
@@ -837,7 +846,9 @@ Status Localizer::localize_sequence(const ScanView& scan, const Eigen::Isometry3
   out.window_scans = 1;
   out.window_ids[0] = out.sequence_index;
   WindowCandidate own[ScanWindow::kMaxCandidates];
-  const uint32_t n_own = offered_candidates(im.answer, out, config_.hypotheses, config_.window.candidates, own);
+  const auto share_at = [&im](const Eigen::Isometry3d& p, uint32_t inliers) { return im.inlier_share_at(p, inliers); };
+  const uint32_t n_own =
+      offered_candidates(im.answer, out, config_.hypotheses, config_.window.candidates, share_at, own);
   const bool alone = out.status == Status::Ok && out.confident;
   const bool thin = alone && out.confidence_evidence.z_rival < kWindowCheckZ;
   if (has_scan && (!alone || thin) && im.window.scans() > 1) {

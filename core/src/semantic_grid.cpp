@@ -155,6 +155,17 @@ uint32_t SemanticGridView::neighbours_at(float x, float y) const {
   return i == kNoCell || neighbours == nullptr ? 0u : neighbours[i];
 }
 
+uint32_t count_observed(const SemanticGridView& grid, const Eigen::Isometry3d& map_T_scan, const float* xyz,
+                        uint32_t n) {
+  uint32_t observed = 0, hint = 0;
+  for (uint32_t i = 0; i < n; ++i) {
+    const Eigen::Vector3d p = map_T_scan * Eigen::Vector3d(xyz[3 * i], xyz[3 * i + 1], xyz[3 * i + 2]);
+    const float x = float(p.x()), y = float(p.y());
+    if ((grid.cell_at(x, y, &hint) | grid.neighbours_at(x, y)) & kCellObserved) ++observed;
+  }
+  return observed;
+}
+
 Status SemanticGridView::validate(uint32_t num_classes) const {
   if (tile_count == 0) return Status::Ok;
   if (!tile_keys || !cells || !palette_offsets || !palette || !neighbours) return Status::CorruptData;

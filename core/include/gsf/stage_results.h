@@ -23,7 +23,7 @@ struct ConfidenceEvidence {
   uint32_t samples = 0;       // sampled voxels compared
   uint32_t blocks = 0;        // scan blocks holding them
   uint32_t inliers = 0;       // the answer's inliers
-  float inlier_share = 0.0f;  // the answer's inliers / the scan's instances
+  float inlier_share = 0.0f;  // the answer's inliers / the scan's instances on the map's observed cells there
   float known_share = 0.0f;   // share of the samples that landed on the map's semantic layer at the answer
   float agreement = 0.0f;     // agree / (agree + disagree) at the answer (diagnostic, not in the model)
   // The closest rival's margin (the comparison z_rival comes from): sum over the samples of (evidence at

@@ -65,8 +65,8 @@ class AnswerConfidence {
 
   // The evidence for `answer` (map-local, the pose verification scored) against `rivals`, over the
   // same strided sample of the n compact points verification used (weights and disagree_weight too);
-  // inliers: the answer's, inlier_share: their share of the scan's instances (a window of scans passes
-  // its candidate's best).
+  // inliers: the answer's; inlier_share: their share of the scan's instances on the map's observed
+  // cells there (a window of scans passes its candidate's best).
   struct Answer {
     const Eigen::Isometry3d& pose;
     const Eigen::Isometry3d* rivals;

@@ -123,6 +123,12 @@ PoseVerification verify_pose_evidence(const VerifyPoint* points, uint32_t n, con
                                       const Eigen::Isometry3d& map_T_scan, uint32_t max_points, const float* weights,
                                       float disagree_weight, float* evidence);
 
+// How many of n points (xyz triples, scan frame), moved by map_T_scan, land on or beside a cell the map
+// observed: of the scan's instances, those the map could hold at this pose. An instance beyond the mapped
+// area can match nothing at any pose, so the confidence's inlier share counts only these (confidence.h).
+uint32_t count_observed(const SemanticGridView& grid, const Eigen::Isometry3d& map_T_scan, const float* xyz,
+                        uint32_t n);
+
 // The same two, over n compact points (fill_verify_points of the layer: the same results, bit for bit).
 PoseVerification verify_pose(const VerifyPoint* points, uint32_t n, const SemanticGridView& grid,
                              const Eigen::Isometry3d& map_T_scan, uint32_t max_points, const float* weights,
