@@ -84,6 +84,7 @@ struct Localizer::Impl {
   float* gather_targets = nullptr;
   uint8_t* gather_labels = nullptr;
   HeightSample* height_samples = nullptr;    // C: the answer height's scratch
+  uint8_t* instance_marks = nullptr;         // I: inliers_at's (all 0 between calls)
   float weights[kNumClasses];                // stability weights of the label set
   uint32_t instance_count = 0;               // query instances of the last call
   uint32_t vote_pairs = 0, graph_pairs = 0;  // selected pairs: for the shift votes, of them for the graph
@@ -110,7 +111,8 @@ struct Localizer::Impl {
                         const Eigen::Isometry3d& prior_answer, Elsewhere* best);
   ConfidenceEvidence elsewhere_evidence(const LocalizerConfig& cfg, const Eigen::Isometry3d& prior_answer,
                                         const Elsewhere& best);
-  float inlier_share_at(const Eigen::Isometry3d& map_T_scan, uint32_t inliers) const;
+  float inlier_share_at(const Eigen::Isometry3d& map_T_scan, uint32_t inliers, float radius) const;
+  uint32_t inliers_at(const Eigen::Isometry3d& map_T_scan, double radius) const;
 };
 
 // The one layout of the workspace: run on a counting arena by required_bytes and budget, and on the
@@ -171,6 +173,7 @@ Status Localizer::bind_workspace(Arena& ar, const LocalizerConfig& config, Impl&
   if (im.confidence.bind(ar, config.verify.max_points * window_scans) != Status::Ok && !ar.counting())
     return Status::InvalidArgument;
   im.height_samples = ar.allocate<HeightSample>(C);
+  im.instance_marks = ar.allocate<uint8_t>(I, true);
   record(&b.clique);
   if ((config.refine.enabled || config.track.refine) && im.refiner.bind(ar, config.refine) != Status::Ok)
     return Status::InvalidArgument;
@@ -500,7 +503,7 @@ void Localizer::Impl::measure_confidence(const LocalizerConfig& cfg, LocalizeRes
   out.confidence = 0.0;  // without verification nothing vouches for the answer
   if (out.verified && answer.compact_points() != nullptr && answer.compact_point_count() > 0) {
     const AnswerConfidence::Answer a{answer.answer_pose(), answer.rival_poses(), answer.rival_count(), out.inliers,
-                                     inlier_share_at(answer.answer_pose(), out.inliers)};
+                                     inlier_share_at(answer.answer_pose(), out.inliers, cfg.hypotheses.tls_threshold)};
     out.confidence_evidence =
         confidence.measure(answer.compact_points(), answer.compact_point_count(), semantic, answer.verify_weights(),
                            cfg.verify.disagree_weight, a, cfg.verify.max_points);
@@ -513,10 +516,37 @@ void Localizer::Impl::measure_confidence(const LocalizerConfig& cfg, LocalizeRes
 // observed cells there. An instance beyond the mapped area (a real scan sees past the mapped street's
 // ends) can match nothing at any pose, so counting it would read a right answer at the map's edge as
 // doubtful. Never below the inliers (a cell-sized slip at the layer's border).
-float Localizer::Impl::inlier_share_at(const Eigen::Isometry3d& map_T_scan, uint32_t inliers) const {
+float Localizer::Impl::inlier_share_at(const Eigen::Isometry3d& map_T_scan, uint32_t inliers, float radius) const {
+  inliers = std::max(inliers, inliers_at(map_T_scan, radius));
   const uint32_t seen =
       semantic.empty() ? instance_count : count_observed(semantic, map_T_scan, centroids, instance_count);
   return float(inliers) / float(std::max({seen, inliers, 1u}));
+}
+
+// The scan's instances that some vote pair puts within `radius` of its map instance at map_T_scan: a
+// pose's inliers counted one way whichever source found it. A clique hypothesis counts only among the
+// graph's C pairs, a translation vote among all vote pairs, and in a lattice (the C pairs crowded by
+// ambiguous matches) the same right pose read 12 inliers from its clique and 64 from its vote.
+uint32_t Localizer::Impl::inliers_at(const Eigen::Isometry3d& map_T_scan, double radius) const {
+  const uint32_t n = std::min(vote_pairs, correspondences.selected());
+  const float* a = correspondences.query_xyz();
+  const float* b = correspondences.map_xyz();
+  uint32_t count = 0;
+  for (uint32_t k = 0; k < n; ++k) {
+    const uint32_t q = correspondences.selected_pair(k).query;
+    if (q >= instance_count || instance_marks[q]) continue;
+    const Eigen::Vector3d d = Eigen::Vector3d(b[3 * k], b[3 * k + 1], b[3 * k + 2]) -
+                              map_T_scan * Eigen::Vector3d(a[3 * k], a[3 * k + 1], a[3 * k + 2]);
+    if (d.squaredNorm() <= radius * radius) {
+      instance_marks[q] = 1;
+      ++count;
+    }
+  }
+  for (uint32_t k = 0; k < n; ++k) {
+    const uint32_t q = correspondences.selected_pair(k).query;
+    if (q < instance_count) instance_marks[q] = 0;
+  }
+  return count;
 }
 
 // 10. Refinement against the map's point layer (accepted only within its correction limit).
@@ -567,7 +597,8 @@ ConfidenceEvidence Localizer::Impl::elsewhere_evidence(const LocalizerConfig& cf
   rivals[n++] = prior_answer;
   for (uint32_t k = 0; k < answer.rival_count() && n < AnswerSelector::kMaxRivals; ++k)
     rivals[n++] = answer.rival_poses()[k];
-  const AnswerConfidence::Answer a{best.pose, rivals, n, best.inliers, inlier_share_at(best.pose, best.inliers)};
+  const AnswerConfidence::Answer a{best.pose, rivals, n, best.inliers,
+                                   inlier_share_at(best.pose, best.inliers, cfg.hypotheses.tls_threshold)};
   return confidence.measure(answer.compact_points(), answer.compact_point_count(), semantic, answer.verify_weights(),
                             cfg.verify.disagree_weight, a, cfg.verify.max_points);
 }
@@ -846,7 +877,10 @@ Status Localizer::localize_sequence(const ScanView& scan, const Eigen::Isometry3
   out.window_scans = 1;
   out.window_ids[0] = out.sequence_index;
   WindowCandidate own[ScanWindow::kMaxCandidates];
-  const auto share_at = [&im](const Eigen::Isometry3d& p, uint32_t inliers) { return im.inlier_share_at(p, inliers); };
+  const float radius = config_.hypotheses.tls_threshold;
+  const auto share_at = [&im, radius](const Eigen::Isometry3d& p, uint32_t inliers) {
+    return im.inlier_share_at(p, inliers, radius);
+  };
   const uint32_t n_own =
       offered_candidates(im.answer, out, config_.hypotheses, config_.window.candidates, share_at, own);
   const bool alone = out.status == Status::Ok && out.confident;
