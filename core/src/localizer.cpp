@@ -512,10 +512,11 @@ void Localizer::Impl::measure_confidence(const LocalizerConfig& cfg, LocalizeRes
   out.confident = out.confidence >= cfg.confidence.min_probability;
 }
 
-// The share of the scan's instances a pose explains: its inliers over the instances that land on the map's
-// observed cells there. An instance beyond the mapped area (a real scan sees past the mapped street's
-// ends) can match nothing at any pose, so counting it would read a right answer at the map's edge as
-// doubtful. Never below the inliers (a cell-sized slip at the layer's border).
+// The share of the scan's instances a pose explains: its inliers recounted there (inliers_at; never
+// fewer than the hypothesis's own) over the instances that land on the map's observed cells there. An
+// instance beyond the mapped area (a real scan sees past the mapped street's ends) can match nothing at
+// any pose, so counting it would read a right answer at the map's edge as doubtful. The denominator is
+// never below the inliers (a cell-sized slip at the layer's border).
 float Localizer::Impl::inlier_share_at(const Eigen::Isometry3d& map_T_scan, uint32_t inliers, float radius) const {
   inliers = std::max(inliers, inliers_at(map_T_scan, radius));
   const uint32_t seen =
