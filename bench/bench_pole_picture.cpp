@@ -113,7 +113,7 @@ int main(int argc, char** argv) {
     return 1;
   if (layer.build(b.view(), nullptr) != Status::Ok) return 1;
   PoleStats ps;
-  const Status s = poles.build(layer, &ps);
+  const Status s = poles.build(layer, &ps, LayerFrame::Sensor);  // one scan, as the localizer sees it
   if (s != Status::Ok && s != Status::CapacityExceeded) return 1;
   uint32_t gt_count = 0;
   if (kitti) {
@@ -213,8 +213,9 @@ int main(int argc, char** argv) {
   cli::draw_scale_bar(svg, 0, size + 14, proj.scale);
   if (!svg.save(argv[5])) return 1;
   std::printf(
-      "%u instances (%u segments, %u wide, %u crowded, %u chains, %u short, %u tilted, %u thick); %u true; wrote %s\n",
+      "%u instances (%u segments, %u wide, %u crowded, %u chains, %u short, %u tilted, %u thick, %u in beam-column "
+      "rows); %u true; wrote %s\n",
       poles.size(), ps.segments, ps.segments_wide, ps.segments_crowded, ps.chains, ps.rejected_short, ps.rejected_tilt,
-      ps.rejected_thick, gt_count, argv[5]);
+      ps.rejected_thick, ps.rejected_row, gt_count, argv[5]);
   return 0;
 }

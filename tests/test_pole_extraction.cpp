@@ -1,5 +1,6 @@
 // Geometric pole / trunk extraction from host classes (pole_extraction.h): known answers on synthetic
-// scenes (a pole among a wall and a bush, a tree's trunk under its canopy, a pole in front of a wall),
+// scenes (a pole among a wall and a bush, a tree's trunk under its canopy, a pole in front of a wall,
+// the beam columns of a wall seen at a grazing angle),
 // the tilt threshold, capacity overflow keeping the best by score, rigid-motion invariance, argument
 // checks; and the real-data measurement: SemanticKITTI (poles/trunks relabelled into their hosts,
 // precision/recall against the true ones) and nuScenes-lidarseg (counts per scan and per 100 m, and
@@ -47,10 +48,10 @@ struct Pipeline {
     REQUIRE(layer.bind(buf.arena, vc) == Status::Ok);
     REQUIRE(poles.bind(buf.arena, pc, vc.max_voxels) == Status::Ok);
   }
-  Status run(const ScanView& view) {
+  Status run(const ScanView& view, LayerFrame frame = LayerFrame::World) {
     const Status s = layer.build(view, &vs);
     if (s != Status::Ok && s != Status::CapacityExceeded) return s;
-    return poles.build(layer, &ps);
+    return poles.build(layer, &ps, frame);
   }
 };
 
@@ -222,12 +223,71 @@ TEST_CASE("Capacity overflow keeps the best by score, whatever the storage order
     ++mapped;
   }
   CHECK(mapped == q.poles.instance(0).voxel_count + q.poles.instance(1).voxel_count + q.poles.instance(2).voxel_count);
+  // In the sensor frame (twice the candidates collected before the row step) the same three are kept.
+  REQUIRE(q.run(c.view(), LayerFrame::Sensor) == Status::CapacityExceeded);
+  CHECK(q.ps.dropped_capacity == 3);
+  REQUIRE(q.poles.size() == 3);
+  for (uint32_t k = 0; k < 3; ++k) CHECK(q.poles.info(k).height > 4.0f);
   // The next, smaller scene is fine again.
   Cloud one;
   ground(one, 10.0f);
   cylinder(one, 1.0f, 1.0f, -1.7f, 4.0f, 0.12f, kManmade);
   REQUIRE(q.run(one.view()) == Status::Ok);
   CHECK(q.poles.size() == 1);
+}
+
+// A wall along x at y = wall_y seen from the origin the way a spinning LiDAR sees it: one vertical
+// column of points per azimuth step (0.4 deg), from x0 to x1. At a grazing angle the columns land
+// metres apart along the wall, each a thin, tall, isolated vertical line.
+void wall_columns(Cloud& c, float wall_y, float x0, float x1, uint32_t label) {
+  const float step = 0.4f * 3.14159265f / 180.0f;
+  for (float az = std::atan2(wall_y, x1); az <= std::atan2(wall_y, x0); az += step) {
+    const float x = wall_y / std::tan(az);
+    for (float z = -1.5f; z <= 6.0f; z += 0.3f) c.add(x, wall_y, z, label);
+  }
+}
+
+TEST_CASE("Beam columns of a wall seen at a grazing angle are rejected in the sensor frame, real rows kept") {
+  Cloud c;
+  ground(c, 20.0f);
+  wall_columns(c, 15.0f, 30.0f, 62.0f, kManmade);  // columns 0.5 m apart at x = 30, 1.9 m at x = 62
+  // Street poles 25 m apart along the road: degrees apart in azimuth.
+  for (float x : {10.0f, 35.0f, 60.0f}) cylinder(c, x, -6.0f, -1.7f, 5.0f, 0.12f, kManmade);
+  // A pole with a second one 2 m behind it, nearly in line with the sensor: a pair, not a row.
+  cylinder(c, -20.0f, 3.0f, -1.7f, 4.0f, 0.12f, kManmade);
+  cylinder(c, -22.0f, 3.2f, -1.7f, 4.0f, 0.12f, kManmade);
+  VoxelConfig vc = near_config();
+  Pipeline world(vc, PoleConfig()), sensor(vc, PoleConfig());
+  REQUIRE(world.run(c.view()) == Status::Ok);
+  REQUIRE(sensor.run(c.view(), LayerFrame::Sensor) == Status::Ok);
+  auto on_wall = [](const Instance& in) { return std::fabs(in.centroid[1] - 15.0f) < 0.5f; };
+  uint32_t world_columns = 0;
+  for (uint32_t k = 0; k < world.poles.size(); ++k) world_columns += on_wall(world.poles.instance(k));
+  INFO("world " << world.poles.size() << " (" << world_columns << " on the wall), sensor " << sensor.poles.size()
+                << ", rows " << sensor.ps.rejected_row);
+  CHECK(world_columns >= 5);  // without the step, the columns pass as poles
+  CHECK(world.ps.rejected_row == 0);
+  CHECK(world.poles.size() == 5 + world_columns);
+  CHECK(sensor.ps.rejected_row == world_columns);
+  REQUIRE(sensor.poles.size() == 5);
+  for (uint32_t k = 0; k < 5; ++k) CHECK_FALSE(on_wall(sensor.poles.instance(k)));
+  // Rejected columns' voxels map to no instance.
+  for (uint32_t v = 0; v < sensor.layer.size(); ++v)
+    if (std::fabs(sensor.layer.voxel(v).centroid[1] - 15.0f) < 0.3f)
+      CHECK(sensor.poles.voxel_instance()[v] == UINT32_MAX);
+  // The columns (7.5 m tall) outscore the poles, yet do not take their places while the candidates fit
+  // in twice max_instances (18 <= 2 x 9): the row step runs before the capacity cut.
+  PoleConfig nine;
+  nine.max_instances = 9;
+  Pipeline small(vc, nine);
+  REQUIRE(small.run(c.view(), LayerFrame::Sensor) == Status::Ok);
+  REQUIRE(small.poles.size() == 5);
+  for (uint32_t k = 0; k < 5; ++k) CHECK_FALSE(on_wall(small.poles.instance(k)));
+  // In the world frame the same capacity keeps the nine best scores: columns.
+  REQUIRE(small.poles.build(small.layer, &small.ps) == Status::CapacityExceeded);
+  uint32_t kept_columns = 0;
+  for (uint32_t k = 0; k < small.poles.size(); ++k) kept_columns += on_wall(small.poles.instance(k));
+  CHECK(kept_columns == 9);
 }
 
 TEST_CASE("A rigid motion of the scene moves the extracted instances with it") {
@@ -430,7 +490,7 @@ KittiScore score_kitti(const Cloud& c, bool signs_and_fences, const PoleConfig& 
   Cloud r = c;
   for (auto& l : r.labels) l = nuscenes_like(l, signs_and_fences);
   Pipeline p(vc, pc);
-  const Status st = p.run(r.view());
+  const Status st = p.run(r.view(), LayerFrame::Sensor);  // one scan, as the localizer sees it
   REQUIRE((st == Status::Ok || st == Status::CapacityExceeded));
   s.gt = gt.size();
   s.extracted = p.poles.size();
@@ -543,7 +603,7 @@ bool run_scene(const std::string& root, const char* scene, SceneResult* out) {
     REQUIRE(src.pose(i, &T) == Status::Ok);
     if (!out->path.empty()) out->path_m += (T.translation() - out->path.back()).norm();
     out->path.push_back(T.translation());
-    const Status s = scan.run(buf.buffer().view());
+    const Status s = scan.run(buf.buffer().view(), LayerFrame::Sensor);
     REQUIRE((s == Status::Ok || s == Status::CapacityExceeded));
     per_scan.emplace_back();
     for (uint32_t k = 0; k < scan.poles.size(); ++k) {

@@ -329,7 +329,7 @@ Status Localizer::Impl::find_instances(const LocalizerConfig& cfg, LocalizeResul
   // 2b. Geometric pole / trunk instances (label sets without pole and trunk classes), best score first
   // into the instance slots clustering left free; the rest are counted, never cut in storage order.
   if (poles_on) {
-    s = poles.build(voxels, nullptr);
+    s = poles.build(voxels, nullptr, LayerFrame::Sensor);
     if (s == Status::CapacityExceeded) out.capacity_truncated = true;
     else if (s != Status::Ok) return s;
     const uint32_t np = poles.size();

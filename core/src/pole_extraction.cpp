@@ -12,6 +12,13 @@ constexpr uint32_t kNone = UINT32_MAX;          // not a host voxel / not visite
 constexpr uint32_t kRejected = UINT32_MAX - 1;  // host voxel of a wide or crowded segment
 constexpr uint32_t kCurrent = UINT32_MAX - 2;   // member of the segment being built
 constexpr int32_t kMaxReachCells = 16;
+// Step 5 (beam-column rows): azimuth columns of one surface are one azimuth step apart (0.1-0.4 deg on
+// common sensors; 1 deg also links across a column the extraction lost) and, along a surface seen at
+// >= 5 deg, at most about range x step / sin(5 deg) < 0.1 x range apart; real poles of a row are degrees
+// apart in azimuth. Three columns make a row: a pole with its sign or a second pole behind it makes two.
+constexpr float kColumnRowDeg = 1.0f;
+constexpr float kColumnRowGap = 0.15f;
+constexpr uint32_t kColumnRowMin = 3;
 
 bool is_segment(uint32_t s) { return s < kCurrent; }
 
@@ -45,14 +52,18 @@ Status PoleExtraction::bind(Arena& arena, const PoleConfig& config, uint32_t max
     return Status::InvalidArgument;
   config_ = config;
   max_voxels_ = max_voxels;
-  instances_ = arena.allocate<Instance>(config.max_instances);
-  info_ = arena.allocate<PoleInfo>(config.max_instances);
+  // Twice max_instances: the candidates step 5 thins (header).
+  instances_ = arena.allocate<Instance>(2 * size_t(config.max_instances));
+  info_ = arena.allocate<PoleInfo>(2 * size_t(config.max_instances));
+  row_order_ = arena.allocate<uint32_t>(2 * size_t(config.max_instances));
+  row_parent_ = arena.allocate<uint32_t>(2 * size_t(config.max_instances));
   voxel_seg_ = arena.allocate<uint32_t>(max_voxels);
   queue_ = arena.allocate<uint32_t>(max_voxels);
   offsets_ = arena.allocate<uint32_t>(size_t(max_voxels) + 1);
   segments_ = arena.allocate<Segment>(max_voxels);
   if (arena.counting()) return Status::Ok;
-  if (!instances_ || !info_ || !voxel_seg_ || !queue_ || !offsets_ || !segments_) return Status::BufferTooSmall;
+  if (!instances_ || !info_ || !voxel_seg_ || !queue_ || !offsets_ || !segments_ || !row_order_ || !row_parent_)
+    return Status::BufferTooSmall;
   bound_ = true;
   return Status::Ok;
 }
@@ -91,7 +102,7 @@ struct PoleExtraction::ChainShape {
   uint32_t points = 0, first = UINT32_MAX;
 };
 
-Status PoleExtraction::build(const VoxelLayer& layer, PoleStats* stats_out) {
+Status PoleExtraction::build(const VoxelLayer& layer, PoleStats* stats_out, LayerFrame frame) {
   PoleStats stats;
   if (stats_out) *stats_out = stats;  // early returns report zeros
   count_ = 0;
@@ -113,6 +124,7 @@ Status PoleExtraction::build(const VoxelLayer& layer, PoleStats* stats_out) {
   // 3. Group the chains' voxels by root; the members of root r are queue_[r == 0 ? 0 : offsets_[r - 1],
   // offsets_[r]). 4. Judge each chain; the best max_instances are kept.
   group_chains(n, segments);
+  collect_ = frame == LayerFrame::Sensor ? 2 * config_.max_instances : config_.max_instances;
   for (uint32_t r = 0; r < segments; ++r) {
     if (segments_[r].parent != r) continue;  // not a root
     const uint32_t begin = r == 0 ? 0 : offsets_[r - 1], end = offsets_[r];
@@ -120,6 +132,9 @@ Status PoleExtraction::build(const VoxelLayer& layer, PoleStats* stats_out) {
     ++stats.chains;
     judge_chain(h, r, queue_ + begin, end - begin, &stats);
   }
+  // 5. Beam-column rows, then the best max_instances of what is left.
+  if (frame == LayerFrame::Sensor) reject_column_rows(&stats);
+  while (count_ > config_.max_instances) evict_worst(&stats);
   order_by_discovery(n, segments);
   stats.instances = count_;
   if (stats_out) *stats_out = stats;
@@ -370,29 +385,90 @@ void PoleExtraction::sum_chain(const Hosts& h, uint32_t* m, uint32_t count, Chai
   }
 }
 
-// Keep the best max_instances by score; on overflow evict the worst (ties: fewer points, then later
+// Keep the best collect_ by score; on overflow evict the worst (ties: fewer points, then later
 // discovery), unless the new one is no better than it.
+namespace {
+bool worse_candidate(const PoleInfo& ai, const Instance& an, const PoleInfo& bi, const Instance& bn) {
+  if (ai.score != bi.score) return ai.score < bi.score;
+  if (an.point_count != bn.point_count) return an.point_count < bn.point_count;
+  return an.first_voxel > bn.first_voxel;
+}
+}  // namespace
+
 void PoleExtraction::keep_best(const Instance& in, const PoleInfo& info, PoleStats* stats) {
-  auto worse = [&](uint32_t a_slot, const PoleInfo& bi, const Instance& bn) {  // slot a worse than (bi, bn)?
-    const PoleInfo& ai = info_[a_slot];
-    const Instance& an = instances_[a_slot];
-    if (ai.score != bi.score) return ai.score < bi.score;
-    if (an.point_count != bn.point_count) return an.point_count < bn.point_count;
-    return an.first_voxel > bn.first_voxel;
-  };
   uint32_t slot = count_;
-  if (count_ == config_.max_instances) {
+  if (count_ == collect_) {
     uint32_t w = 0;
     for (uint32_t k = 1; k < count_; ++k)
-      if (worse(k, info_[w], instances_[w])) w = k;
+      if (worse_candidate(info_[k], instances_[k], info_[w], instances_[w])) w = k;
     ++stats->dropped_capacity;
-    if (worse(w, info, in) == false) return;  // the new one is no better than the worst kept
+    if (!worse_candidate(info_[w], instances_[w], info, in)) return;  // the new one is no better than the worst kept
     slot = w;
   } else {
     ++count_;
   }
   instances_[slot] = in;
   info_[slot] = info;
+}
+
+// Drops the worst kept candidate (the last one moves into its slot; discovery order is restored later).
+void PoleExtraction::evict_worst(PoleStats* stats) {
+  uint32_t w = 0;
+  for (uint32_t k = 1; k < count_; ++k)
+    if (worse_candidate(info_[k], instances_[k], info_[w], instances_[w])) w = k;
+  --count_;
+  instances_[w] = instances_[count_];
+  info_[w] = info_[count_];
+  ++stats->dropped_capacity;
+}
+
+// 5. Rows of beam columns (header): candidates sorted by azimuth about the sensor (the origin); each
+// one links to those of its kind within kColumnRowDeg after it (cyclically) and within kColumnRowGap x
+// the nearer range; the members of a row of >= kColumnRowMin are removed.
+void PoleExtraction::reject_column_rows(PoleStats* stats) {
+  const uint32_t n = count_;
+  if (n < kColumnRowMin) return;
+  auto azimuth = [&](uint32_t i) { return std::atan2(instances_[i].centroid[1], instances_[i].centroid[0]); };
+  auto range = [&](uint32_t i) { return std::hypot(instances_[i].centroid[0], instances_[i].centroid[1]); };
+  for (uint32_t i = 0; i < n; ++i) row_order_[i] = row_parent_[i] = i;
+  std::sort(row_order_, row_order_ + n, [&](uint32_t a, uint32_t b) {
+    const float za = azimuth(a), zb = azimuth(b);
+    return za != zb ? za < zb : a < b;
+  });
+  auto root = [&](uint32_t i) {
+    while (row_parent_[i] != i) i = row_parent_[i] = row_parent_[row_parent_[i]];
+    return i;
+  };
+  const float window = kColumnRowDeg * kRadPerDeg;
+  for (uint32_t a = 0; a < n; ++a) {
+    const uint32_t i = row_order_[a];
+    for (uint32_t step = 1; step < n; ++step) {
+      const uint32_t j = row_order_[(a + step) % n];
+      float d = azimuth(j) - azimuth(i);
+      if (d < 0.0f) d += 2.0f * float(kPi);  // past +-180 deg
+      if (!(d <= window)) break;
+      if (info_[i].kind != info_[j].kind) continue;
+      const float dx = instances_[i].centroid[0] - instances_[j].centroid[0];
+      const float dy = instances_[i].centroid[1] - instances_[j].centroid[1];
+      if (std::hypot(dx, dy) > kColumnRowGap * std::min(range(i), range(j))) continue;
+      const uint32_t ri = root(i), rj = root(j);
+      if (ri != rj) row_parent_[std::max(ri, rj)] = std::min(ri, rj);
+    }
+  }
+  // Row sizes at the roots (row_order_ is free again), then compaction of the survivors.
+  for (uint32_t i = 0; i < n; ++i) row_order_[i] = 0;
+  for (uint32_t i = 0; i < n; ++i) ++row_order_[root(i)];
+  uint32_t kept = 0;
+  for (uint32_t i = 0; i < n; ++i) {
+    if (row_order_[root(i)] >= kColumnRowMin) {
+      ++stats->rejected_row;
+      continue;
+    }
+    instances_[kept] = instances_[i];
+    info_[kept] = info_[i];
+    ++kept;
+  }
+  count_ = kept;
 }
 
 // Discovery order (first voxel; unique, so both arrays get the same permutation), then the

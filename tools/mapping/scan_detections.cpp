@@ -43,7 +43,7 @@ Status ScanDetector::detect(const VoxelLayer& voxels, const Eigen::Isometry3d& m
   uint32_t n = clusters_.size();
   for (uint32_t i = 0; i < n; ++i) push(clusters_.instance(i));
   if (!poles_on_) return Status::Ok;
-  s = poles_.build(voxels, nullptr);
+  s = poles_.build(voxels, nullptr, LayerFrame::Sensor);  // one scan, sensor frame
   if (s != Status::Ok && s != Status::CapacityExceeded) return s;
   const uint32_t np = poles_.size();  // <= poles.max_instances = pole_order_.size()
   poles_.order_by_score(pole_order_.data());

@@ -29,9 +29,23 @@
 //     whatever the storage order, and build() returns Status::CapacityExceeded with
 //     stats.dropped_capacity = the number of accepted chains not kept. The result is in discovery order
 //     (first voxel index), deterministic for a given layer.
+//  5. Beam-column rows (a layer in the sensor frame only, LayerFrame::Sensor): a flat surface seen at a
+//     grazing angle (a facade or a fence far along the street) is hit by the sensor's azimuth columns one
+//     by one, metres apart along the surface (range x azimuth step / sin(grazing angle)), so each column
+//     is a thin, tall, isolated vertical line that passes 1-4. Such columns lie next to each other in
+//     azimuth (one azimuth step, 0.1-0.4 deg, apart) at nearly the same range, where real poles of a
+//     row are degrees apart. Accepted chains of one kind at most kColumnRowDeg apart in azimuth and at
+//     most kColumnRowGap x range apart link into rows; every chain of a row of >= 3 is rejected
+//     (stats.rejected_row). Up to 2 x max_instances chains are collected before this step, so
+//     columns do not evict real poles first. Another drive sees the same surface from elsewhere, so
+//     these lines never repeat: on the real nuScenes scans and the simulated nuScenes-labelled worlds
+//     they were a large share of the scan's instances (docs/pole-extraction.md). The map builder's
+//     accumulated world-frame layer (many viewpoints, LayerFrame::World) fills such surfaces in and
+//     has no single sensor: there the step is off.
 //
 // Memory: bind() takes everything from the arena: 24 bytes per max_voxels plus two records per
-// max_instances; build() does not allocate. Cost: per host voxel 8 lookups (slices), per thin voxel
+// max_instances (2 x max_instances candidate records, 8 bytes per candidate for the row step); build()
+// does not allocate. Cost: per host voxel 8 lookups (slices), per thin voxel
 // (2 ceil(ring_width / voxel) + 3)^2 for the ring test and (2 ceil(link_radius / voxel) + 1)^2 *
 // (1 + floor(max_gap / voxel)) for linking, plus a sort of each chain's voxels by level.
 // Statuses: NotInitialized before a successful bind(); InvalidArgument from bind() for a bad config
@@ -73,15 +87,20 @@ struct PoleStats {
   uint32_t rejected_short = 0;    // too few levels, or too low
   uint32_t rejected_tilt = 0;
   uint32_t rejected_thick = 0;
+  uint32_t rejected_row = 0;      // beam-column rows (step 5)
   uint32_t dropped_capacity = 0;  // accepted but not among the best max_instances
   uint32_t instances = 0;
 };
+
+// Where the layer's origin is: a single scan in its sensor frame (the sensor at the origin: step 5 runs),
+// or a world-frame layer of many scans (step 5 is off).
+enum class LayerFrame : uint8_t { World, Sensor };
 
 class PoleExtraction {
  public:
   static size_t required_bytes(const PoleConfig& config, uint32_t max_voxels);
   Status bind(Arena& arena, const PoleConfig& config, uint32_t max_voxels);
-  Status build(const VoxelLayer& voxels, PoleStats* stats);
+  Status build(const VoxelLayer& voxels, PoleStats* stats, LayerFrame frame = LayerFrame::World);
 
   uint32_t size() const { return count_; }
   const Instance& instance(uint32_t i) const { return instances_[i]; }
@@ -117,6 +136,8 @@ class PoleExtraction {
   uint32_t ring_voxels(const Hosts& h, const SliceBox& box, int32_t level, int32_t ring_cells) const;
   void sum_chain(const Hosts& h, uint32_t* members, uint32_t count, ChainShape* shape) const;
   void keep_best(const Instance& in, const PoleInfo& info, PoleStats* stats);
+  void reject_column_rows(PoleStats* stats);
+  void evict_worst(PoleStats* stats);
 
   PoleConfig config_{};
   Instance* instances_ = nullptr;
@@ -125,8 +146,11 @@ class PoleExtraction {
   uint32_t* queue_ = nullptr;      // slice BFS, then chain members grouped by root
   uint32_t* offsets_ = nullptr;    // per segment (+1): chain member ranges, then root -> instance
   Segment* segments_ = nullptr;
+  uint32_t* row_order_ = nullptr;   // 2 x max_instances: candidates by azimuth (step 5)
+  uint32_t* row_parent_ = nullptr;  // 2 x max_instances: row union-find, then row sizes
   uint32_t max_voxels_ = 0;
   uint32_t count_ = 0;
+  uint32_t collect_ = 0;  // during build: chains kept before step 5 (max_instances, or twice that)
   bool bound_ = false;
 };
 
