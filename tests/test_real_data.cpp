@@ -218,38 +218,39 @@ TEST_CASE("Real nuScenes-lidarseg: the opposite-direction revisit localizes, the
                                   << fwd.answered_right << " right, " << fwd.answered_wrong << " wrong of "
                                   << fwd.queries);
   CHECK(fwd.overlap >= 13);
-  // 13 of 15 measured with triangles among the instances single scans find (MapBuildConfig::
-  // triangle_min_detections; 7 of 15 with every map instance a vertex).
-  CHECK(fwd.correct_pose >= 11);
-  // The data README's revisit: scene 0002 frames 8-20 pass 6-8.5 m from scene 0004's drive (11 of 13
+  // 15 of 15 measured since geometric poles may be 1.2 m thick (13 before; 7 of 15 with every map
+  // instance a triangle vertex, before MapBuildConfig::triangle_min_detections).
+  CHECK(fwd.correct_pose >= 13);
+  // The data README's revisit: scene 0002 frames 8-20 pass 6-8.5 m from scene 0004's drive (13 of 13
   // measured; the issue's target is 9).
-  CHECK(fwd.correct_8_to_20 >= 9);
+  CHECK(fwd.correct_8_to_20 >= 11);
   CHECK(fwd.answered_wrong == 0);
-  // One scan at a time: 24 answered right measured (21 while the inlier share counted the instances
-  // beyond the mapped street; 20 of the 40 queries' shares leave some out).
-  CHECK(fwd.answered_right >= 23);
+  // One scan at a time: 27 answered right measured (24 with the 0.8 m pole diameter, 21 while the
+  // inlier share counted the instances beyond the mapped street).
+  CHECK(fwd.answered_right >= 25);
   INFO("shares below the all-instances share: " << fwd.share_below_all
                                                 << ", over fewer instances: " << fwd.share_over_fewer);
   CHECK(fwd.share_below_all == 0);
   CHECK(fwd.share_over_fewer >= 10);
   // Several scans (issue 27): the drive's last three scans tied by its odometry answer what one scan
-  // cannot vouch for alone (35 of 40 measured against 21 one-shot), never wrongly.
+  // cannot vouch for alone (34 of 40 measured against 27 one-shot), never wrongly.
   INFO("window of 3: answered " << fwd.window_answered_right << " right, " << fwd.window_answered_wrong << " wrong");
-  CHECK(fwd.window_answered_right >= fwd.answered_right + 8);
+  CHECK(fwd.window_answered_right >= fwd.answered_right + 5);
   CHECK(fwd.window_answered_wrong == 0);
   // Under qemu (GSF_UNDER_EMULATOR, the aarch64 preset) the forward pair only: each map build and
   // drive costs ~40x the host's there, and the reverse and distractor runs exercise no other code.
   if (std::getenv("GSF_UNDER_EMULATOR")) return;
-  // The reverse: the 0002 map (109 m, 56 of its 144 instances found by two scans) covers less of what
-  // 0004's first frames see; 6 of 13 measured.
+  // The reverse: the 0002 map (109 m) covers less of what 0004's first frames see; 13 of 13 measured
+  // with the 1.2 m pole diameter (6 of 13 before), 22 answered right one-shot (the issue's target: 18).
   const NuScenesRun rev = localize_nuscenes(root, "0002", "0004");
   INFO("map 0002, queries 0004: " << rev.correct_pose << " correct poses of " << rev.overlap
                                   << " overlapping; answered " << rev.answered_right << " right, " << rev.answered_wrong
                                   << " wrong of " << rev.queries);
   CHECK(rev.overlap >= 13);
-  CHECK(rev.correct_pose >= 5);
+  CHECK(rev.correct_pose >= 11);
+  CHECK(rev.answered_right >= 18);
   CHECK(rev.answered_wrong == 0);
-  // The window: 17 answered measured with exact odometry, 18 with `gsf evaluate`'s 2% noise (one-shot 15).
+  // The window: 25 answered measured with exact odometry (one-shot 22).
   INFO("window of 3: answered " << rev.window_answered_right << " right, " << rev.window_answered_wrong << " wrong");
   CHECK(rev.window_answered_right >= rev.answered_right + 1);
   CHECK(rev.window_answered_wrong == 0);

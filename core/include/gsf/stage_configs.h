@@ -64,7 +64,7 @@ enum PoleKind : uint8_t { kPoleKind = 0, kTrunkKind = 1 };
 struct PoleConfig {
   ClassMask pole_hosts = class_bit(kBuilding);     // e.g. nuScenes static.manmade
   ClassMask trunk_hosts = class_bit(kVegetation);  // e.g. nuScenes static.vegetation
-  float max_diameter[2] = {0.8f, 1.2f};            // m, per kind: slice box diagonal and thickness about the axis
+  float max_diameter[2] = {1.2f, 1.2f};            // m, per kind: slice box diagonal and thickness about the axis
   float min_height[2] = {2.0f, 2.0f};              // m, per kind: vertical extent of a chain
   uint32_t min_levels = 4;                         // distinct voxel levels in a chain
   float max_tilt_deg = 12.0f;                      // axis from vertical
