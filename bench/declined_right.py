@@ -1,7 +1,7 @@
 #!/usr/bin/env python3
 """Why the confidence declines right answers (issue 24): per family, the declined right answers (the
 query succeeded, t < 5 m and r < 10 deg, but confidence < --min-confidence) by the model's limiting
-factor (the smallest of its logistic factors: rival, shift, turn, inlier share; with the right
+factor (the smallest of its logistic factors: rival, peak (shifted and turned probes), inlier share; with the right
 answers' median inlier share beside it), and for those the
 rival factor limits, where the best-scoring rival is: its distance and heading from the answer and its
 verified score over the answer's. A rival far away (another place or a flip) that scores nearly as
@@ -26,7 +26,7 @@ import re
 
 import fit_confidence as fc
 
-FACTOR_NAMES = ["rival", "shift", "turn", "inlier"]
+FACTOR_NAMES = ["rival", "peak", "inlier"]  # kConfidenceModel's factors, in fit_confidence.FACTORS order
 PLACES = ["open", "near", "zone"]  # open road, near the repetitive zone, in it
 FAMILY_ORDER = "p0 p3 p8 p15 o10 o20 thin b16 b64 b128 cross cheap edge ns".split()  # bench/families.sh's
 
@@ -94,7 +94,7 @@ def family_line(name, files, model, threshold):
             count["declined"] += 1
             add_inlier_ratio(inlier_ratio["declined right"], d)
             u = fc.factor_inputs(model, fc.features(e, q))
-            limiting = FACTOR_NAMES[min(range(4), key=lambda k: u[k])]
+            limiting = FACTOR_NAMES[min(range(len(FACTOR_NAMES)), key=lambda k: u[k])]
             by_factor[limiting] += 1
             if limiting != "rival":
                 continue

@@ -3,7 +3,7 @@
 replays any model on held-out ones.
 
 The model (core/include/gsf/detail/confidence.h): P = s(a_r + b_r z_rival + c_r rival_margin)
-s(a_s + b_s z_shift) s(a_t + b_t z_turn) s(a_i + b_i inlier_share), s the logistic function, each z
+s(a_p + b_s z_shift + b_t z_turn) s(a_i + b_i inlier_share), s the logistic function, each z
 clipped to [-3, 10], the margin to [0, 1]. --factors fits other forms (e.g. inlier_share+inliers).
 The evidence is the library's own measurement, written per query by `gsf evaluate --json`
 (diagnostics.confidence_evidence), so a fit needs no re-run of the localizer: fit on some runs, paste
@@ -35,7 +35,7 @@ import os
 # A factor may read several fields (s(offset + slope_1 x_1 + slope_2 x_2)); --factors joins them with '+'.
 FEATURES = {"z_rival": (-3.0, 10.0), "rival_margin": (0.0, 1.0), "z_shift": (-3.0, 10.0), "z_turn": (-3.0, 10.0),
             "inlier_share": (0.0, 1.0), "inliers": (3.0, 12.0), "known_share": (0.0, 1.0)}
-FACTORS = [["z_rival", "rival_margin"], ["z_shift"], ["z_turn"], ["inlier_share"]]
+FACTORS = [["z_rival", "rival_margin"], ["z_shift", "z_turn"], ["inlier_share"]]
 
 
 def parameter_count():

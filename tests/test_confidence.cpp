@@ -187,20 +187,42 @@ TEST_CASE("The probability is a product of rising logistic factors, in [0, 1]") 
     CHECK(p >= last);
     last = p;
   }
+  double last_turn = 0.0;
   e.z_rival = 0.0f;  // no separation from the rival, a near-tie: a coin toss at best
   e.rival_margin = 0.02f;
   CHECK(confidence_probability(e) < 0.5);
   e.z_rival = 10.0f;
-  e.z_turn = -3.0f;  // a turned copy of the scan fits better: not a peak
+  e.z_shift = 3.0f;  // clearly ahead of its shifted copies (a right answer's median is about 3)
+  e.z_turn = -3.0f;  // but a turned copy of the scan fits better: not a peak
   CHECK(confidence_probability(e) < 0.01);
+  e.z_turn = 5.0f;  // a right answer's 5th percentile
+  const double turned_well = confidence_probability(e);
+  CHECK(turned_well > 0.9);
+  e.z_shift = -3.0f;  // and the other way round: a shifted copy fits better
+  CHECK(confidence_probability(e) < 0.5);
+  for (float z = -3.0f; z <= 10.0f; z += 0.5f) {  // the peak factor rises with either z
+    e.z_shift = z;
+    const double p_shift = confidence_probability(e);
+    e.z_shift = 3.0f;
+    e.z_turn = z;
+    const double p_turn = confidence_probability(e);
+    e.z_turn = 5.0f;
+    if (z > -3.0f) {
+      CHECK(p_shift >= last);
+      CHECK(p_turn >= last_turn);
+    }
+    last = p_shift;
+    last_turn = p_turn;
+  }
+  e.z_shift = 10.0f;
   e.z_turn = 10.0f;
   e.inlier_share = 0.5f;
   const double half = confidence_probability(e);
   e.inlier_share = 0.0f;  // none of the scan's instances explained: a coincidence somewhere else
   CHECK(confidence_probability(e) < 0.05);
   CHECK(confidence_probability(e) < half);
-  const ConfidenceModel flat{0, 0, 0, 0, 0, 0, 0, 0, 0};  // every factor 1/2
-  CHECK(confidence_probability(e, flat) == Approx(0.0625));
+  const ConfidenceModel flat{0, 0, 0, 0, 0, 0, 0, 0};  // every factor (rival, peak, inlier) 1/2
+  CHECK(confidence_probability(e, flat) == Approx(0.125));
 }
 
 namespace {

@@ -8,7 +8,7 @@
 namespace gsf {
 
 // bench/fit_confidence.py on the training suites (docs/confidence.md).
-const ConfidenceModel kConfidenceModel = {-1.765f, 1.636f, 25.672f, 3.421f, 1.850f, -10.703f, 3.227f, -6.235f, 37.715f};
+const ConfidenceModel kConfidenceModel = {-1.552f, 1.739f, 24.600f, -11.401f, 1.503f, 2.720f, -6.193f, 28.786f};
 
 namespace {
 
@@ -65,10 +65,10 @@ double confidence_probability(const ConfidenceEvidence& e, const ConfidenceModel
   if (e.samples == 0) return 0.0;
   const double rival = m.rival_offset + m.rival_slope * clipped(e.z_rival, kZMin, kZMax) +
                        m.rival_margin_slope * clipped(e.rival_margin, 0.0f, kMarginMax);
-  const double shift = m.shift_offset + m.shift_slope * clipped(e.z_shift, kZMin, kZMax);
-  const double turn = m.turn_offset + m.turn_slope * clipped(e.z_turn, kZMin, kZMax);
+  const double peak = m.peak_offset + m.peak_shift_slope * clipped(e.z_shift, kZMin, kZMax) +
+                      m.peak_turn_slope * clipped(e.z_turn, kZMin, kZMax);
   const double inlier = m.inlier_offset + m.inlier_slope * clipped(e.inlier_share, 0.0f, 1.0f);
-  return logistic(rival) * logistic(shift) * logistic(turn) * logistic(inlier);
+  return logistic(rival) * logistic(peak) * logistic(inlier);
 }
 
 size_t AnswerConfidence::required_bytes(uint32_t max_points) { return counted_bytes<AnswerConfidence>(max_points); }

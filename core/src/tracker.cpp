@@ -9,13 +9,16 @@
 namespace gsf {
 
 // The one-shot model fitted 2026-11 (rival factor on the closest probe's z alone; see tracker.h).
-const ConfidenceModel kTrackingConfidenceModel = {-1.817f,  3.540f, 0.0f,    3.391f, 1.827f,
-                                                  -10.350f, 3.164f, -3.891f, 27.352f};
+const TrackingConfidenceModel kTrackingConfidenceModel = {-1.817f, 3.540f, 3.391f, 1.827f, -10.350f, 3.164f};
 
-double tracking_probability(const ConfidenceEvidence& evidence) {
-  ConfidenceEvidence e = evidence;
-  e.inlier_share = 1.0f;  // the inlier factor at its ceiling (s(a_i + b_i) = 1 - 6e-11): left out
-  return confidence_probability(e, kTrackingConfidenceModel);
+double tracking_probability(const ConfidenceEvidence& e) {
+  if (e.samples == 0) return 0.0;
+  const TrackingConfidenceModel& m = kTrackingConfidenceModel;
+  auto factor = [](float offset, float slope, float z) {
+    return 1.0 / (1.0 + std::exp(-(offset + slope * std::min(10.0f, std::max(-3.0f, z)))));
+  };
+  return factor(m.rival_offset, m.rival_slope, e.z_rival) * factor(m.shift_offset, m.shift_slope, e.z_shift) *
+         factor(m.turn_offset, m.turn_slope, e.z_turn);
 }
 
 namespace {

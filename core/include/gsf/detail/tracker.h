@@ -20,7 +20,7 @@
 //      confident one. Its own model (kTrackingConfidenceModel): the one-shot model is fitted on answers
 //      that have rivals, and the rival's margin of a probe 2 m off (tracking's stand-in) is another
 //      quantity; the tracking model is the one-shot model of 2026-11 without the margin, with which
-//      tracking was measured (suite, real drives, lost odometry).
+//      tracking was measured (suite, real drives, lost odometry): TrackingConfidenceModel below.
 // Loss is "not confident": the caller falls back to one-shot localization. A prediction far off ends
 // where the pattern search can reach (a few metres), which the probes judge as any wrong pose: no peak.
 #pragma once
@@ -60,8 +60,16 @@ TrackOutcome track_pose(const TrackScan& scan, const SemanticGridView& grid, con
                         const TrackConfig& config, const VerifyConfig& verify, double min_probability, Refiner* refiner,
                         AnswerConfidence& confidence, Clock* clock = nullptr);
 
-// P of a tracked pose: kTrackingConfidenceModel's factors without the inlier factor (see above).
-extern const ConfidenceModel kTrackingConfidenceModel;
+// P of a tracked pose (see above): s(a_r + b_r z_rival) s(a_s + b_s z_shift) s(a_t + b_t z_turn), each z
+// clipped to [-3, 10] as in confidence.h; the one-shot model of 2026-11 without its margin and inlier
+// factors, kept when the one-shot model's shift and turn became one factor (2026-12-04), so tracking
+// reads as it was measured.
+struct TrackingConfidenceModel {
+  float rival_offset, rival_slope;
+  float shift_offset, shift_slope;
+  float turn_offset, turn_slope;
+};
+extern const TrackingConfidenceModel kTrackingConfidenceModel;
 double tracking_probability(const ConfidenceEvidence& evidence);
 
 }  // namespace gsf
