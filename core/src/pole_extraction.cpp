@@ -122,7 +122,7 @@ Status PoleExtraction::build(const VoxelLayer& layer, PoleStats* stats_out, Laye
   // 2. Link stacked thin segments (union by smaller id, so roots are deterministic).
   link_segments(h, link_cells, gap_levels);
   // 3. Group the chains' voxels by root; the members of root r are queue_[r == 0 ? 0 : offsets_[r - 1],
-  // offsets_[r]). 4. Judge each chain; the best max_instances are kept.
+  // offsets_[r]). 4. Judge each chain; the best collect_ are kept (max_instances, twice that before step 5).
   group_chains(n, segments);
   collect_ = frame == LayerFrame::Sensor ? 2 * config_.max_instances : config_.max_instances;
   for (uint32_t r = 0; r < segments; ++r) {
