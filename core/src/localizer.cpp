@@ -502,8 +502,11 @@ void Localizer::Impl::settle_height(const LocalizerConfig& cfg, const MapView& m
 void Localizer::Impl::measure_confidence(const LocalizerConfig& cfg, LocalizeResult& out) {
   out.confidence = 0.0;  // without verification nothing vouches for the answer
   if (out.verified && answer.compact_points() != nullptr && answer.compact_point_count() > 0) {
-    const AnswerConfidence::Answer a{answer.answer_pose(), answer.rival_poses(), answer.rival_count(), out.inliers,
-                                     inlier_share_at(answer.answer_pose(), out.inliers, cfg.hypotheses.tls_threshold)};
+    const Eigen::Isometry3d& pose = answer.answer_pose();
+    const float radius = cfg.hypotheses.tls_threshold;
+    const AnswerConfidence::Answer a{pose, answer.rival_poses(), answer.rival_count(),
+                                     std::max(out.inliers, inliers_at(pose, radius)),
+                                     inlier_share_at(pose, out.inliers, radius)};
     out.confidence_evidence =
         confidence.measure(answer.compact_points(), answer.compact_point_count(), semantic, answer.verify_weights(),
                            cfg.verify.disagree_weight, a, cfg.verify.max_points);
@@ -598,8 +601,9 @@ ConfidenceEvidence Localizer::Impl::elsewhere_evidence(const LocalizerConfig& cf
   rivals[n++] = prior_answer;
   for (uint32_t k = 0; k < answer.rival_count() && n < AnswerSelector::kMaxRivals; ++k)
     rivals[n++] = answer.rival_poses()[k];
-  const AnswerConfidence::Answer a{best.pose, rivals, n, best.inliers,
-                                   inlier_share_at(best.pose, best.inliers, cfg.hypotheses.tls_threshold)};
+  const float radius = cfg.hypotheses.tls_threshold;
+  const AnswerConfidence::Answer a{best.pose, rivals, n, std::max(best.inliers, inliers_at(best.pose, radius)),
+                                   inlier_share_at(best.pose, best.inliers, radius)};
   return confidence.measure(answer.compact_points(), answer.compact_point_count(), semantic, answer.verify_weights(),
                             cfg.verify.disagree_weight, a, cfg.verify.max_points);
 }

@@ -22,12 +22,13 @@ struct ConfidenceEvidence {
   uint32_t rivals = 0;   // rivals compared (at most AnswerConfidence::kMaxRivals)
   uint32_t samples = 0;  // sampled voxels compared
   uint32_t blocks = 0;   // scan blocks holding them
-  uint32_t inliers = 0;  // the answer's inliers (its hypothesis's count)
-  // The scan's instances some vote pair puts within hypotheses.tls_threshold of its map instance at the
-  // answer (at least `inliers`) / the scan's instances on the map's observed cells there.
-  float inlier_share = 0.0f;
-  float known_share = 0.0f;  // share of the samples that landed on the map's semantic layer at the answer
-  float agreement = 0.0f;    // agree / (agree + disagree) at the answer (diagnostic, not in the model)
+  // The answer's inliers: the scan's instances some vote pair puts within hypotheses.tls_threshold of its
+  // map instance at the answer, never fewer than its hypothesis's own count (LocalizeResult::inliers; a
+  // clique counts only among the consistency graph's pairs).
+  uint32_t inliers = 0;
+  float inlier_share = 0.0f;  // inliers / the scan's instances on the map's observed cells at the answer
+  float known_share = 0.0f;   // share of the samples that landed on the map's semantic layer at the answer
+  float agreement = 0.0f;     // agree / (agree + disagree) at the answer (diagnostic, not in the model)
   // The closest rival's margin (the comparison z_rival comes from): sum over the samples of (evidence at
   // the answer - evidence at the rival) over the sum of |evidence at the answer|, the share of the
   // answer's evidence the rival does not have. Independent of the class weights' scale, like z.
