@@ -74,12 +74,14 @@ Rounds run_rounds(const ScanView* real) {
   for (uint32_t round = 0; round < 50; ++round) {
     const bool use_real = real != nullptr && round % 5 == 4;
     const ScanView view = use_real ? *real : scans[round % scans.size()].view();
+    // Every other round as a single scan in its sensor frame (the beam-column row step runs too).
+    const LayerFrame frame = round % 2 ? LayerFrame::Sensor : LayerFrame::World;
     PoleStats ps;
     if (layer.build(view, nullptr) != Status::Ok) continue;
-    r.ok += poles.build(layer, &ps) == Status::Ok;
+    r.ok += poles.build(layer, &ps, frame) == Status::Ok;
     r.instances += poles.size();
     if (use_real) r.real_instances += poles.size();
-    r.capacity += small.build(layer, &ps) == Status::CapacityExceeded;
+    r.capacity += small.build(layer, &ps, frame) == Status::CapacityExceeded;
     ++r.rounds;
   }
   r.allocations = scope.allocations();
