@@ -61,6 +61,8 @@ struct AnswerConfidence::Sample {
   uint32_t max_points;
 };
 
+double z_factor(float offset, float slope, float z) { return logistic(offset + slope * clipped(z, kZMin, kZMax)); }
+
 double confidence_probability(const ConfidenceEvidence& e, const ConfidenceModel& m) {
   if (e.samples == 0) return 0.0;
   const double rival = m.rival_offset + m.rival_slope * clipped(e.z_rival, kZMin, kZMax) +

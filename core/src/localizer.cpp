@@ -111,7 +111,11 @@ struct Localizer::Impl {
                         const Eigen::Isometry3d& prior_answer, Elsewhere* best);
   ConfidenceEvidence elsewhere_evidence(const LocalizerConfig& cfg, const Eigen::Isometry3d& prior_answer,
                                         const Elsewhere& best);
-  float inlier_share_at(const Eigen::Isometry3d& map_T_scan, uint32_t inliers, float radius) const;
+  struct Explained {
+    uint32_t inliers;  // recounted at the pose, never below the hypothesis's own
+    float share;       // of the scan's instances on the map's observed cells there
+  };
+  Explained explained_at(const Eigen::Isometry3d& map_T_scan, uint32_t inliers, float radius) const;
   uint32_t inliers_at(const Eigen::Isometry3d& map_T_scan, double radius) const;
 };
 
@@ -502,11 +506,9 @@ void Localizer::Impl::settle_height(const LocalizerConfig& cfg, const MapView& m
 void Localizer::Impl::measure_confidence(const LocalizerConfig& cfg, LocalizeResult& out) {
   out.confidence = 0.0;  // without verification nothing vouches for the answer
   if (out.verified && answer.compact_points() != nullptr && answer.compact_point_count() > 0) {
-    const Eigen::Isometry3d& pose = answer.answer_pose();
-    const float radius = cfg.hypotheses.tls_threshold;
-    const AnswerConfidence::Answer a{pose, answer.rival_poses(), answer.rival_count(),
-                                     std::max(out.inliers, inliers_at(pose, radius)),
-                                     inlier_share_at(pose, out.inliers, radius)};
+    const Explained x = explained_at(answer.answer_pose(), out.inliers, cfg.hypotheses.tls_threshold);
+    const AnswerConfidence::Answer a{answer.answer_pose(), answer.rival_poses(), answer.rival_count(), x.inliers,
+                                     x.share};
     out.confidence_evidence =
         confidence.measure(answer.compact_points(), answer.compact_point_count(), semantic, answer.verify_weights(),
                            cfg.verify.disagree_weight, a, cfg.verify.max_points);
@@ -520,11 +522,12 @@ void Localizer::Impl::measure_confidence(const LocalizerConfig& cfg, LocalizeRes
 // instance beyond the mapped area (a real scan sees past the mapped street's ends) can match nothing at
 // any pose, so counting it would read a right answer at the map's edge as doubtful. The denominator is
 // never below the inliers (a cell-sized slip at the layer's border).
-float Localizer::Impl::inlier_share_at(const Eigen::Isometry3d& map_T_scan, uint32_t inliers, float radius) const {
+Localizer::Impl::Explained Localizer::Impl::explained_at(const Eigen::Isometry3d& map_T_scan, uint32_t inliers,
+                                                         float radius) const {
   inliers = std::max(inliers, inliers_at(map_T_scan, radius));
   const uint32_t seen =
       semantic.empty() ? instance_count : count_observed(semantic, map_T_scan, centroids, instance_count);
-  return float(inliers) / float(std::max({seen, inliers, 1u}));
+  return Explained{inliers, float(inliers) / float(std::max({seen, inliers, 1u}))};
 }
 
 // The scan's instances that some vote pair puts within `radius` of its map instance at map_T_scan: a
@@ -601,9 +604,8 @@ ConfidenceEvidence Localizer::Impl::elsewhere_evidence(const LocalizerConfig& cf
   rivals[n++] = prior_answer;
   for (uint32_t k = 0; k < answer.rival_count() && n < AnswerSelector::kMaxRivals; ++k)
     rivals[n++] = answer.rival_poses()[k];
-  const float radius = cfg.hypotheses.tls_threshold;
-  const AnswerConfidence::Answer a{best.pose, rivals, n, std::max(best.inliers, inliers_at(best.pose, radius)),
-                                   inlier_share_at(best.pose, best.inliers, radius)};
+  const Explained x = explained_at(best.pose, best.inliers, cfg.hypotheses.tls_threshold);
+  const AnswerConfidence::Answer a{best.pose, rivals, n, x.inliers, x.share};
   return confidence.measure(answer.compact_points(), answer.compact_point_count(), semantic, answer.verify_weights(),
                             cfg.verify.disagree_weight, a, cfg.verify.max_points);
 }
@@ -795,7 +797,7 @@ namespace {
 
 // The poses a one-shot result offers the window: its answer (at the pose verification scored, with the
 // answer's height), then its rivals, each with the share of the scan's instances it explained
-// (share_at(pose, inliers): Impl::inlier_share_at; a rival's inliers are the reported hypothesis nearest
+// (share_at(pose, inliers): Impl::explained_at's share; a rival's inliers are the reported hypothesis nearest
 // it within the same-pose tolerance, 0 without one).
 template <class ShareAt>
 uint32_t offered_candidates(const AnswerSelector& sel, const LocalizeResult& r, const HypothesisConfig& hc,
@@ -884,7 +886,7 @@ Status Localizer::localize_sequence(const ScanView& scan, const Eigen::Isometry3
   WindowCandidate own[ScanWindow::kMaxCandidates];
   const float radius = config_.hypotheses.tls_threshold;
   const auto share_at = [&im, radius](const Eigen::Isometry3d& p, uint32_t inliers) {
-    return im.inlier_share_at(p, inliers, radius);
+    return im.explained_at(p, inliers, radius).share;
   };
   const uint32_t n_own =
       offered_candidates(im.answer, out, config_.hypotheses, config_.window.candidates, share_at, own);

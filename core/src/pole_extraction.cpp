@@ -398,9 +398,7 @@ bool worse_candidate(const PoleInfo& ai, const Instance& an, const PoleInfo& bi,
 void PoleExtraction::keep_best(const Instance& in, const PoleInfo& info, PoleStats* stats) {
   uint32_t slot = count_;
   if (count_ == collect_) {
-    uint32_t w = 0;
-    for (uint32_t k = 1; k < count_; ++k)
-      if (worse_candidate(info_[k], instances_[k], info_[w], instances_[w])) w = k;
+    const uint32_t w = worst_slot();
     ++stats->dropped_capacity;
     if (!worse_candidate(info_[w], instances_[w], info, in)) return;  // the new one is no better than the worst kept
     slot = w;
@@ -411,11 +409,17 @@ void PoleExtraction::keep_best(const Instance& in, const PoleInfo& info, PoleSta
   info_[slot] = info;
 }
 
-// Drops the worst kept candidate (the last one moves into its slot; discovery order is restored later).
-void PoleExtraction::evict_worst(PoleStats* stats) {
+// The kept candidate worse than every other (count_ > 0).
+uint32_t PoleExtraction::worst_slot() const {
   uint32_t w = 0;
   for (uint32_t k = 1; k < count_; ++k)
     if (worse_candidate(info_[k], instances_[k], info_[w], instances_[w])) w = k;
+  return w;
+}
+
+// Drops the worst kept candidate (the last one moves into its slot; discovery order is restored later).
+void PoleExtraction::evict_worst(PoleStats* stats) {
+  const uint32_t w = worst_slot();
   --count_;
   instances_[w] = instances_[count_];
   info_[w] = info_[count_];

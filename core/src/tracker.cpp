@@ -14,11 +14,8 @@ const TrackingConfidenceModel kTrackingConfidenceModel = {-1.817f, 3.540f, 3.391
 double tracking_probability(const ConfidenceEvidence& e) {
   if (e.samples == 0) return 0.0;
   const TrackingConfidenceModel& m = kTrackingConfidenceModel;
-  auto factor = [](float offset, float slope, float z) {  // in double, as confidence_probability
-    return 1.0 / (1.0 + std::exp(-(double(offset) + double(slope) * double(std::min(10.0f, std::max(-3.0f, z))))));
-  };
-  return factor(m.rival_offset, m.rival_slope, e.z_rival) * factor(m.shift_offset, m.shift_slope, e.z_shift) *
-         factor(m.turn_offset, m.turn_slope, e.z_turn);
+  return z_factor(m.rival_offset, m.rival_slope, e.z_rival) * z_factor(m.shift_offset, m.shift_slope, e.z_shift) *
+         z_factor(m.turn_offset, m.turn_slope, e.z_turn);
 }
 
 namespace {

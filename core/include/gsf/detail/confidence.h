@@ -58,6 +58,8 @@ extern const ConfidenceModel kConfidenceModel;
 
 // P from the evidence (the model above).
 double confidence_probability(const ConfidenceEvidence& e, const ConfidenceModel& model = kConfidenceModel);
+// One logistic factor of a z: s(offset + slope z), z clipped to the range the model reads ([-3, 10]).
+double z_factor(float offset, float slope, float z);
 
 class AnswerConfidence {
  public:

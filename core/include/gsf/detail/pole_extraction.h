@@ -137,6 +137,7 @@ class PoleExtraction {
   void sum_chain(const Hosts& h, uint32_t* members, uint32_t count, ChainShape* shape) const;
   void keep_best(const Instance& in, const PoleInfo& info, PoleStats* stats);
   void reject_column_rows(PoleStats* stats);
+  uint32_t worst_slot() const;
   void evict_worst(PoleStats* stats);
 
   PoleConfig config_{};
