@@ -164,6 +164,42 @@ TEST_CASE("A rigidly transformed scan gives the correspondingly transformed pose
   CHECK(checked == 3);
 }
 
+// Localizer::score_pose is what the evaluation's diagnostics compare the truth with the hypotheses by
+// (truth_verified_score against their verified scores), so it must score a pose exactly as verification
+// scores a hypothesis: the same weights and the same disagree weight. Without the pattern search
+// (refine_top 0) every fully verified hypothesis was scored at its own reported x, y and heading.
+TEST_CASE("score_pose scores a hypothesis' pose as verification scored it") {
+  const auto& w = tiny_world();
+  LocalizerConfig cfg = w.config;
+  cfg.verify.refine_top = 0;
+  REQUIRE(cfg.verify.disagree_weight != 1.0f);  // else a dropped disagree weight would go unseen
+  Workspace ws(cfg);
+  Localizer loc;
+  REQUIRE(loc.init(cfg, w.map, ws.data(), ws.bytes()) == Status::Ok);
+  int checked = 0, with_disagreement = 0;
+  for (size_t q = 0; q < w.queries.size(); ++q) {
+    LocalizeResult r;
+    if (loc.localize(w.queries[q].view(), &r) != Status::Ok || !r.verified) continue;
+    for (uint32_t k = 0; k < std::min(r.hypotheses, kMaxReportedHypotheses); ++k) {
+      const HypothesisReport& h = r.hypothesis[k];
+      if (!h.fully_verified) continue;
+      Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
+      T.linear() = Eigen::AngleAxisd(h.yaw_deg * M_PI / 180.0, Eigen::Vector3d::UnitZ()).toRotationMatrix();
+      T.translation() = Eigen::Vector3d(h.x, h.y, 0.0);
+      const PoseVerification v = loc.score_pose(T);
+      INFO("query " << q << " hypothesis " << k);
+      // The reported heading is rounded to a float in degrees: a voxel or two may change cells.
+      const double tolerance = 0.01 * (h.verified_agree + h.verified_disagree) + 1.0;
+      CHECK(std::fabs(v.score - h.verified_score) <= tolerance);
+      CHECK(std::fabs(v.disagree - h.verified_disagree) <= tolerance);
+      with_disagreement += h.verified_disagree > 0.05f * h.verified_agree;
+      ++checked;
+    }
+  }
+  CHECK(checked >= 50);
+  CHECK(with_disagreement >= 10);  // the disagree weight shows in these scores
+}
+
 TEST_CASE("Same scan and map give bit-identical results (tiny world and tiny lattice)") {
   // The lattice runs every new path at full tilt: heading votes, shift votes (sorts, bin selection),
   // coarse/full/refined verification; ties anywhere must break the same way every time.

@@ -918,7 +918,7 @@ void Localizer::reset_sequence() {
 PoseVerification Localizer::score_pose(const Eigen::Isometry3d& map_T_scan) const {
   if (!impl_) return PoseVerification();
   return verify_pose(impl_->voxels, impl_->semantic, map_T_scan, config_.verify.max_points,
-                     impl_->answer.verify_weights());
+                     impl_->answer.verify_weights(), config_.verify.disagree_weight);
 }
 
 uint32_t Localizer::last_instances(float* xyz, uint8_t* labels, uint32_t max) const {

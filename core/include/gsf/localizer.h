@@ -183,7 +183,8 @@ class Localizer {
   // centroids (x, y, z in the scan frame) and labels; returns how many there were.
   uint32_t last_instances(float* xyz, uint8_t* labels, uint32_t max) const;
   // Whole-scan verification of any pose (map-local: to_map_local(map.georef, truth) for a ground truth in
-  // the map's frame) against the last scan (diagnostics: how the ground truth would have scored). Zero
+  // the map's frame) against the last scan, scored as verification scores a hypothesis (its weights and
+  // disagree_weight; diagnostics: how the ground truth would have scored against the answer). Zero
   // scores without a map semantic layer or before the first localize().
   PoseVerification score_pose(const Eigen::Isometry3d& map_T_scan) const;
 
