@@ -8,7 +8,9 @@ evaluation records (the best 16) and the truth's own verified score:
   truth outscored   a hypothesis within 2 m / 5 deg exists but another scored higher
   absent, higher    no hypothesis near the truth, whose own score beats the answer's (hypothesis recall)
   absent, lower     no hypothesis near the truth, and the truth scores lower (verification's limit)
-It also counts answers 100 m or more away turned 180 deg (+-10), and how many of those were declined
+It also counts the queries matched again at the sparse tolerance (`sparse_rematch`: their first pass
+found few map triangles, triangle_matcher.h) and how many of them succeeded, and answers 100 m or more
+away turned 180 deg (+-10), and how many of those were declined
 (not "answered" under the library's decision rule, status Ok and confident; with --min-confidence P:
 confidence < P): a zone's two approach roads look alike.
 Python standard library only.  Usage: bench/suite_failures.py OUT_DIR [--mode gsf] [--min-confidence P]"""
@@ -26,12 +28,16 @@ ap.add_argument("--min-confidence", type=float, default=None,
 args = ap.parse_args()
 
 causes = collections.Counter()
+rematched = collections.Counter()
 far_turned = collections.Counter()
 declined = collections.Counter()
 total = 0
 for path in sorted(glob.glob(os.path.join(args.suite_dir, "*", "results.json"))):
     for q in json.load(open(path))["modes"][args.mode]["queries"]:
         total += 1
+        if q["diagnostics"].get("sparse_rematch"):
+            rematched["all"] += 1
+            rematched["success"] += bool(q["success"])
         if q["success"]:
             continue
         region = "zone" if q["in_zone"] else ("near" if q["near_zone"] else "else")
@@ -62,6 +68,7 @@ print(f"{args.mode}: {failures} failures of {total} queries")
 print("| region | cause | queries |\n| --- | --- | --- |")
 for (region, cause), n in sorted(causes.items()):
     print(f"| {region} | {cause} | {n} |")
+print(f"sparse rematch: {rematched['all']} queries, {rematched['success']} of them successes")
 for region in sorted(far_turned):
     print(f"{region}: {far_turned[region]} failures answered >= 100 m away turned 180 deg, "
           f"{declined[region]} of them declined ("

@@ -106,6 +106,8 @@ TEST_CASE("check_config names the first failing parameter: its range, or the rul
       {"triangle.map_neighbours", [](LocalizerConfig* x) { x->triangle.map_neighbours = x->triangle.neighbours - 1; }},
       {"triangle.max_side", [](LocalizerConfig* x) { x->triangle.max_side = x->triangle.min_side; }},
       {"triangle.max_side", [](LocalizerConfig* x) { x->triangle.side_bin = 0.0005f; }},
+      {"triangle.sparse_side_tolerance",
+       [](LocalizerConfig* x) { x->triangle.sparse_side_tolerance = x->triangle.relative_side_tolerance; }},
       {"hypotheses.tls_threshold", [](LocalizerConfig* x) { x->hypotheses.tls_threshold = 2.5f; }},
       {"refine.radius_start", [](LocalizerConfig* x) { x->refine.radius_end = 1.0f, x->refine.radius_start = 0.8f; }},
       {"refine.radius_start", [](LocalizerConfig* x) { x->refine.cell = 0.5f; }},

@@ -15,6 +15,7 @@
 #include <vector>
 
 #include "gsf/detail/gsf_filter.h"
+#include "gsf/detail/triangle_matcher.h"
 #include "gsf/localizer.h"
 #include "skip.h"
 #include "source_stamp.h"
@@ -198,6 +199,60 @@ TEST_CASE("score_pose scores a hypothesis' pose as verification scored it") {
   }
   CHECK(checked >= 50);
   CHECK(with_disagreement >= 10);  // the disagree weight shows in these scores
+}
+
+// The sparse rematch (TriangleConfig::sparse_side_tolerance): a scan whose triangles find fewer than
+// kSparseScanCandidates map candidates is matched at the looser tolerance, which accepts a superset;
+// any other scan is answered exactly as without it. The heading votes count the candidates of every
+// triangle when the scan has at most match.heading_sample_triangles (an estimate beyond). Thinned scans
+// (every k-th point, as a sparser sensor sees) bring the tiny world's queries below the threshold.
+TEST_CASE("Only a scan with few candidates is matched at the looser tolerance") {
+  const auto& w = tiny_world();
+  LocalizerConfig off = w.config;
+  off.triangle.sparse_side_tolerance = 0.0f;
+  REQUIRE(w.config.triangle.sparse_side_tolerance > w.config.triangle.relative_side_tolerance);
+  Workspace ws_on(w.config), ws_off(off);
+  Localizer on_loc, off_loc;
+  REQUIRE(on_loc.init(w.config, w.map, ws_on.data(), ws_on.bytes()) == Status::Ok);
+  REQUIRE(off_loc.init(off, w.map, ws_off.data(), ws_off.bytes()) == Status::Ok);
+  int rematched = 0, unchanged = 0;
+  for (size_t q = 0; q < w.queries.size(); ++q) {
+    for (int keep_every : {1, 6}) {
+      gsf_test::QueryScan scan = w.queries[q];
+      if (keep_every > 1) {
+        gsf_test::QueryScan thin = scan;
+        thin.xyzi.clear();
+        thin.labels.clear();
+        thin.logits.clear();
+        const bool logits = !scan.logits.empty();
+        for (size_t i = 0; i < scan.labels.size(); i += keep_every) {
+          thin.labels.push_back(scan.labels[i]);
+          for (int d = 0; d < 4; ++d) thin.xyzi.push_back(scan.xyzi[4 * i + d]);
+          for (int c = 0; logits && c < kNumClasses; ++c) thin.logits.push_back(scan.logits[kNumClasses * i + c]);
+        }
+        scan = thin;
+      }
+      LocalizeResult a, b;
+      on_loc.localize(scan.view(), &a);
+      off_loc.localize(scan.view(), &b);
+      INFO("query " << q << " keep every " << keep_every << " candidates " << b.match_candidates);
+      CHECK_FALSE(b.sparse_rematch);
+      if (b.query_instances < 3) continue;
+      if (b.query_triangles <= w.config.match.heading_sample_triangles)
+        CHECK(a.sparse_rematch == (b.match_candidates < kSparseScanCandidates));
+      if (a.sparse_rematch) {
+        CHECK(a.match_candidates >= b.match_candidates);  // a looser tolerance accepts a superset
+        ++rematched;
+      } else {
+        CHECK(a.status == b.status);
+        CHECK(a.map_T_scan.matrix() == b.map_T_scan.matrix());
+        CHECK(a.confidence == b.confidence);
+        ++unchanged;
+      }
+    }
+  }
+  CHECK(rematched >= 3);
+  CHECK(unchanged >= 10);
 }
 
 TEST_CASE("Same scan and map give bit-identical results (tiny world and tiny lattice)") {

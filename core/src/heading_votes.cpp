@@ -51,16 +51,22 @@ uint32_t HeadingVotes::vote(const FixedVector<Triangle>& triangles, const float*
                             const TriangleConfig& triangle_config, const HeadingVoteParams& params) {
   const uint32_t B = bins_, T = triangles.size();
   for (uint32_t b = 0; b < B; ++b) allowed_[b] = params.kept_bins == 0 ? 1 : 0;
+  scan_candidates_ = 0;
   if (params.kept_bins > 0 && T > 0) {
     for (uint32_t b = 0; b < B; ++b) votes_[b] = 0;
     const uint32_t stride = (T + params.sample_triangles - 1) / params.sample_triangles;
     uint32_t qv[3];
+    uint64_t found = 0;
     for (uint32_t qt_id = 0; qt_id < T; qt_id += stride) {
       const Triangle& qt = triangles[qt_id];
-      matcher.match(qt, index, map.triangles, triangle_config, params.vertex_tie_tolerance);
+      const TriangleMatchStats ms =
+          matcher.match(qt, index, map.triangles, triangle_config, params.vertex_tie_tolerance);
+      found += uint64_t(ms.accepted) + ms.outside;
       for (uint32_t k = 0; k < matcher.size(); ++k)
         ++votes_[match_yaw_bin(qt, matcher.match_at(k), query_centroids, map, B, qv)];
     }
+    found *= stride;
+    scan_candidates_ = found < UINT32_MAX ? static_cast<uint32_t>(found) : UINT32_MAX;
     // The best bins by votes, ties to the lower bin (a strict > over ascending bins).
     for (uint32_t pick = 0; pick < params.kept_bins && pick < B; ++pick) {
       uint32_t best = UINT32_MAX;

@@ -97,8 +97,10 @@ struct Localizer::Impl {
   void fit_query_fields(const LocalizerConfig& cfg, LocalizeResult& out);
   Status build_query_triangles(LocalizeResult& out);
   void limit_matches(const LocalizerConfig& cfg);
-  void vote_headings(const LocalizerConfig& cfg, const MapView& map, LocalizeResult& out);
-  void match_and_filter(const LocalizerConfig& cfg, const MapView& map, Clock* clock, LocalizeResult& out);
+  void match_scan(const LocalizerConfig& cfg, const MapView& map, Clock* clock, LocalizeResult& out);
+  void vote_headings(const LocalizerConfig& cfg, const TriangleConfig& tc, const MapView& map, LocalizeResult& out);
+  void match_and_filter(const LocalizerConfig& cfg, const TriangleConfig& tc, const MapView& map, Clock* clock,
+                        LocalizeResult& out);
   uint32_t select_correspondences(const LocalizerConfig& cfg, const MapView& map, LocalizeResult& out);
   Status generate_hypotheses(const LocalizerConfig& cfg, uint32_t C, LocalizeResult& out);
   void drop_outside_prior(const LocalizerConfig& cfg, LocalizeResult& out);
@@ -391,21 +393,43 @@ void Localizer::Impl::limit_matches(const LocalizerConfig& cfg) {
   matcher.set_limit(cap);
 }
 
+// 5a-6. The scan's triangles against the map's: heading votes, then the GSF filter. When the votes'
+// matching found fewer than kSparseScanCandidates candidates in the whole map at the side tolerance (a
+// sparse sensor's scan; those a prior's region refused count, so a prior does not change whether it
+// happens), the votes are taken again at triangle.sparse_side_tolerance and the filter matches at that
+// one. Needs the heading votes (match.heading_bins > 0): their matching counts the candidates. Adds its
+// time to out.times.match and .gsf.
+void Localizer::Impl::match_scan(const LocalizerConfig& cfg, const MapView& map, Clock* clock, LocalizeResult& out) {
+  TriangleConfig tc = cfg.triangle;
+  const uint64_t t0 = now(clock);
+  vote_headings(cfg, tc, map, out);
+  const uint32_t found = headings.scan_candidates();
+  if (cfg.triangle.sparse_side_tolerance > 0.0f && cfg.match.heading_bins > 0 && found < kSparseScanCandidates) {
+    tc.relative_side_tolerance = cfg.triangle.sparse_side_tolerance;
+    out.sparse_rematch = true;
+    out.headings_kept = 0;
+    vote_headings(cfg, tc, map, out);
+  }
+  out.times.match += now(clock) - t0;
+  match_and_filter(cfg, tc, map, clock, out);
+}
+
 // 5a. Heading votes (heading_votes.h): only matches at the best-supported headings go on.
-void Localizer::Impl::vote_headings(const LocalizerConfig& cfg, const MapView& map, LocalizeResult& out) {
+void Localizer::Impl::vote_headings(const LocalizerConfig& cfg, const TriangleConfig& tc, const MapView& map,
+                                    LocalizeResult& out) {
   const HeadingVoteParams params{cfg.match.heading_bins, cfg.match.heading_sample_triangles,
                                  cfg.match.vertex_tie_tolerance};
-  out.headings_kept += headings.vote(triangles, centroids, matcher, index, map, cfg.triangle, params);
+  out.headings_kept += headings.vote(triangles, centroids, matcher, index, map, tc, params);
 }
 
 // 5b + 6. The GSF filter over the scan's matches at the kept headings (gsf_filter.h), accumulating
 // weighted, deduplicated vertex correspondences. Adds its time to out.times.match and .gsf.
-void Localizer::Impl::match_and_filter(const LocalizerConfig& cfg, const MapView& map, Clock* clock,
-                                       LocalizeResult& out) {
+void Localizer::Impl::match_and_filter(const LocalizerConfig& cfg, const TriangleConfig& tc, const MapView& map,
+                                       Clock* clock, LocalizeResult& out) {
   const QueryFields qf{q_inputs, q_alpha, q_chol, q_m, cfg.field.inducing_points};
   const MatchFilterParams params{cfg.match.vertex_tie_tolerance, cfg.gsf.enabled, cfg.match.min_similarity, kFillPairs};
-  const MatchFilterStats st = gsf.filter_matches(triangles, centroids, qf, matcher, index, map, cfg.triangle, headings,
-                                                 params, clock, correspondences);
+  const MatchFilterStats st =
+      gsf.filter_matches(triangles, centroids, qf, matcher, index, map, tc, headings, params, clock, correspondences);
   out.match_candidates = st.match_candidates;
   out.match_dropped = st.match_dropped;
   out.mirrored_matches = st.mirrored_matches;
@@ -576,8 +600,7 @@ bool Localizer::Impl::search_elsewhere(const LocalizerConfig& cfg, const MapView
   vote_pairs = graph_pairs = 0;
   matcher.set_region(nullptr, map.instances, centroids);
   limit_matches(cfg);
-  vote_headings(cfg, map, g);
-  match_and_filter(cfg, map, clock, g);
+  match_scan(cfg, map, clock, g);
   const uint32_t C = select_correspondences(cfg, map, g);
   if (C < cfg.hypotheses.min_inliers || generate_hypotheses(cfg, C, g) != Status::Ok) return false;
   uint8_t keep[PoseHypotheses::kMaxHypotheses];
@@ -717,9 +740,8 @@ Status Localizer::localize_in(const ScanView& scan, const PositionPrior* prior, 
     if (s != Status::Ok) return finish(s);
   }
   im.limit_matches(cfg);
-  im.vote_headings(cfg, map_, out);
-  lap(&out.times.match);  // the heading votes are index matching too
-  im.match_and_filter(cfg, map_, clock_, out);
+  t = now(clock_);
+  im.match_scan(cfg, map_, clock_, out);  // its own times (the heading votes are index matching too)
   out.prior_outside_matches = im.matcher.outside_region();
   t = now(clock_);
   const uint32_t C = im.select_correspondences(cfg, map_, out);

@@ -161,6 +161,11 @@ const ParamRule kRules[] = {
      [](const LocalizerConfig& c) {
        return !(c.triangle.max_side / c.triangle.side_bin < float(kTriangleKeyMaxBin - 1));
      }},
+    {"triangle.sparse_side_tolerance", "must be 0 or > triangle.relative_side_tolerance",
+     [](const LocalizerConfig& c) {
+       return c.triangle.sparse_side_tolerance != 0.0f &&
+              !(c.triangle.sparse_side_tolerance > c.triangle.relative_side_tolerance);
+     }},
     {"hypotheses.tls_threshold", "must be <= hypotheses.shift_bin (the shift votes' support radius)",
      [](const LocalizerConfig& c) { return c.hypotheses.tls_threshold > c.hypotheses.shift_bin; }},
     {"refine.radius_start", "must be >= refine.radius_end",

@@ -19,7 +19,8 @@ float dist(const float* a, const float* b) {
 Status validate(const TriangleConfig& c) {
   if (c.neighbours < 2 || c.neighbours > 64 ||
       (c.map_neighbours != 0 && (c.map_neighbours < c.neighbours || c.map_neighbours > 64)) || !(c.min_side >= 0.0f) ||
-      !(c.max_side > c.min_side) || !(c.side_bin > 0.0f) || !(c.relative_side_tolerance > 0.0f) || c.max_triangles == 0)
+      !(c.max_side > c.min_side) || !(c.side_bin > 0.0f) || !(c.relative_side_tolerance > 0.0f) ||
+      c.max_triangles == 0 || !(c.sparse_side_tolerance == 0.0f || c.sparse_side_tolerance > c.relative_side_tolerance))
     return Status::InvalidArgument;
   // Every side quantises into the key's 16 bits, with room for the matcher's +1 neighbour.
   if (!(c.max_side / c.side_bin < float(kTriangleKeyMaxBin - 1))) return Status::InvalidArgument;

@@ -144,6 +144,7 @@ void TriangleMatcher::offer_range(const Triangle& q, uint8_t o, const float side
     if (!ok) continue;
     if (region_ && !in_region(m)) {
       ++outside_;
+      ++st->outside;
       continue;
     }
     if (mirror_check_ && orientations_contradict(q.orientation, m.orientation, flip)) {

@@ -49,6 +49,7 @@ void write_stage_counts(JsonWriter& j, const LocalizeResult& x) {
   j.field("triangles", x.query_triangles);
   j.field("match_candidates", x.match_candidates);
   j.field("match_dropped", x.match_dropped);
+  j.field("sparse_rematch", x.sparse_rematch);
   j.field("tie_ordered_triangles", x.tie_ordered_triangles);
   j.field("headings_kept", x.headings_kept);
   j.field("heading_dropped", x.heading_dropped);

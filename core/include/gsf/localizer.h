@@ -71,6 +71,7 @@ struct LocalizeResult {
   // What each cap dropped (all ranked before cutting), so a failure can be traced to a cap.
   uint32_t match_candidates = 0;         // map triangles accepted by labels and sides, before the per-triangle cap
   uint32_t match_dropped = 0;            // ... dropped by match.max_matches_per_triangle
+  bool sparse_rematch = false;           // too few candidates: matched at triangle.sparse_side_tolerance
   uint32_t tie_ordered_triangles = 0;    // query triangles also tried in a tied vertex order
   uint32_t headings_kept = 0;            // yaw bins the heading votes let through (match.heading_bins)
   uint32_t heading_dropped = 0;          // kept matches whose heading was not among them

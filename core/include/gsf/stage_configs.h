@@ -112,7 +112,13 @@ struct TriangleConfig {
   float max_side = 50.0f;                 // m
   float side_bin = 1.0f;                  // m, key quantisation
   float relative_side_tolerance = 0.03f;  // match if |d_q - d_m| < tol * d_q on every side
-  uint32_t max_triangles = 4096;          // per scan (capacity)
+  // A scan whose triangles find fewer than kSparseScanCandidates (triangle_matcher.h) map triangles at
+  // that tolerance is matched at this one instead (0: never; needs the heading votes, which count). A
+  // sparse sensor sees an object on two or three rings, so its centroid moves between views by more
+  // than 3% of a side; a scan that finds thousands of candidates does not need the looser match (it
+  // would only add wrong ones).
+  float sparse_side_tolerance = 0.075f;
+  uint32_t max_triangles = 4096;  // per scan (capacity)
 };
 
 // Coarse matching and correspondence selection. Every cap ranks before it cuts (never storage order)

@@ -38,17 +38,22 @@ class HeadingVotes {
   static size_t required_bytes(uint32_t yaw_bins);
   Status bind(Arena& arena, uint32_t yaw_bins);
   // Votes with the matches of the sampled query triangles (`matcher` is used as scratch). Returns the
-  // number of bins kept.
+  // number of bins kept. Without votes (kept_bins 0) every bin is kept and nothing is matched.
   uint32_t vote(const FixedVector<Triangle>& triangles, const float* query_centroids, TriangleMatcher& matcher,
                 const TriangleIndexView& index, const MapView& map, const TriangleConfig& triangle_config,
                 const HeadingVoteParams& params);
   bool allowed(uint32_t bin) const { return allowed_[bin] != 0; }
+  // The map candidates the last vote's sample found (accepted by labels and sides, or refused only as
+  // outside a prior's region), scaled by the sampling stride: the whole scan's count when it has at
+  // most sample_triangles triangles, an estimate beyond. 0 without votes.
+  uint32_t scan_candidates() const { return scan_candidates_; }
   uint32_t bins() const { return bins_; }
 
  private:
   uint32_t* votes_ = nullptr;  // per yaw bin
   uint8_t* allowed_ = nullptr;
   uint32_t bins_ = 0;
+  uint32_t scan_candidates_ = 0;
 };
 
 }  // namespace gsf

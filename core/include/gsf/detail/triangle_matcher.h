@@ -42,6 +42,14 @@ struct PriorRegion;
 // The query vertex orders tried: order k maps matched position j to canonical query vertex kOrders[k][j].
 constexpr uint8_t kTriangleVertexOrders[6][3] = {{0, 1, 2}, {2, 1, 0}, {1, 0, 2}, {0, 2, 1}, {1, 2, 0}, {2, 0, 1}};
 
+// A scan whose triangles find fewer map candidates than this (summed over its triangles, before the
+// caps, as the heading votes' matching counts them: HeadingVotes::scan_candidates) is matched at
+// TriangleConfig::sparse_side_tolerance instead. A 32-beam scan on the suite's worlds mostly finds
+// hundreds to tens of thousands; the 16-beam scans that failed for want of a true correspondence found
+// 3-40 (bench/suite_failures.py, CHANGELOG.md 2026-12-04). 64, 128 and 256 gave the same answers on
+// seeds 7-8 of the cheap family and within one on b16.
+constexpr uint32_t kSparseScanCandidates = 128;
+
 struct RankedTriangleMatch {
   uint32_t map;    // map triangle id
   float residual;  // max over sides of |d_q - d_m| / d_q
@@ -55,6 +63,7 @@ struct TriangleMatchStats {
   uint32_t kept = 0;      // after the cap
   uint32_t orders = 0;    // vertex orders tried for this query triangle (1 without side ties)
   uint32_t mirrored = 0;  // candidates of the right sides refused as mirror images (mirror check)
+  uint32_t outside = 0;   // candidates of the right sides refused as outside the region (position prior)
   uint32_t dropped() const { return accepted - kept; }
 };
 
