@@ -743,7 +743,6 @@ Status Localizer::localize_in(const ScanView& scan, const PositionPrior* prior, 
     if (s != Status::Ok) return finish(s);
   }
   im.limit_matches(cfg);
-  t = now(clock_);
   im.match_scan(cfg, map_, clock_, out);  // its own times (the heading votes are index matching too)
   out.prior_outside_matches = im.matcher.outside_region();
   t = now(clock_);
