@@ -1,5 +1,6 @@
 #include "gsf/detail/answer_selection.h"
 #include "gsf/detail/angles.h"
+#include "gsf/detail/disagree_weights.h"
 #include "gsf/detail/pose_distance.h"
 
 #include <algorithm>
@@ -78,16 +79,14 @@ struct AnswerSelector::PoseScorer {
   const VerifyConfig& vc;
   const float* verify_weights;
 
-  PoseVerification score(const Eigen::Isometry3d& T, uint32_t max_points, const float* w) const {
+  PoseVerification score(const Eigen::Isometry3d& T, uint32_t max_points, DisagreeWeights lambda) const {
     const uint32_t nv = voxels.size();
-    const float lambda = vc.disagree_weight;
-    return points ? verify_pose(points, nv, semantic, T, max_points, w, lambda)
-                  : verify_pose(voxels, semantic, T, max_points, w, lambda);
+    return points ? verify_pose(points, nv, semantic, T, max_points, verify_weights, lambda)
+                  : verify_pose(voxels, semantic, T, max_points, verify_weights, lambda);
   }
-  PoseVerification search(const Eigen::Isometry3d& T, Eigen::Isometry3d* refined,
-                          const PoseVerification* at_start) const {
+  PoseVerification search(const Eigen::Isometry3d& T, Eigen::Isometry3d* refined, const PoseVerification* at_start,
+                          DisagreeWeights lambda) const {
     const uint32_t nv = voxels.size();
-    const float lambda = vc.disagree_weight;
     return points ? verify_pose_refined(points, nv, semantic, T, vc.max_points, verify_weights, vc.refine_rounds,
                                         vc.refine_step_m, vc.refine_step_deg, refined, vc.search_divisor,
                                         vc.polish_divisor, at_start, lambda)
@@ -126,6 +125,7 @@ AnswerChoice AnswerSelector::choose(PoseHypotheses& hyps, const VoxelLayer& voxe
 bool AnswerSelector::prepare_scoring(const VoxelLayer& voxels, const float* weights, const VerifyConfig& vc,
                                      bool verify) {
   compact_points_ = 0;
+  disagree_ = DisagreeWeights(vc.disagree_weight);  // until verify_hypotheses measures this scan's
   rarity_weights(voxels, weights, vc.rarity_exponent, vc.max_points, verify_weights_);
   const bool compact = verify && voxels.size() <= point_capacity_ && points_ != nullptr;
   if (compact) {
@@ -143,11 +143,11 @@ uint32_t AnswerSelector::verify_hypotheses(PoseHypotheses& hyps, const PoseScore
   const uint32_t H = hyps.size();
   uint32_t top[PoseHypotheses::kMaxHypotheses];
   const uint32_t coarse_points = std::max<uint32_t>(1, vc.max_points / vc.coarse_divisor);
-  for (uint32_t h = 0; h < H; ++h)
-    hyps[h].verification = scorer.score(hyps[h].map_T_scan, coarse_points, verify_weights_);
+  for (uint32_t h = 0; h < H; ++h) hyps[h].verification = scorer.score(hyps[h].map_T_scan, coarse_points, disagree_);
   uint32_t nt = top_by_score(hyps, H, nullptr, vc.full_top, top);
+  if (nt > 0) disagree_ = weigh_disagreements(hyps, scorer, hc, top, nt);
   for (uint32_t k = 0; k < nt; ++k) {
-    hyps[top[k]].verification = scorer.score(hyps[top[k]].map_T_scan, vc.max_points, verify_weights_);
+    hyps[top[k]].verification = scorer.score(hyps[top[k]].map_T_scan, vc.max_points, disagree_);
     full_scored[top[k]] = 1;
   }
   nt = vc.refine_rounds > 0 ? top_by_score(hyps, H, full_scored, std::min(vc.refine_top, refine_top_), top) : 0;
@@ -155,9 +155,26 @@ uint32_t AnswerSelector::verify_hypotheses(PoseHypotheses& hyps, const PoseScore
   for (uint32_t k = 0; k < nt; ++k) {
     refined_id_[k] = top[k];
     const PoseVerification full = hyps[top[k]].verification;  // verify_pose at max_points, just above
-    hyps[top[k]].verification = scorer.search(hyps[top[k]].map_T_scan, &refined_pose_[k], &full);
+    hyps[top[k]].verification = scorer.search(hyps[top[k]].map_T_scan, &refined_pose_[k], &full, disagree_);
   }
   return nt;
+}
+
+// This scan's disagree weights (disagree_weights.h): the best coarse hypothesis against up to
+// kMaxRivals of the others at another place or heading (top: the coarse ranking, best first, n > 0).
+DisagreeWeights AnswerSelector::weigh_disagreements(const PoseHypotheses& hyps, const PoseScorer& scorer,
+                                                    const HypothesisConfig& hc, const uint32_t* top, uint32_t n) const {
+  const float configured = scorer.vc.disagree_weight;
+  if (scorer.points == nullptr) return DisagreeWeights(configured);  // never: the copy has the layer's capacity
+  const Eigen::Isometry3d& best = hyps[top[0]].map_T_scan;
+  const double same_rad = double(hc.same_pose_deg) / kDegPerRad;
+  Eigen::Isometry3d competitors[kMaxRivals];
+  uint32_t count = 0;
+  for (uint32_t k = 1; k < n && count < kMaxRivals; ++k)
+    if (!within_pose(best, hyps[top[k]].map_T_scan, hc.same_pose_m, same_rad))
+      competitors[count++] = hyps[top[k]].map_T_scan;
+  return scan_disagree_weights(scorer.points, scorer.voxels.size(), scorer.semantic, best, competitors, count,
+                               scorer.vc.max_points, configured);
 }
 
 // Keeps in top[0, n) (best first) only the hypotheses not within the same-pose tolerance of a better

@@ -3,7 +3,7 @@
 #include <algorithm>
 #include <cmath>
 
-#include "gsf/detail/angles.h"
+#include "gsf/detail/pose_probes.h"
 
 namespace gsf {
 
@@ -32,20 +32,6 @@ uint16_t block_index(float x, float y) {
   return static_cast<uint16_t>(axis(y) * kBlockSide + axis(x));
 }
 
-// The answer moved `forward` and `left` metres in its own (scan) frame.
-Eigen::Isometry3d shifted(const Eigen::Isometry3d& T, double forward, double left) {
-  Eigen::Isometry3d c = T;
-  c.translation() += T.linear() * Eigen::Vector3d(forward, left, 0.0);
-  return c;
-}
-
-// The answer turned about the sensor (map_T_scan * Rz keeps the scan origin where it is).
-Eigen::Isometry3d turned(const Eigen::Isometry3d& T, double deg) {
-  Eigen::Isometry3d c = T;
-  c.linear() = T.linear() * Eigen::AngleAxisd(deg_to_rad(deg), Eigen::Vector3d::UnitZ()).toRotationMatrix();
-  return c;
-}
-
 double logistic(double x) { return 1.0 / (1.0 + std::exp(-x)); }
 
 double clipped(float v, float lo, float hi) { return std::min(hi, std::max(lo, v)); }
@@ -57,7 +43,7 @@ struct AnswerConfidence::Sample {
   uint32_t n;
   const SemanticGridView& grid;
   const float* weights;
-  float disagree_weight;
+  DisagreeWeights disagree;
   uint32_t max_points;
 };
 
@@ -87,7 +73,7 @@ Status AnswerConfidence::bind(Arena& arena, uint32_t max_points) {
 }
 
 AnswerConfidence::Paired AnswerConfidence::paired(const Sample& s, const Eigen::Isometry3d& other) {
-  verify_pose_evidence(s.points, s.n, s.grid, other, s.max_points, s.weights, s.disagree_weight, other_evidence_);
+  verify_pose_evidence(s.points, s.n, s.grid, other, s.max_points, s.weights, s.disagree, other_evidence_);
   for (uint32_t k = 0; k < samples_; ++k) block_sum_[block_of_[k]] += answer_evidence_[k] - other_evidence_[k];
   Paired p;
   double sum = 0.0, sq = 0.0;
@@ -103,12 +89,12 @@ AnswerConfidence::Paired AnswerConfidence::paired(const Sample& s, const Eigen::
 }
 
 ConfidenceEvidence AnswerConfidence::measure(const VerifyPoint* points, uint32_t n, const SemanticGridView& grid,
-                                             const float* weights, float disagree_weight, const Answer& a,
+                                             const float* weights, DisagreeWeights disagree, const Answer& a,
                                              uint32_t max_points) {
   ConfidenceEvidence e;
   max_points = std::min(max_points, capacity_);
   if (n == 0 || max_points == 0 || grid.empty() || points == nullptr || block_sum_ == nullptr) return e;
-  const Sample s{points, n, grid, weights, disagree_weight, max_points};
+  const Sample s{points, n, grid, weights, disagree, max_points};
   // The strided sample verify_pose reads: sample k is point k x stride.
   const uint32_t stride = (n + max_points - 1) / max_points;
   samples_ = (n + stride - 1) / stride;
@@ -122,7 +108,7 @@ ConfidenceEvidence AnswerConfidence::measure(const VerifyPoint* points, uint32_t
   }
   for (uint32_t b = 0; b < block_count_; ++b) block_sum_[blocks_[b]] = 0.0f;
   const PoseVerification at =
-      verify_pose_evidence(points, n, grid, a.pose, max_points, weights, disagree_weight, answer_evidence_);
+      verify_pose_evidence(points, n, grid, a.pose, max_points, weights, disagree, answer_evidence_);
   e.inliers = a.inliers;
   e.inlier_share = a.inlier_share;
   e.samples = samples_;
@@ -138,9 +124,9 @@ ConfidenceEvidence AnswerConfidence::measure(const VerifyPoint* points, uint32_t
   };
   for (double d : {2.0, 8.0}) {
     const double moves[4][2] = {{d, 0.0}, {-d, 0.0}, {0.0, d}, {0.0, -d}};
-    for (const auto& m : moves) keep_closest(shift, paired(s, shifted(a.pose, m[0], m[1])));
+    for (const auto& m : moves) keep_closest(shift, paired(s, shifted_pose(a.pose, m[0], m[1])));
   }
-  for (double deg : {10.0, -10.0, 180.0}) keep_closest(turn, paired(s, turned(a.pose, deg)));
+  for (double deg : {10.0, -10.0, 180.0}) keep_closest(turn, paired(s, turned_pose(a.pose, deg)));
   e.z_shift = shift.z;
   e.z_turn = turn.z;
   e.rivals = std::min(a.rival_count, kMaxRivals);

@@ -499,6 +499,7 @@ void Localizer::Impl::choose_answer(const LocalizerConfig& cfg, LocalizeResult& 
   out.score = choice.answer.support;
   out.chosen_hypothesis = choice.index;
   out.verified = choice.verified;
+  out.other_class_weight = choice.verified ? answer.disagree_weights().other_class : 0.0f;
   for (uint32_t k = 0; k < choice.ranked; ++k)
     out.hypothesis[k] = hypothesis_report(hypotheses[choice.rank[k]], choice.fully_verified[k]);
 }
@@ -538,7 +539,7 @@ void Localizer::Impl::measure_confidence(const LocalizerConfig& cfg, LocalizeRes
                                      x.share};
     out.confidence_evidence =
         confidence.measure(answer.compact_points(), answer.compact_point_count(), semantic, answer.verify_weights(),
-                           cfg.verify.disagree_weight, a, cfg.verify.max_points);
+                           answer.disagree_weights(), a, cfg.verify.max_points);
     out.confidence = confidence_probability(out.confidence_evidence);
   }
   out.confident = out.confidence >= cfg.confidence.min_probability;
@@ -633,7 +634,7 @@ ConfidenceEvidence Localizer::Impl::elsewhere_evidence(const LocalizerConfig& cf
   const Explained x = explained_at(best.pose, best.inliers, cfg.hypotheses.tls_threshold);
   const AnswerConfidence::Answer a{best.pose, rivals, n, x.inliers, x.share};
   return confidence.measure(answer.compact_points(), answer.compact_point_count(), semantic, answer.verify_weights(),
-                            cfg.verify.disagree_weight, a, cfg.verify.max_points);
+                            answer.disagree_weights(), a, cfg.verify.max_points);
 }
 
 Status Localizer::localize(const ScanView& scan, LocalizeResult* out) { return localize_in(scan, nullptr, out); }
@@ -942,7 +943,7 @@ void Localizer::reset_sequence() {
 PoseVerification Localizer::score_pose(const Eigen::Isometry3d& map_T_scan) const {
   if (!impl_) return PoseVerification();
   return verify_pose(impl_->voxels, impl_->semantic, map_T_scan, config_.verify.max_points,
-                     impl_->answer.verify_weights(), config_.verify.disagree_weight);
+                     impl_->answer.verify_weights(), impl_->answer.disagree_weights());
 }
 
 uint32_t Localizer::last_instances(float* xyz, uint8_t* labels, uint32_t max) const {

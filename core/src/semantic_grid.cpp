@@ -214,11 +214,30 @@ struct PointSource {
   }
 };
 
+enum class Verdict { kUnknown, kAgree, kOtherClass, kContradicted };
+
+// Above-ground class bits: a cell holding any of them was seen occupied.
+constexpr uint32_t kAboveGroundClasses = ~(kGroundClasses | kCellObserved);
+
+// One sampled voxel (class bit `bit`) against the cell at palette index `at` (kNoCell: outside).
+inline Verdict verdict_of(const SemanticGridView& grid, uint32_t at, uint32_t bit) {
+  const uint32_t mask = at == kNoCell ? 0u : grid.palette[at];
+  const bool ground = (bit & kGroundClasses) != 0;
+  if (ground ? !(mask & kGroundClasses) : !(mask & kCellObserved)) return Verdict::kUnknown;
+  // A hypothesis pose is good to about a cell: the class in a 4-neighbour cell still agrees (a lattice
+  // shift moves cues by metres, far beyond this tolerance). The cell is in a stored tile here, so its
+  // palette entry's neighbour mask is there.
+  if (mask & bit) return Verdict::kAgree;
+  const uint32_t near = mask | grid.neighbours[at];
+  if (near & bit) return Verdict::kAgree;
+  return !ground && (near & kAboveGroundClasses) ? Verdict::kOtherClass : Verdict::kContradicted;
+}
+
 // The scoring loop, with the grid's reciprocal test hoisted out of it (kExactInverse: k.exact_inverse).
 template <bool kExactInverse, class Source>
 PoseVerification score_samples(const Source& src, const SemanticGridView& grid, const GridConstants& k,
-                               const Eigen::Isometry3d& T, uint32_t stride, const float* weights, float disagree_weight,
-                               float* evidence = nullptr) {
+                               const Eigen::Isometry3d& T, uint32_t stride, const float* weights,
+                               DisagreeWeights disagree, float* evidence = nullptr) {
   PoseVerification v;
   const uint32_t n = src.size();
   // Bird's-eye comparison under the upright prior: only the hypothesis' heading and position matter. A
@@ -228,66 +247,57 @@ PoseVerification score_samples(const Source& src, const SemanticGridView& grid, 
   const Eigen::Matrix3f R = Eigen::AngleAxisf(yaw, Eigen::Vector3f::UnitZ()).toRotationMatrix();
   const Eigen::Vector3f t = T.translation().cast<float>();
   TileCache cache;
+  float contradicted = 0.0f, other_class = 0.0f;
   for (uint32_t i = 0; i < n; i += stride) {
     uint8_t label;
     const Eigen::Vector2f p = src.at(i, R, t, &label);
     const GridAxis ax = grid_axis<kExactInverse>(k, p.x()), ay = grid_axis<kExactInverse>(k, p.y());
-    const uint32_t at = palette_index_at_axes(grid, k, ax, ay, cache);
-    const uint32_t mask = at == kNoCell ? 0u : grid.palette[at];
-    const uint32_t bit = class_bit(label);
+    const Verdict verdict = verdict_of(grid, palette_index_at_axes(grid, k, ax, ay, cache), class_bit(label));
     const float w = weights[label];
-    int verdict = 0;  // +1 agree, -1 disagree, 0 unknown
-    if (bit & kGroundClasses) {
-      if (mask & kGroundClasses) verdict = (mask & bit) ? 1 : -1;
-    } else if (mask & kCellObserved) {
-      verdict = (mask & bit) ? 1 : -1;
+    float e = 0.0f;
+    switch (verdict) {
+      case Verdict::kUnknown: ++v.unknown; break;
+      case Verdict::kAgree: v.agree += w, e = w; break;
+      case Verdict::kOtherClass: other_class += w, e = -disagree.other_class * w; break;
+      case Verdict::kContradicted: contradicted += w, e = -disagree.contradicted * w; break;
     }
-    // A hypothesis pose is good to about a cell: the class in a 4-neighbour cell still agrees (a
-    // lattice shift moves cues by metres, far beyond this tolerance). A disagreeing voxel's cell is in
-    // a stored tile, so its palette entry's neighbour mask is there.
-    if (verdict < 0 && (grid.neighbours[at] & bit)) verdict = 1;
-    if (evidence) *evidence++ = verdict == 0 ? 0.0f : (verdict > 0 ? w : -disagree_weight * w);
-    if (verdict == 0) {
-      ++v.unknown;
-      continue;
-    }
-    ++v.scored;
-    if (verdict > 0) v.agree += w;
-    else v.disagree += w;
+    if (evidence) *evidence++ = e;
   }
-  v.score = v.agree - disagree_weight * v.disagree;
+  v.scored = (n + stride - 1) / stride - v.unknown;
+  v.disagree = contradicted + other_class;
+  v.score = v.agree - disagree.contradicted * contradicted - disagree.other_class * other_class;
   return v;
 }
 
 template <class Source>
 PoseVerification score_pose(const Source& src, const SemanticGridView& grid, const Eigen::Isometry3d& T,
-                            uint32_t max_points, const float* weights, float disagree_weight) {
+                            uint32_t max_points, const float* weights, DisagreeWeights disagree) {
   const uint32_t n = src.size();
   if (n == 0 || max_points == 0 || grid.empty() || grid.neighbours == nullptr) return PoseVerification();
   const uint32_t stride = (n + max_points - 1) / max_points;
   const GridConstants k = grid_constants(grid);
-  return k.exact_inverse ? score_samples<true>(src, grid, k, T, stride, weights, disagree_weight)
-                         : score_samples<false>(src, grid, k, T, stride, weights, disagree_weight);
+  return k.exact_inverse ? score_samples<true>(src, grid, k, T, stride, weights, disagree)
+                         : score_samples<false>(src, grid, k, T, stride, weights, disagree);
 }
 
 // The evidence variant: score_samples with each sample's signed weight written out (k = i / stride).
 template <class Source>
 PoseVerification score_pose_evidence(const Source& src, const SemanticGridView& grid, const Eigen::Isometry3d& T,
-                                     uint32_t max_points, const float* weights, float disagree_weight,
+                                     uint32_t max_points, const float* weights, DisagreeWeights disagree,
                                      float* evidence) {
   const uint32_t n = src.size();
   if (n == 0 || max_points == 0 || grid.empty() || grid.neighbours == nullptr) return PoseVerification();
   const uint32_t stride = (n + max_points - 1) / max_points;
   const GridConstants k = grid_constants(grid);
-  return k.exact_inverse ? score_samples<true>(src, grid, k, T, stride, weights, disagree_weight, evidence)
-                         : score_samples<false>(src, grid, k, T, stride, weights, disagree_weight, evidence);
+  return k.exact_inverse ? score_samples<true>(src, grid, k, T, stride, weights, disagree, evidence)
+                         : score_samples<false>(src, grid, k, T, stride, weights, disagree, evidence);
 }
 
 template <class Source>
 PoseVerification search_pose(const Source& src, const SemanticGridView& grid, const Eigen::Isometry3d& T,
                              uint32_t max_points, const float* weights, uint32_t rounds, float step_m, float step_deg,
                              Eigen::Isometry3d* refined, uint32_t search_divisor, uint32_t polish_divisor,
-                             const PoseVerification* at_start, float disagree_weight) {
+                             const PoseVerification* at_start, DisagreeWeights disagree) {
   Eigen::Isometry3d best = T;
   auto sample = [max_points](uint32_t divisor) {
     const uint32_t d = divisor > 0 ? divisor : 1;
@@ -296,12 +306,12 @@ PoseVerification search_pose(const Source& src, const SemanticGridView& grid, co
   const uint32_t coarse = sample(search_divisor), polish = sample(polish_divisor);
   bool any_move = false;
   uint32_t points = rounds > 1 ? coarse : polish;
-  float best_score = score_pose(src, grid, best, points, weights, disagree_weight).score;
+  float best_score = score_pose(src, grid, best, points, weights, disagree).score;
   double step = step_m, turn = deg_to_rad(double(step_deg));
   for (uint32_t r = 0; r < rounds; ++r, step *= 0.5, turn *= 0.5) {
     if (r + 1 == rounds && points != polish) {  // the last, finest round on its own sample
       points = polish;
-      best_score = score_pose(src, grid, best, points, weights, disagree_weight).score;
+      best_score = score_pose(src, grid, best, points, weights, disagree).score;
     }
     bool moved = true;
     for (int pass = 0; pass < 2 && moved; ++pass) {
@@ -316,7 +326,7 @@ PoseVerification search_pose(const Source& src, const SemanticGridView& grid, co
           c.linear() =
               c.linear() * Eigen::AngleAxisd(k == 4 ? turn : -turn, Eigen::Vector3d::UnitZ()).toRotationMatrix();
         }
-        const float sc = score_pose(src, grid, c, points, weights, disagree_weight).score;
+        const float sc = score_pose(src, grid, c, points, weights, disagree).score;
         if (sc > best_score) {
           best_score = sc;
           best = c;
@@ -328,7 +338,7 @@ PoseVerification search_pose(const Source& src, const SemanticGridView& grid, co
   if (refined) *refined = best;
   // Not moved: the full score at the start pose is the caller's, when it has it (the same call).
   if (!any_move && at_start) return *at_start;
-  return score_pose(src, grid, best, max_points, weights, disagree_weight);
+  return score_pose(src, grid, best, max_points, weights, disagree);
 }
 
 }  // namespace
@@ -341,37 +351,65 @@ void fill_verify_points(const VoxelLayer& voxels, VerifyPoint* out) {
 }
 
 PoseVerification verify_pose(const VoxelLayer& voxels, const SemanticGridView& grid, const Eigen::Isometry3d& T,
-                             uint32_t max_points, const float* weights, float disagree_weight) {
-  return score_pose(VoxelSource{voxels}, grid, T, max_points, weights, disagree_weight);
+                             uint32_t max_points, const float* weights, DisagreeWeights disagree) {
+  return score_pose(VoxelSource{voxels}, grid, T, max_points, weights, disagree);
 }
 
 PoseVerification verify_pose(const VerifyPoint* points, uint32_t n, const SemanticGridView& grid,
                              const Eigen::Isometry3d& T, uint32_t max_points, const float* weights,
-                             float disagree_weight) {
-  return score_pose(PointSource{points, n}, grid, T, max_points, weights, disagree_weight);
+                             DisagreeWeights disagree) {
+  return score_pose(PointSource{points, n}, grid, T, max_points, weights, disagree);
 }
 
 PoseVerification verify_pose_evidence(const VerifyPoint* points, uint32_t n, const SemanticGridView& grid,
                                       const Eigen::Isometry3d& T, uint32_t max_points, const float* weights,
-                                      float disagree_weight, float* evidence) {
-  return score_pose_evidence(PointSource{points, n}, grid, T, max_points, weights, disagree_weight, evidence);
+                                      DisagreeWeights disagree, float* evidence) {
+  return score_pose_evidence(PointSource{points, n}, grid, T, max_points, weights, disagree, evidence);
 }
 
 PoseVerification verify_pose_refined(const VoxelLayer& voxels, const SemanticGridView& grid, const Eigen::Isometry3d& T,
                                      uint32_t max_points, const float* weights, uint32_t rounds, float step_m,
                                      float step_deg, Eigen::Isometry3d* refined, uint32_t search_divisor,
-                                     uint32_t polish_divisor, const PoseVerification* at_start, float disagree_weight) {
+                                     uint32_t polish_divisor, const PoseVerification* at_start,
+                                     DisagreeWeights disagree) {
   return search_pose(VoxelSource{voxels}, grid, T, max_points, weights, rounds, step_m, step_deg, refined,
-                     search_divisor, polish_divisor, at_start, disagree_weight);
+                     search_divisor, polish_divisor, at_start, disagree);
 }
 
 PoseVerification verify_pose_refined(const VerifyPoint* points, uint32_t n, const SemanticGridView& grid,
                                      const Eigen::Isometry3d& T, uint32_t max_points, const float* weights,
                                      uint32_t rounds, float step_m, float step_deg, Eigen::Isometry3d* refined,
                                      uint32_t search_divisor, uint32_t polish_divisor, const PoseVerification* at_start,
-                                     float disagree_weight) {
+                                     DisagreeWeights disagree) {
   return search_pose(PointSource{points, n}, grid, T, max_points, weights, rounds, step_m, step_deg, refined,
-                     search_divisor, polish_divisor, at_start, disagree_weight);
+                     search_divisor, polish_divisor, at_start, disagree);
+}
+
+VerdictCounts count_verdicts(const VerifyPoint* points, uint32_t n, const SemanticGridView& grid,
+                             const Eigen::Isometry3d& T, uint32_t max_points) {
+  VerdictCounts c;
+  if (n == 0 || max_points == 0 || grid.empty() || grid.neighbours == nullptr) return c;
+  const uint32_t stride = (n + max_points - 1) / max_points;
+  const GridConstants k = grid_constants(grid);
+  const PointSource src{points, n};
+  const float yaw = static_cast<float>(std::atan2(T.linear()(1, 0), T.linear()(0, 0)));
+  const Eigen::Matrix3f R = Eigen::AngleAxisf(yaw, Eigen::Vector3f::UnitZ()).toRotationMatrix();
+  const Eigen::Vector3f t = T.translation().cast<float>();
+  TileCache cache;
+  for (uint32_t i = 0; i < n; i += stride) {
+    uint8_t label;
+    const Eigen::Vector2f p = src.at(i, R, t, &label);
+    const uint32_t bit = class_bit(label);
+    if (bit & kGroundClasses) continue;
+    const uint32_t at = palette_index_at_axes(grid, k, grid_axis<false>(k, p.x()), grid_axis<false>(k, p.y()), cache);
+    switch (verdict_of(grid, at, bit)) {
+      case Verdict::kUnknown: break;
+      case Verdict::kAgree: ++c.agree; break;
+      case Verdict::kOtherClass: ++c.other_class; break;
+      case Verdict::kContradicted: ++c.contradicted; break;
+    }
+  }
+  return c;
 }
 
 }  // namespace gsf

@@ -71,6 +71,7 @@ void write_stage_counts(JsonWriter& j, const LocalizeResult& x) {
   j.field("field_probes", x.field_probes);
   j.field("field_comparisons", x.field_comparisons);
   j.field("verified", x.verified);
+  j.field("other_class_weight", x.other_class_weight);
   j.field("chosen_hypothesis", x.chosen_hypothesis);
   j.field("height_votes", x.height_votes);
   if (x.prior_used) {  // a position prior (docs/vehicle-modes.md)

@@ -86,7 +86,10 @@ struct LocalizeResult {
   uint32_t hypotheses = 0;         // distinct pose hypotheses (<= hypotheses.max_hypotheses)
   uint32_t chosen_hypothesis = 0;  // index of the answer among them (0 = the maximum clique)
   bool verified = false;           // the answer was chosen by whole-scan verification
-  uint32_t height_votes = 0;       // correspondences whose median set the answer's height (0: its hypothesis's)
+  // What verification charged a voxel on a cell of another above-ground class, estimated for this scan
+  // (detail/disagree_weights.h); every other disagreement costs verify.disagree_weight.
+  float other_class_weight = 0.0f;
+  uint32_t height_votes = 0;  // correspondences whose median set the answer's height (0: its hypothesis's)
   HypothesisReport hypothesis[kMaxReportedHypotheses];
   uint64_t clique_nodes = 0;
   uint32_t field_probes = 0;        // query-field probes computed by the GSF filter (cost driver)

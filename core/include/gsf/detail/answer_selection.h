@@ -70,6 +70,9 @@ class AnswerSelector {
   const Eigen::Isometry3d& answer_pose() const { return answer_pose_; }
   const Eigen::Isometry3d* rival_poses() const { return rival_pose_; }
   uint32_t rival_count() const { return rival_count_; }
+  // The disagree weights verification scored with (disagree_weights.h): estimated for this scan by
+  // choose(), the configured weight for every disagreement after prepare().
+  const DisagreeWeights& disagree_weights() const { return disagree_; }
   const VerifyPoint* compact_points() const { return points_; }
   uint32_t compact_point_count() const { return compact_points_; }
 
@@ -79,6 +82,8 @@ class AnswerSelector {
   bool prepare_scoring(const VoxelLayer& voxels, const float* weights, const VerifyConfig& vc, bool verify);
   uint32_t verify_hypotheses(PoseHypotheses& hyps, const PoseScorer& scorer, const VerifyConfig& vc,
                              const HypothesisConfig& hc, uint8_t* full_scored);
+  DisagreeWeights weigh_disagreements(const PoseHypotheses& hyps, const PoseScorer& scorer, const HypothesisConfig& hc,
+                                      const uint32_t* top, uint32_t n) const;
   uint32_t distinct_of(const PoseHypotheses& hyps, const HypothesisConfig& hc, uint32_t* top, uint32_t n) const;
   uint32_t pick_answer_and_rivals(const PoseHypotheses& hyps, const uint8_t* full_scored, const HypothesisConfig& hc,
                                   uint32_t refined_count);
@@ -91,6 +96,7 @@ class AnswerSelector {
   uint32_t refine_top_ = 0;
   uint32_t chosen_ = UINT32_MAX;
   float verify_weights_[kNumClasses] = {};
+  DisagreeWeights disagree_;
   Eigen::Isometry3d scoring_pose_of(uint32_t h, uint32_t refined_count) const;
   const PoseHypotheses* hyps_ = nullptr;
   Eigen::Isometry3d answer_pose_ = Eigen::Isometry3d::Identity();

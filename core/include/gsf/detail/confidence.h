@@ -69,7 +69,7 @@ class AnswerConfidence {
   Status bind(Arena& arena, uint32_t max_points);
 
   // The evidence for `answer` (map-local, the pose verification scored) against `rivals`, over the
-  // same strided sample of the n compact points verification used (weights and disagree_weight too);
+  // same strided sample of the n compact points verification used (weights and disagree weights too);
   // inliers: the answer's; inlier_share: their share of the scan's instances on the map's observed
   // cells there (a window of scans passes its candidate's best).
   struct Answer {
@@ -80,7 +80,7 @@ class AnswerConfidence {
     float inlier_share;
   };
   ConfidenceEvidence measure(const VerifyPoint* points, uint32_t n, const SemanticGridView& grid, const float* weights,
-                             float disagree_weight, const Answer& answer, uint32_t max_points);
+                             DisagreeWeights disagree, const Answer& answer, uint32_t max_points);
 
  private:
   struct Sample;

@@ -23,7 +23,8 @@
 //                       unknown if the cell was never observed.
 //   either, disagreeing: agrees after all if one of the cell's four edge neighbours has the class (a
 //                       hypothesis pose is good to about a cell).
-// score = sum of stability weights of agreeing voxels - the same sum over disagreeing voxels. In a
+// score = sum of stability weights of agreeing voxels - the same sum over disagreeing voxels, each times
+// its disagree weight (DisagreeWeights). In a
 // lattice every shift of the columns agrees on the columns and the roads; the hedge, the terrain
 // island, the fence 30 m away are what separate the shifts, and they are in the score.
 #pragma once
@@ -86,6 +87,30 @@ inline SemanticGridView semantic_grid_view(const MapView& map) {
   return g;
 }
 
+// What a voxel the map contradicts costs, per unit of its class weight (score = agree - these).
+// `contradicted`: a voxel on a cell the map saw empty above ground, or a ground voxel on other ground.
+// `other_class`: an above-ground voxel on (or beside) a cell the map saw holding other above-ground
+// classes, none its own. The map saw something there, so the voxel may be right and its label wrong:
+// how much less than a contradiction that costs depends on the scan's segmentation noise
+// (disagree_weights.h estimates it per scan). One weight converts to both (the same penalty for every
+// disagreement).
+struct DisagreeWeights {
+  DisagreeWeights(float w = 1.0f) : contradicted(w), other_class(w) {}  // NOLINT: one weight is both
+  DisagreeWeights(float contradicted_w, float other_class_w)
+      : contradicted(contradicted_w), other_class(other_class_w) {}
+  float contradicted;
+  float other_class;
+};
+
+// Unweighted counts of a pose's sampled above-ground voxels on the map's observed cells, by verdict:
+// what disagree_weights.h compares between the best pose and its competitors. (Ground voxels and cells
+// the map never observed are left out.)
+struct VerdictCounts {
+  uint32_t agree = 0;
+  uint32_t other_class = 0;   // on or beside cells holding other above-ground classes only
+  uint32_t contradicted = 0;  // on a cell the map saw empty above ground
+};
+
 // The bird's-eye part of a query voxel that verification reads (12 B of the voxel's 96): a query scores
 // a few hundred poses on strided samples of its voxels, and this compact copy keeps them in cache.
 struct VerifyPoint {
@@ -99,7 +124,7 @@ void fill_verify_points(const VoxelLayer& voxels, VerifyPoint* out);
 // stride over the layer (never "the first N"). weights: stability weight per dense class.
 PoseVerification verify_pose(const VoxelLayer& voxels, const SemanticGridView& grid,
                              const Eigen::Isometry3d& map_T_scan, uint32_t max_points, const float* weights,
-                             float disagree_weight = 1.0f);
+                             DisagreeWeights disagree = DisagreeWeights());
 
 // verify_pose after a small bird's-eye pattern search around map_T_scan (moves of step_m along x and y
 // and step_deg of heading, halved each round, 6 probes a pass, a second pass when the first moved), so
@@ -114,14 +139,20 @@ PoseVerification verify_pose_refined(const VoxelLayer& voxels, const SemanticGri
                                      const Eigen::Isometry3d& map_T_scan, uint32_t max_points, const float* weights,
                                      uint32_t rounds, float step_m, float step_deg, Eigen::Isometry3d* refined,
                                      uint32_t search_divisor = 4, uint32_t polish_divisor = 4,
-                                     const PoseVerification* at_start = nullptr, float disagree_weight = 1.0f);
+                                     const PoseVerification* at_start = nullptr,
+                                     DisagreeWeights disagree = DisagreeWeights());
 
 // verify_pose over compact points that also writes each sampled voxel's evidence: evidence[k] = +w when
-// the k-th sample (voxel k x stride) agrees, -w when it disagrees, 0 when unknown (w its class weight).
+// the k-th sample (voxel k x stride) agrees, -w x its disagree weight when it disagrees, 0 when unknown
+// (w its class weight).
 // evidence holds at least min(n, max_points) floats. Same score as verify_pose, bit for bit.
 PoseVerification verify_pose_evidence(const VerifyPoint* points, uint32_t n, const SemanticGridView& grid,
                                       const Eigen::Isometry3d& map_T_scan, uint32_t max_points, const float* weights,
-                                      float disagree_weight, float* evidence);
+                                      DisagreeWeights disagree, float* evidence);
+
+// The verdicts of map_T_scan's sampled voxels (the strided sample verify_pose scores on max_points).
+VerdictCounts count_verdicts(const VerifyPoint* points, uint32_t n, const SemanticGridView& grid,
+                             const Eigen::Isometry3d& map_T_scan, uint32_t max_points);
 
 // How many of n points (xyz triples, scan frame), moved by map_T_scan, land on or beside a cell the map
 // observed: of the scan's instances, those the map could hold at this pose. An instance beyond the mapped
@@ -132,11 +163,12 @@ uint32_t count_observed(const SemanticGridView& grid, const Eigen::Isometry3d& m
 // The same two, over n compact points (fill_verify_points of the layer: the same results, bit for bit).
 PoseVerification verify_pose(const VerifyPoint* points, uint32_t n, const SemanticGridView& grid,
                              const Eigen::Isometry3d& map_T_scan, uint32_t max_points, const float* weights,
-                             float disagree_weight = 1.0f);
+                             DisagreeWeights disagree = DisagreeWeights());
 PoseVerification verify_pose_refined(const VerifyPoint* points, uint32_t n, const SemanticGridView& grid,
                                      const Eigen::Isometry3d& map_T_scan, uint32_t max_points, const float* weights,
                                      uint32_t rounds, float step_m, float step_deg, Eigen::Isometry3d* refined,
                                      uint32_t search_divisor = 4, uint32_t polish_divisor = 4,
-                                     const PoseVerification* at_start = nullptr, float disagree_weight = 1.0f);
+                                     const PoseVerification* at_start = nullptr,
+                                     DisagreeWeights disagree = DisagreeWeights());
 
 }  // namespace gsf
