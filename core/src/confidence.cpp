@@ -8,7 +8,7 @@
 namespace gsf {
 
 // bench/fit_confidence.py on the training suites (docs/confidence.md).
-const ConfidenceModel kConfidenceModel = {-1.552f, 1.739f, 24.600f, -11.401f, 1.503f, 2.720f, -6.193f, 28.786f};
+const ConfidenceModel kConfidenceModel = {-1.736f, 2.563f, 12.264f, -12.921f, 1.111f, 2.941f, -5.121f, 25.488f};
 
 namespace {
 
