@@ -58,6 +58,9 @@ struct QueryRecord {
   uint32_t repeatable_instances = 0;  // query instances with a same-label map instance < 2 m under the truth
   uint32_t true_correspondences = 0;  // selected correspondences the ground truth agrees with (< 2 m)
   double truth_verified_score = 0;    // the ground-truth pose's whole-scan verification score
+  // Of the sampled voxels at the ground-truth pose, the share on cells the map's semantic layer holds:
+  // near 0 when the vehicle is outside the map (every answer is then wrong, however good it looks).
+  double truth_known_share = 0;
   // Per true correspondence: its GSF weight (best omega) and its query instance's range in m (the gate's
   // evidence, bench/true_pair_omega.py).
   std::vector<std::array<float, 2>> true_pairs;

@@ -106,6 +106,7 @@ void write_truth(JsonWriter& j, const QueryTruth& truth) {
   j.field("true_correspondences", truth.true_correspondences);
   j.field("repeatable_instances", truth.repeatable_instances);
   j.field("truth_verified_score", truth.truth_verified_score);
+  j.field("truth_known_share", truth.truth_known_share);
   if (truth.true_pairs) {
     j.key("true_pairs");  // [GSF weight, query instance range m] of each true selected correspondence
     j.begin_array();

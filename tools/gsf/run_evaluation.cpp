@@ -47,6 +47,7 @@ void write_diagnostics(JsonWriter& j, const QueryRecord& r) {
   t.true_correspondences = r.true_correspondences;
   t.repeatable_instances = r.repeatable_instances;
   t.truth_verified_score = r.truth_verified_score;
+  t.truth_known_share = r.truth_known_share;
   t.true_pairs = &r.true_pairs;
   write_result_diagnostics(j, r.result, &t);
 }
@@ -694,7 +695,12 @@ void localize_query(LocalizerMode& lm, const ScanView& scan, Status read_status,
   std::vector<Localizer::Correspondence> corr(corr_buf.begin(),
                                               corr_buf.begin() + std::min<size_t>(nc, corr_buf.size()));
   add_truth_diagnostics(*lm.loc, map, corr, &r);
-  if (res.status == Status::Ok) r.truth_verified_score = lm.loc->score_pose(r.truth_local).score;
+  if (res.status == Status::Ok) {
+    const PoseVerification at_truth = lm.loc->score_pose(r.truth_local);
+    r.truth_verified_score = at_truth.score;
+    const uint32_t sampled = at_truth.scored + at_truth.unknown;
+    r.truth_known_share = sampled > 0 ? double(at_truth.scored) / sampled : 0.0;
+  }
   run->instances.push_back(picture_instances(*lm.loc));
   run->corr.push_back(std::move(corr));
   run->records.push_back(std::move(r));
