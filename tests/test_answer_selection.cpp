@@ -288,3 +288,21 @@ TEST_CASE("choose(): full_top and refine_top cap what is fully scored and patter
     CHECK(out.hypothesis[k].fully_verified == again.hypothesis[k].fully_verified);
   }
 }
+
+TEST_CASE("choose(): the best hypothesis turned more than 90 deg from the leader is pattern-searched too") {
+  // A 180-degree twin (x = 33: the columns line up again, the bush lands on road) leads before any
+  // search; the truth's clique pose is 1.4 m and 5 deg off, so it scores below the twin until searched.
+  Selection s;
+  const std::vector<Eigen::Isometry3d> poses = {pose_at(33.0, 0.0, 180.0), pose_at(25.3, 0.7, 5.0),
+                                                pose_at(17.0, 0.0, 180.0)};
+  s.vc.refine_top = 1;
+  s.vc.refine_turned = 0;
+  s.set(poses);
+  Chosen out = s.choose();
+  CHECK(s.selector.chosen() == 0);  // the twin, searched alone
+  s.vc.refine_turned = 1;
+  s.set(poses);
+  out = s.choose();
+  CHECK(s.selector.chosen() == 1);  // the truth, once searched
+  CHECK(planar_distance(s.selector.answer_pose(), pose_at(24.0, 0.0)) < planar_distance(poses[1], pose_at(24.0, 0.0)));
+}

@@ -46,14 +46,14 @@ void rarity_weights(const VoxelLayer& voxels, const float* base, float exponent,
     for (int c = 0; c < kNumClasses; ++c) out[c] = static_cast<float>(out[c] * (mass / scaled));
 }
 
-size_t AnswerSelector::required_bytes(uint32_t refine_top, uint32_t max_voxels) {
-  return counted_bytes<AnswerSelector>(refine_top, max_voxels);
+size_t AnswerSelector::required_bytes(uint32_t refine_slots, uint32_t max_voxels) {
+  return counted_bytes<AnswerSelector>(refine_slots, max_voxels);
 }
 
-Status AnswerSelector::bind(Arena& arena, uint32_t refine_top, uint32_t max_voxels) {
-  refine_top_ = refine_top;
-  refined_pose_ = arena.allocate<Eigen::Isometry3d>(refine_top);
-  refined_id_ = arena.allocate<uint32_t>(refine_top);
+Status AnswerSelector::bind(Arena& arena, uint32_t refine_slots, uint32_t max_voxels) {
+  refine_slots_ = refine_slots;
+  refined_pose_ = arena.allocate<Eigen::Isometry3d>(refine_slots);
+  refined_id_ = arena.allocate<uint32_t>(refine_slots);
   points_ = arena.allocate<VerifyPoint>(max_voxels);
   point_capacity_ = max_voxels;
   chosen_ = UINT32_MAX;
@@ -136,7 +136,9 @@ bool AnswerSelector::prepare_scoring(const VoxelLayer& voxels, const float* weig
 }
 
 // Coarse score for every hypothesis, the full score for the best `full_top` (marked in full_scored),
-// then the best `refine_top` at their best local alignment. Each step ranks, then caps. Returns how
+// then the best `refine_top` at their best local alignment, a hypothesis within the same-pose tolerance
+// of a better one skipped (the same peak: its search would end where the better one's does), and the
+// best `refine_turned` turned more than 90 deg from the best. Each step ranks, then caps. Returns how
 // many were refined (their ids and poses in refined_id_, refined_pose_).
 uint32_t AnswerSelector::verify_hypotheses(PoseHypotheses& hyps, const PoseScorer& scorer, const VerifyConfig& vc,
                                            const HypothesisConfig& hc, uint8_t* full_scored) {
@@ -150,8 +152,9 @@ uint32_t AnswerSelector::verify_hypotheses(PoseHypotheses& hyps, const PoseScore
     hyps[top[k]].verification = scorer.score(hyps[top[k]].map_T_scan, vc.max_points, disagree_);
     full_scored[top[k]] = 1;
   }
-  nt = vc.refine_rounds > 0 ? top_by_score(hyps, H, full_scored, std::min(vc.refine_top, refine_top_), top) : 0;
-  if (refine_distinct_) nt = distinct_of(hyps, hc, top, nt);
+  const uint32_t slots = vc.refine_rounds > 0 ? refine_slots_ : 0;
+  nt = distinct_of(hyps, hc, top, top_by_score(hyps, H, full_scored, std::min(vc.refine_top, slots), top));
+  nt = add_turned(hyps, hc, full_scored, vc.refine_turned, slots, top, nt);
   for (uint32_t k = 0; k < nt; ++k) {
     refined_id_[k] = top[k];
     const PoseVerification full = hyps[top[k]].verification;  // verify_pose at max_points, just above
@@ -192,6 +195,31 @@ uint32_t AnswerSelector::distinct_of(const PoseHypotheses& hyps, const Hypothesi
     if (!twin) top[kept++] = top[k];
   }
   return kept;
+}
+
+// Appends to top[0, n) (best first, n > 0 unless nothing was scored) the best `turned` fully scored
+// hypotheses not in it whose heading is more than 90 deg from top[0]'s and not within the same-pose
+// tolerance of each other, keeping at most `cap` in all; returns the new count.
+uint32_t AnswerSelector::add_turned(const PoseHypotheses& hyps, const HypothesisConfig& hc, const uint8_t* full_scored,
+                                    uint32_t turned, uint32_t cap, uint32_t* top, uint32_t n) const {
+  if (n == 0 || turned == 0 || n >= cap) return n;
+  const uint32_t H = hyps.size();
+  uint32_t ranked[PoseHypotheses::kMaxHypotheses];
+  const uint32_t nr = top_by_score(hyps, H, full_scored, H, ranked);
+  const double best_yaw = yaw_of(hyps[top[0]].map_T_scan), same_rad = double(hc.same_pose_deg) / kDegPerRad;
+  const uint32_t end = std::min(cap, n + turned);
+  const uint32_t first_turned = n;
+  for (uint32_t k = 0; k < nr && n < end; ++k) {
+    const uint32_t h = ranked[k];
+    double gap = std::fabs(yaw_of(hyps[h].map_T_scan) - best_yaw);
+    if (gap > kPi) gap = 2.0 * kPi - gap;
+    if (gap <= 0.5 * kPi || std::find(top, top + n, h) != top + n) continue;
+    bool twin = false;
+    for (uint32_t j = first_turned; j < n && !twin; ++j)
+      twin = within_pose(hyps[top[j]].map_T_scan, hyps[h].map_T_scan, hc.same_pose_m, same_rad);
+    if (!twin) top[n++] = h;
+  }
+  return n;
 }
 
 // The answer, and as runner-up the best fully scored hypotheses at another place or heading (into

@@ -172,7 +172,9 @@ Status Localizer::bind_workspace(Arena& ar, const LocalizerConfig& config, Impl&
     return Status::InvalidArgument;
   record(&b.correspondence);
   if (im.hypotheses.bind(ar, C, config.hypotheses.max_hypotheses, V) != Status::Ok) return Status::InvalidArgument;
-  if (im.answer.bind(ar, config.verify.refine_top, config.voxel.max_voxels) != Status::Ok && !ar.counting())
+  if (im.answer.bind(ar, config.verify.refine_top + config.verify.refine_turned, config.voxel.max_voxels) !=
+          Status::Ok &&
+      !ar.counting())
     return Status::InvalidArgument;
   // The confidence's per-sample arrays hold the window's combined sample (one scan's without a window).
   const uint32_t window_scans = std::max(1u, std::min(config.window.scans, ScanWindow::kMaxScans));
@@ -612,7 +614,6 @@ bool Localizer::Impl::search_elsewhere(const LocalizerConfig& cfg, const MapView
   hypotheses.retain(keep);
   if (hypotheses.size() == 0) return false;
   g.query_instances = instance_count;
-  answer.set_refine_distinct(true);
   LocalizerConfig check = cfg;  // the check refines fewer: it asks only whether one beats the answer
   check.verify.refine_top = std::min(cfg.verify.refine_top, cfg.confidence.prior_check_refine);
   choose_answer(check, g);
@@ -753,7 +754,6 @@ Status Localizer::localize_in(const ScanView& scan, const PositionPrior* prior, 
   lap(&out.times.clique);  // with the correspondence selection
   if (s != Status::Ok) return finish(Status::NoSolution);
   if (prior) im.drop_outside_prior(cfg, out);
-  im.answer.set_refine_distinct(prior != nullptr);  // a prior's hypotheses crowd at few places
   if (im.hypotheses.size() == 0) return finish(Status::NoSolution);
   im.choose_answer(cfg, out);
   im.settle_height(cfg, map_, C, out);

@@ -228,6 +228,10 @@ struct VerifyConfig {
   // The best `refine_top` hypotheses (by first score) are re-scored after a bird's-eye pattern search
   // (semantic_grid.h: verify_pose_refined), so a near-truth clique pose is compared at its best.
   uint32_t refine_top = 4;
+  // ... and the best `refine_turned` of the fully scored ones turned more than 90 deg from the best: in a
+  // hall or a symmetric street the true pose can be the 180-degree twin of the best, whose clique pose is
+  // a few metres off and scores low until searched (issue 24: the confident wrong answers were flips).
+  uint32_t refine_turned = 2;
   uint32_t refine_rounds = 3;
   // The pattern search's probes are scored on max_points / search_divisor voxels, those of its last
   // (finest) round on max_points / polish_divisor; the pose it ends at is scored on max_points.

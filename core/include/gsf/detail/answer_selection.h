@@ -40,9 +40,10 @@ void rarity_weights(const VoxelLayer& voxels, const float* base, float exponent,
 
 class AnswerSelector {
  public:
-  // max_voxels: the voxel layer's capacity (the compact copy verification reads holds that many).
-  static size_t required_bytes(uint32_t refine_top, uint32_t max_voxels);
-  Status bind(Arena& arena, uint32_t refine_top, uint32_t max_voxels);
+  // refine_slots: pattern searches at most (VerifyConfig refine_top + refine_turned); max_voxels: the
+  // voxel layer's capacity (the compact copy verification reads holds that many).
+  static size_t required_bytes(uint32_t refine_slots, uint32_t max_voxels);
+  Status bind(Arena& arena, uint32_t refine_slots, uint32_t max_voxels);
 
   // Verifies `hyps` (when verification is on and the map has a semantic layer) and chooses the answer.
   // `weights`: the stability weights.
@@ -51,9 +52,6 @@ class AnswerSelector {
                       const VerifyConfig& verify_config);
   uint32_t chosen() const { return chosen_; }
   void forget() { chosen_ = UINT32_MAX; }
-  // On: the pattern search skips a hypothesis within the same-pose tolerance of one it refined already
-  // (the same peak; a position prior's hypotheses crowd at its answer). Off by default (one-shot).
-  void set_refine_distinct(bool on) { refine_distinct_ = on; }
   // The verification weights of the last choose() (the stability weights given here before any).
   const float* verify_weights() const { return verify_weights_; }
   void set_verify_weights(const float* weights);
@@ -85,6 +83,8 @@ class AnswerSelector {
   DisagreeWeights weigh_disagreements(const PoseHypotheses& hyps, const PoseScorer& scorer, const HypothesisConfig& hc,
                                       const uint32_t* top, uint32_t n) const;
   uint32_t distinct_of(const PoseHypotheses& hyps, const HypothesisConfig& hc, uint32_t* top, uint32_t n) const;
+  uint32_t add_turned(const PoseHypotheses& hyps, const HypothesisConfig& hc, const uint8_t* full_scored,
+                      uint32_t turned, uint32_t cap, uint32_t* top, uint32_t n) const;
   uint32_t pick_answer_and_rivals(const PoseHypotheses& hyps, const uint8_t* full_scored, const HypothesisConfig& hc,
                                   uint32_t refined_count);
   static void rank_for_report(const PoseHypotheses& hyps, bool verify, const uint8_t* full_scored,
@@ -93,7 +93,7 @@ class AnswerSelector {
   uint32_t* refined_id_ = nullptr;             // refine_top: their hypotheses
   VerifyPoint* points_ = nullptr;              // max_voxels: the query voxels' bird's-eye copy (fill_verify_points)
   uint32_t point_capacity_ = 0;                // max_voxels
-  uint32_t refine_top_ = 0;
+  uint32_t refine_slots_ = 0;
   uint32_t chosen_ = UINT32_MAX;
   float verify_weights_[kNumClasses] = {};
   DisagreeWeights disagree_;
@@ -103,7 +103,6 @@ class AnswerSelector {
   Eigen::Isometry3d rival_pose_[kMaxRivals];
   uint32_t rival_count_ = 0;
   uint32_t compact_points_ = 0;
-  bool refine_distinct_ = false;
 };
 
 }  // namespace gsf
