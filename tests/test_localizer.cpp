@@ -14,6 +14,8 @@
 #include <utility>
 #include <vector>
 
+#include "gsf/class_table.h"
+#include "gsf/detail/confidence.h"
 #include "gsf/detail/gsf_filter.h"
 #include "gsf/detail/triangle_matcher.h"
 #include "gsf/localizer.h"
@@ -735,4 +737,48 @@ TEST_CASE("A scan beyond voxel.max_voxels is truncated, reported, and still answ
   CHECK((s == Status::Ok || s == Status::NoSolution));
   CHECK(t.scan_voxels == cfg.voxel.max_voxels);
   CHECK(t.capacity_truncated);
+}
+
+TEST_CASE("An answer from fewer than min_inliers + 2 instances is never vouched for") {
+  // Tiny-world scans with their instance-class points kept only within r metres of the sensor, so
+  // that 3 or 4 instances remain: any hypothesis explains its own clique's 3, so such an answer has
+  // at most one instance of evidence, and its confidence is capped (Localizer::kFewInstancesConfidence).
+  const auto& w = tiny_world();
+  ClassTable table;
+  semantic_kitti_class_table(&table);
+  Workspace ws(w.config);
+  Localizer loc;
+  REQUIRE(loc.init(w.config, w.map, ws.data(), ws.bytes()) == Status::Ok);
+  const uint32_t few = w.config.hypotheses.min_inliers + 2;
+  int capped = 0, held_down = 0;
+  for (size_t q = 0; q < w.queries.size(); ++q) {
+    for (float r : {6.0f, 9.0f, 12.0f, 16.0f}) {
+      const gsf_test::QueryScan& scan = w.queries[q];
+      gsf_test::QueryScan near = scan;
+      near.xyzi.clear();
+      near.labels.clear();
+      near.logits.clear();
+      for (size_t i = 0; i < scan.labels.size(); ++i) {
+        const int c = table.library_class(scan.labels[i]);
+        const float* p = &scan.xyzi[4 * i];
+        const bool instance = c >= 0 && c < kNumClasses && (kDefaultInstanceClasses & class_bit(c));
+        if (instance && p[0] * p[0] + p[1] * p[1] > r * r) continue;
+        near.labels.push_back(scan.labels[i]);
+        near.xyzi.insert(near.xyzi.end(), p, p + 4);
+        near.logits.insert(near.logits.end(), scan.logits.begin() + kNumClasses * i,
+                           scan.logits.begin() + kNumClasses * (i + 1));
+      }
+      LocalizeResult out;
+      if (loc.localize(near.view(), &out) != Status::Ok || !out.verified || out.query_instances >= few) continue;
+      INFO("query " << q << " r " << r << ": " << out.query_instances << " instances, confidence " << out.confidence);
+      const double uncapped = confidence_probability(out.confidence_evidence);
+      CHECK(out.confidence == std::min(uncapped, Localizer::kFewInstancesConfidence));
+      CHECK_FALSE(out.confident);
+      ++capped;
+      held_down += uncapped > Localizer::kFewInstancesConfidence;
+    }
+  }
+  INFO(capped << " answers from fewer than " << few << " instances, " << held_down << " of them held down");
+  CHECK(capped >= 3);
+  CHECK(held_down >= 1);
 }

@@ -198,6 +198,9 @@ class Localizer {
 
   // A prior's confident answer whose z_rival is below this is checked by a global search (localizer.cpp).
   static constexpr float kPriorGlobalCheckZ = 4.0f;
+  // The confidence of an answer from a scan of fewer than hypotheses.min_inliers + 2 instances is at
+  // most this (localizer.cpp, measure_confidence): right about half the time, never vouched for.
+  static constexpr double kFewInstancesConfidence = 0.5;
 
  private:
   struct Impl;  // stage objects, bound into the arena (defined in localizer.cpp only)
