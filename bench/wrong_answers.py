@@ -8,8 +8,9 @@ each with what it looked like, and per family a count by kind:
                     mapped place (a repeated zone continues past the map's edge) is not detectable from
                     the scan
   flip              the answer is turned 180 deg (+-20) from the truth: a symmetric street or hall
-  truth outscored   a verified hypothesis within 2 m / 5 deg of the truth existed and scored lower
-  truth not found   no hypothesis near the truth (the matching or the cliques missed it)
+  truth outscored   a fully verified hypothesis within 5 m / 10 deg of the truth existed and scored
+                    below the answer
+  truth not found   none did (the matching or the cliques missed it, or the search never reached it)
 (the first kind that applies). Reads FAMILIES_DIR/<family>/<world>/results.json (bench/families.sh).
 
 Usage: bench/wrong_answers.py FAMILIES_DIR [--families "p0 p3 ..."] [--quiet]
@@ -26,11 +27,14 @@ KINDS = ["outside the map", "flip", "truth outscored", "truth not found"]
 
 def kind_of(q):
     d = q.get("diagnostics", {})
-    if d.get("truth_known_share", 1.0) < 0.5:
+    if d.get("verified") and d.get("truth_known_share", 1.0) < 0.5:  # (0 without a semantic layer)
         return KINDS[0]
     if abs(abs(q["rotation_error_deg"]) - 180.0) <= 20.0:
         return KINDS[1]
-    near = [h for h in d.get("hypotheses", []) if h["distance_to_truth_m"] < 2.0 and abs(h["yaw_error_deg"]) < 5.0]
+    hyps = [h for h in d.get("hypotheses", []) if h.get("fully_verified")]
+    answer = max((h["verified_score"] for h in hyps), default=0.0)
+    near = [h for h in hyps if h["distance_to_truth_m"] < 5.0 and abs(h["yaw_error_deg"]) < 10.0
+            and h["verified_score"] < answer]
     return KINDS[2] if near else KINDS[3]
 
 

@@ -197,9 +197,9 @@ uint32_t AnswerSelector::distinct_of(const PoseHypotheses& hyps, const Hypothesi
   return kept;
 }
 
-// Appends to top[0, n) (best first, n > 0 unless nothing was scored) the best `turned` fully scored
-// hypotheses not in it whose heading is more than 90 deg from top[0]'s and not within the same-pose
-// tolerance of each other, keeping at most `cap` in all; returns the new count.
+// Appends to top[0, n) (best first; nothing when n = 0) the best `turned` fully scored hypotheses not
+// within the same-pose tolerance of one in it or appended, whose heading is more than 90 deg from
+// top[0]'s, keeping at most `cap` in all; returns the new count.
 uint32_t AnswerSelector::add_turned(const PoseHypotheses& hyps, const HypothesisConfig& hc, const uint8_t* full_scored,
                                     uint32_t turned, uint32_t cap, uint32_t* top, uint32_t n) const {
   if (n == 0 || turned == 0 || n >= cap) return n;
@@ -208,14 +208,13 @@ uint32_t AnswerSelector::add_turned(const PoseHypotheses& hyps, const Hypothesis
   const uint32_t nr = top_by_score(hyps, H, full_scored, H, ranked);
   const double best_yaw = yaw_of(hyps[top[0]].map_T_scan), same_rad = double(hc.same_pose_deg) / kDegPerRad;
   const uint32_t end = std::min(cap, n + turned);
-  const uint32_t first_turned = n;
   for (uint32_t k = 0; k < nr && n < end; ++k) {
     const uint32_t h = ranked[k];
     double gap = std::fabs(yaw_of(hyps[h].map_T_scan) - best_yaw);
     if (gap > kPi) gap = 2.0 * kPi - gap;
-    if (gap <= 0.5 * kPi || std::find(top, top + n, h) != top + n) continue;
-    bool twin = false;
-    for (uint32_t j = first_turned; j < n && !twin; ++j)
+    if (gap <= 0.5 * kPi) continue;
+    bool twin = false;  // (top[j] == h is within any tolerance)
+    for (uint32_t j = 0; j < n && !twin; ++j)
       twin = within_pose(hyps[top[j]].map_T_scan, hyps[h].map_T_scan, hc.same_pose_m, same_rad);
     if (!twin) top[n++] = h;
   }

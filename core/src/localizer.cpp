@@ -118,6 +118,7 @@ struct Localizer::Impl {
     float share;       // of the scan's instances on the map's observed cells there
   };
   Explained explained_at(const Eigen::Isometry3d& map_T_scan, uint32_t inliers, float radius) const;
+  double capped_for_few_instances(const LocalizerConfig& cfg, double confidence) const;
   uint32_t inliers_at(const Eigen::Isometry3d& map_T_scan, double radius) const;
 };
 
@@ -542,15 +543,17 @@ void Localizer::Impl::measure_confidence(const LocalizerConfig& cfg, LocalizeRes
     out.confidence_evidence =
         confidence.measure(answer.compact_points(), answer.compact_point_count(), semantic, answer.verify_weights(),
                            answer.disagree_weights(), a, cfg.verify.max_points);
-    out.confidence = confidence_probability(out.confidence_evidence);
-    // Every hypothesis explains the min_inliers instances of its own clique, so a scan with fewer than
-    // min_inliers + 2 instances has at most one instance of evidence beyond that; its inlier share reads
-    // 3 of 3 at any pose a triangle fits. Such answers were right about half the time (38 of 77 on
-    // seeds 7-8 of the 14 families, and 4 of the 14 vouched for were wrong), so that is their cap.
-    if (instance_count < cfg.hypotheses.min_inliers + 2)
-      out.confidence = std::min(out.confidence, kFewInstancesConfidence);
+    out.confidence = capped_for_few_instances(cfg, confidence_probability(out.confidence_evidence));
   }
   out.confident = out.confidence >= cfg.confidence.min_probability;
+}
+
+// Every hypothesis explains the min_inliers instances of its own clique, so a scan with fewer than
+// min_inliers + 2 instances has at most one instance of evidence beyond that; its inlier share reads
+// 3 of 3 at any pose a triangle fits. Such answers were right about half the time (74 of 143 on seeds
+// 7-10 of the 14 families; 4 of the 32 vouched for were wrong), so that is their cap.
+double Localizer::Impl::capped_for_few_instances(const LocalizerConfig& cfg, double confidence) const {
+  return instance_count < cfg.hypotheses.min_inliers + 2 ? std::min(confidence, kFewInstancesConfidence) : confidence;
 }
 
 // The share of the scan's instances a pose explains: its inliers recounted there (inliers_at; never
@@ -622,6 +625,7 @@ bool Localizer::Impl::search_elsewhere(const LocalizerConfig& cfg, const MapView
   g.query_instances = instance_count;
   LocalizerConfig check = cfg;  // the check refines fewer: it asks only whether one beats the answer
   check.verify.refine_top = std::min(cfg.verify.refine_top, cfg.confidence.prior_check_refine);
+  check.verify.refine_turned = 0;  // confidence.prior_check_refine bounds its pattern searches
   choose_answer(check, g);
   best->pose = answer.answer_pose();
   best->score = hypotheses[answer.chosen()].verification.score;
@@ -693,7 +697,7 @@ void Localizer::check_outside_prior(LocalizeResult& out) {
       im.settle_height(config_, map_, im.graph_pairs, out);
       out.map_frame_T_scan = to_map_frame(map_.georef, out.map_T_scan);
       out.confidence_evidence = e;
-      out.confidence = c;
+      out.confidence = im.capped_for_few_instances(config_, c);
     } else {
       out.confidence = std::min(out.confidence, 1.0 - c);
     }

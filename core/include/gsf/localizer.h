@@ -198,8 +198,10 @@ class Localizer {
 
   // A prior's confident answer whose z_rival is below this is checked by a global search (localizer.cpp).
   static constexpr float kPriorGlobalCheckZ = 4.0f;
-  // The confidence of an answer from a scan of fewer than hypotheses.min_inliers + 2 instances is at
-  // most this (localizer.cpp, measure_confidence): right about half the time, never vouched for.
+  // The confidence of a one-shot or prior answer from a scan of fewer than hypotheses.min_inliers + 2
+  // instances is at most this (localizer.cpp, capped_for_few_instances): such answers are right about
+  // half the time, so the default rule (confidence.min_probability 0.9) never vouches for one. A window
+  // of scans (localize_sequence) and tracking have their own evidence and are not capped.
   static constexpr double kFewInstancesConfidence = 0.5;
 
  private:

@@ -231,6 +231,7 @@ struct VerifyConfig {
   // ... and the best `refine_turned` of the fully scored ones turned more than 90 deg from the best: in a
   // hall or a symmetric street the true pose can be the 180-degree twin of the best, whose clique pose is
   // a few metres off and scores low until searched (issue 24: the confident wrong answers were flips).
+  // Only with refine_top > 0 (the best is the first searched); a prior's global check searches none.
   uint32_t refine_turned = 2;
   uint32_t refine_rounds = 3;
   // The pattern search's probes are scored on max_points / search_divisor voxels, those of its last
