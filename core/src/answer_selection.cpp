@@ -5,6 +5,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 
 namespace gsf {
 namespace {
@@ -206,14 +207,13 @@ uint32_t AnswerSelector::add_turned(const PoseHypotheses& hyps, const Hypothesis
   const uint32_t H = hyps.size();
   uint32_t ranked[PoseHypotheses::kMaxHypotheses];
   const uint32_t nr = top_by_score(hyps, H, full_scored, H, ranked);
-  const double best_yaw = yaw_of(hyps[top[0]].map_T_scan), same_rad = double(hc.same_pose_deg) / kDegPerRad;
+  const Eigen::Isometry3d& best = hyps[top[0]].map_T_scan;
+  const double same_rad = double(hc.same_pose_deg) / kDegPerRad, anywhere = std::numeric_limits<double>::infinity();
   const uint32_t end = std::min(cap, n + turned);
   for (uint32_t k = 0; k < nr && n < end; ++k) {
     const uint32_t h = ranked[k];
-    double gap = std::fabs(yaw_of(hyps[h].map_T_scan) - best_yaw);
-    if (gap > kPi) gap = 2.0 * kPi - gap;
-    if (gap <= 0.5 * kPi) continue;
-    bool twin = false;  // (top[j] == h is within any tolerance)
+    if (within_pose(best, hyps[h].map_T_scan, anywhere, 0.5 * kPi)) continue;  // not turned > 90 deg
+    bool twin = false;                                                         // (top[j] == h is within any tolerance)
     for (uint32_t j = 0; j < n && !twin; ++j)
       twin = within_pose(hyps[top[j]].map_T_scan, hyps[h].map_T_scan, hc.same_pose_m, same_rad);
     if (!twin) top[n++] = h;

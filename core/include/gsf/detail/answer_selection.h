@@ -89,8 +89,8 @@ class AnswerSelector {
                                   uint32_t refined_count);
   static void rank_for_report(const PoseHypotheses& hyps, bool verify, const uint8_t* full_scored,
                               AnswerChoice* choice);
-  Eigen::Isometry3d* refined_pose_ = nullptr;  // refine_top: poses the pattern search chose
-  uint32_t* refined_id_ = nullptr;             // refine_top: their hypotheses
+  Eigen::Isometry3d* refined_pose_ = nullptr;  // refine_slots: poses the pattern search chose
+  uint32_t* refined_id_ = nullptr;             // refine_slots: their hypotheses
   VerifyPoint* points_ = nullptr;              // max_voxels: the query voxels' bird's-eye copy (fill_verify_points)
   uint32_t point_capacity_ = 0;                // max_voxels
   uint32_t refine_slots_ = 0;
