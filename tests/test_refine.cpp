@@ -1,6 +1,7 @@
 // Refinement alone (core/include/gsf/detail/refine.h): it pulls a nearby global pose onto the map's point
 // layer (built as the map builder builds it: mapping/refine_layer_builder.h), refuses corrections beyond
-// its limit, refuses a layer of another cell size, ignores map points without a reliable normal, and picks
+// its limit, refuses a layer of another cell size, ignores map points without a reliable normal (but for
+// a pole voxel's horizontal offset from one), and picks
 // the same nearest map points as the plain 27-cell search (reference_refine below), ties included.
 #include <catch2/catch.hpp>
 
@@ -146,6 +147,64 @@ TEST_CASE("Refinement that starts on the truth settles and goes straight to the 
   CHECK(far_st.iterations > 2);
 }
 
+namespace {
+
+// A car park: flat ground and columns (r 0.3 m, 4.5 m) every 8 m, as (x, y, z, dense label) samples,
+// the columns labelled `column`.
+std::vector<float> car_park(int column) {
+  std::vector<float> p;
+  auto add = [&](float x, float y, float z, int cls) { p.insert(p.end(), {x, y, z, float(cls)}); };
+  for (float x = -30; x <= 30; x += 0.25f)
+    for (float y = -30; y <= 30; y += 0.25f) add(x, y, 0.0f, kParking);
+  for (float cx = -28; cx <= 28; cx += 8)
+    for (float cy = -28; cy <= 28; cy += 8)
+      for (float z = 0.2f; z <= 4.5f; z += 0.2f)
+        for (int k = 0; k < 16; ++k) {
+          const float a = float(k) * float(M_PI) / 8.0f;
+          add(cx + 0.3f * std::cos(a), cy + 0.3f * std::sin(a), z, column);
+        }
+  return p;
+}
+
+}  // namespace
+
+TEST_CASE("Pole voxels hold the horizontal pose where the map has no plane but the ground") {
+  // Columns have no normal in the 1 m layer, and the ground holds height, roll and pitch only: without
+  // the pole rows nothing pulls x, y or heading (a column labelled building stays where it started).
+  for (const int column : {int(kPole), int(kBuilding)}) {
+    Fixture f;
+    const std::vector<float> world = car_park(column);
+    const Layer map(world, f.rc.cell);
+    Cloud scan;
+    const Eigen::Isometry3d inv = f.truth.inverse();
+    for (size_t i = 0; i < world.size(); i += 4) {
+      const Eigen::Vector3d q = inv * Eigen::Vector3d(world[i], world[i + 1], world[i + 2]);
+      scan.add(float(q.x()), float(q.y()), float(q.z()), kitti_from_class(int(world[i + 3])));
+    }
+    REQUIRE(f.voxels.build(scan.view(), nullptr) == Status::Ok);
+    ArenaBuffer buf(Refiner::required_bytes(f.rc));
+    Refiner r;
+    REQUIRE(r.bind(buf.arena, f.rc) == Status::Ok);
+    REQUIRE(r.set_map(map.view) == Status::Ok);
+    Eigen::Isometry3d d = Eigen::Isometry3d::Identity();
+    d.linear() = Eigen::AngleAxisd(1.5 * M_PI / 180.0, Eigen::Vector3d::UnitZ()).toRotationMatrix();
+    d.translation() = Eigen::Vector3d(0.4, -0.3, 0.0);
+    const Eigen::Isometry3d initial = f.truth * d;
+    RefineStats st;
+    const Eigen::Isometry3d refined = f.run(r, initial, &st);
+    INFO("column class " << column << ": error " << metres(refined, f.truth) << " m / " << degrees(refined, f.truth)
+                         << " deg, inliers " << st.inliers);
+    REQUIRE(st.accepted);
+    if (column == kPole) {
+      CHECK(metres(refined, f.truth) < 0.1);
+      CHECK(degrees(refined, f.truth) < 0.3);
+    } else {
+      CHECK(metres(refined, f.truth) > 0.4);
+      CHECK(degrees(refined, f.truth) > 1.2);
+    }
+  }
+}
+
 TEST_CASE("Refinement refuses a correction beyond max_correction and returns the initial pose") {
   Fixture f;
   f.rc.max_correction = 0.3f;  // the needed correction is about 1 m
@@ -197,10 +256,12 @@ Eigen::Isometry3d reference_refine(const VoxelLayer& layer, const RefineLayerVie
   for (uint32_t i = 0; i < layer.size(); ++i) eligible += stability_weight(layer.voxel(i).label) >= 1.0f;
   const uint32_t stride = eligible > c.max_points ? (eligible + c.max_points - 1) / c.max_points : 1;
   uint32_t seen = 0;
+  std::vector<bool> pole;
   for (uint32_t i = 0; i < layer.size() && query.size() < size_t(c.max_points) * 3; ++i) {
     const Voxel& v = layer.voxel(i);
     if (stability_weight(v.label) < 1.0f || seen++ % stride) continue;
     query.insert(query.end(), {v.centroid[0], v.centroid[1], v.centroid[2]});
+    pole.push_back(v.label == kPole || v.label == kTrunk);
   }
   st->query_points = uint32_t(query.size() / 3);
   const float inv = 1.0f / c.cell, step = map.cell / 256.0f;
@@ -242,15 +303,24 @@ Eigen::Isometry3d reference_refine(const VoxelLayer& layer, const RefineLayerVie
       if (nearest_point == nullptr) continue;
       float n[3];
       RefineLayerView::normal(*nearest_point, n);
-      const Eigen::Vector3d nrm(n[0], n[1], n[2]);
-      if (nrm.squaredNorm() < 0.5) continue;
-      const double r = nrm.dot(p - Eigen::Vector3d(nearest[0], nearest[1], nearest[2]));
-      Eigen::Matrix<double, 6, 1> J;
-      J.head<3>() = p.cross(nrm);
-      J.tail<3>() = nrm;
-      H += J * J.transpose();
-      g += J * r;
-      err += r * r;
+      const Eigen::Vector3d nrm(n[0], n[1], n[2]), m(nearest[0], nearest[1], nearest[2]);
+      // Rows about the sensor: point to plane, or a pole voxel's x and y offsets from a point without one.
+      auto add_row = [&](const Eigen::Vector3d& dir, double r) {
+        Eigen::Matrix<double, 6, 1> J;
+        J.head<3>() = (p - t.translation()).cross(dir);
+        J.tail<3>() = dir;
+        H += J * J.transpose();
+        g += J * r;
+        err += r * r;
+      };
+      if (nrm.squaredNorm() >= 0.5) {
+        add_row(nrm, nrm.dot(p - m));
+      } else if (pole[i / 3]) {
+        add_row(Eigen::Vector3d::UnitX(), p.x() - m.x());
+        add_row(Eigen::Vector3d::UnitY(), p.y() - m.y());
+      } else {
+        continue;
+      }
       ++inl;
     }
     ++st->iterations;
@@ -262,7 +332,7 @@ Eigen::Isometry3d reference_refine(const VoxelLayer& layer, const RefineLayerVie
     Eigen::Isometry3d s = Eigen::Isometry3d::Identity();
     const double angle = dx.head<3>().norm();
     if (angle > 1e-12) s.linear() = Eigen::AngleAxisd(angle, dx.head<3>() / angle).toRotationMatrix();
-    s.translation() = dx.tail<3>();
+    s.translation() = t.translation() - s.linear() * t.translation() + dx.tail<3>();  // about the sensor
     t = s * t;
     // Settled (a move under 1 cm and a turn under 0.05 deg): straight to the last radius.
     if (dx.tail<3>().norm() < 0.01 && angle < 0.05 * M_PI / 180.0 && it + 2 < c.iterations) it = c.iterations - 2;

@@ -22,9 +22,10 @@ Status Refiner::bind(Arena& arena, const RefineConfig& c) {
   query_cell_ = arena.allocate<uint64_t>(c.max_points);
   query_begin_ = arena.allocate<uint32_t>(size_t(c.max_points) * 27);
   query_end_ = arena.allocate<uint32_t>(size_t(c.max_points) * 27);
+  query_pole_ = arena.allocate<uint8_t>(c.max_points);
   map_ = RefineLayerView();
   if (arena.counting()) return Status::Ok;
-  if (!query_ || !query_cell_ || !query_begin_ || !query_end_) return Status::BufferTooSmall;
+  if (!query_ || !query_cell_ || !query_begin_ || !query_end_ || !query_pole_) return Status::BufferTooSmall;
   bound_ = true;
   return Status::Ok;
 }
@@ -101,16 +102,33 @@ uint32_t Refiner::pick_query_points(const VoxelLayer& layer) {
     if (!long_term(v.label)) continue;
     if (seen++ % stride) continue;
     for (int k = 0; k < 3; ++k) query_[3 * q + k] = v.centroid[k];
+    query_pole_[q] = v.label == kPole || v.label == kTrunk;
     ++q;
   }
   return q;
 }
 
-// The point-to-plane normal equations at pose t: each query point with a map point within the radius
-// (r2 squared) adds its residual's term to H, g and err. Returns how many did.
+// The normal equations at pose t: each query point with a map point within the radius (r2 squared)
+// adds its residual's rows to H, g and err. Returns how many did.
+//  - Point to plane along the map point's normal.
+//  - A pole or trunk voxel whose map point has no normal (a column: nothing planar within a cell) adds
+//    its horizontal offset from that point (an x and a y row). Without these rows a car park of columns
+//    on flat ground gives ICP nothing to hold x, y and heading, and tracking there drifted 0.3-0.57 m
+//    (docs/vehicle-modes.md, "Poles in ICP"). A column seen from opposite sides by the map and the query
+//    is off by up to its diameter; rows of columns either side of an aisle cancel most of that.
+// The small rotation turns about the sensor (t's origin), not the map's origin: its lever is the
+// point's range, not a distance of kilometres across the map, so H stays well conditioned.
 uint32_t Refiner::add_point_to_plane_terms(const Eigen::Isometry3d& t, uint32_t q, float r2, uint32_t* tile_hint,
                                            Eigen::Matrix<double, 6, 6>* H, Eigen::Matrix<double, 6, 1>* g,
                                            double* err) {
+  auto add_row = [&](const Eigen::Vector3d& arm, const Eigen::Vector3d& n, double r) {
+    Eigen::Matrix<double, 6, 1> J;
+    J.head<3>() = arm.cross(n);  // d r / d (small rotation about the sensor)
+    J.tail<3>() = n;             // d r / d translation
+    *H += J * J.transpose();
+    *g += J * r;
+    *err += r * r;
+  };
   uint32_t inl = 0;
   for (uint32_t i = 0; i < q; ++i) {
     const Eigen::Vector3d p = t * Eigen::Vector3d(query_[3 * i], query_[3 * i + 1], query_[3 * i + 2]);
@@ -121,15 +139,16 @@ uint32_t Refiner::add_point_to_plane_terms(const Eigen::Isometry3d& t, uint32_t 
     float nearest_normal[3];
     RefineLayerView::normal(*nearest_point, nearest_normal);
     const Eigen::Vector3d nrm(nearest_normal[0], nearest_normal[1], nearest_normal[2]);
-    if (nrm.squaredNorm() < 0.5) continue;
     const Eigen::Vector3d m(nearest[0], nearest[1], nearest[2]);
-    const double r = nrm.dot(p - m);  // point-to-plane residual
-    Eigen::Matrix<double, 6, 1> J;
-    J.head<3>() = p.cross(nrm);  // d r / d (small rotation)
-    J.tail<3>() = nrm;           // d r / d translation
-    *H += J * J.transpose();
-    *g += J * r;
-    *err += r * r;
+    const Eigen::Vector3d arm = p - t.translation();
+    if (nrm.squaredNorm() >= 0.5) {
+      add_row(arm, nrm, nrm.dot(p - m));  // point-to-plane residual
+    } else if (query_pole_[i]) {
+      add_row(arm, Eigen::Vector3d::UnitX(), p.x() - m.x());
+      add_row(arm, Eigen::Vector3d::UnitY(), p.y() - m.y());
+    } else {
+      continue;
+    }
     ++inl;
   }
   return inl;
@@ -149,7 +168,9 @@ bool Refiner::apply_update(const Eigen::Matrix<double, 6, 6>& H, const Eigen::Ma
   const double angle = dx.head<3>().norm();
   *settled = dx.tail<3>().norm() < kSettledM && angle < kSettledRad;
   if (angle > 1e-12) update.linear() = Eigen::AngleAxisd(angle, dx.head<3>() / angle).toRotationMatrix();
-  update.translation() = dx.tail<3>();
+  // Turned about the sensor c: x -> R (x - c) + c + v.
+  const Eigen::Vector3d c = t->translation();
+  update.translation() = c - update.linear() * c + dx.tail<3>();
   *t = update * *t;
   return true;
 }

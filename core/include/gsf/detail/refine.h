@@ -10,7 +10,9 @@
 // of long-term classes, a bounded number of Gauss-Newton iterations with a shrinking correspondence
 // radius, nearest neighbours from the 27 surrounding cells (visited nearest first, cells farther than
 // the best so far skipped, each cell's point range looked up once while the query point stays in its
-// cell), a 6x6 solve per iteration. An update under 1 cm and 0.05 deg ends the middle radii: the last
+// cell), a 6x6 solve per iteration. A pole or trunk voxel whose nearest map point has no normal (a
+// column) adds its horizontal offset from it instead: in a car park of columns on flat ground that is
+// all that holds x, y and heading. An update under 1 cm and 0.05 deg ends the middle radii: the last
 // (tightest) radius runs next, so a start already on the map (tracking) costs two iterations, not all.
 // The refined pose is accepted only if it keeps enough inliers and stays within max_correction of the
 // global pose; otherwise the global pose is returned unchanged (refinement never makes it worse by
@@ -72,6 +74,7 @@ class Refiner {
   uint64_t* query_cell_ = nullptr;   // max_points
   uint32_t* query_begin_ = nullptr;  // max_points x 27
   uint32_t* query_end_ = nullptr;    // max_points x 27
+  uint8_t* query_pole_ = nullptr;    // max_points: 1 for a pole or trunk voxel (point-to-point rows)
   bool bound_ = false;
 };
 
