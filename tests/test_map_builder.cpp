@@ -22,11 +22,13 @@
 #include "arena_buffer.h"
 #include "gsf/class_table.h"
 #include "gsf/detail/fixed_vector.h"
+#include "gsf/detail/refine_layer.h"
 #include "gsf/detail/triangle.h"
 #include "gsf/map_format.h"
 #include "mapping/map_builder.h"
 #include "mapping/map_writer.h"
 #include "mapping/scan_triangles.h"
+#include "test_cloud.h"
 #include "tiny_world.h"
 
 using namespace gsf;
@@ -719,4 +721,32 @@ TEST_CASE("A triangle vertex needs min(min_detections, nearby scans) detections"
   CHECK(mapping::triangle_vertices(det, near, 2) == std::vector<uint32_t>{0, 1, 2, 3});
   CHECK(mapping::triangle_vertices(det, near, 1) == std::vector<uint32_t>{0, 1, 2, 3, 5});
   CHECK(mapping::triangle_vertices(det, near, 0) == std::vector<uint32_t>{0, 1, 2, 3, 4, 5});
+}
+
+TEST_CASE("A refinement cell's point is the mean of its voxels' centroids, not one of them") {
+  // One scan, posed at the origin: a building's points in two voxels of the 1 m cell (10, 10, 1), three
+  // at (10.1, 10.1, 1.1) and one at (10.9, 10.1, 1.1). The cell's point is their voxels' mean, 10.5 in x:
+  // the first voxel in key order (10.1) put a column's point on its low-x side (docs/map-format.md).
+  gsf_test::Cloud scan;
+  for (int i = 0; i < 3; ++i) scan.add(10.1f, 10.1f, 1.1f, kitti_from_class(kBuilding));
+  scan.add(10.9f, 10.1f, 1.1f, kitti_from_class(kBuilding));
+  mapping::MapBuildConfig config;
+  mapping::MapBuilder builder(config);
+  REQUIRE(builder.add_scan(scan.view(), Eigen::Isometry3d::Identity()) == Status::Ok);
+  std::vector<uint64_t> blob;
+  size_t bytes = 0;
+  REQUIRE(builder.build(&blob, &bytes, nullptr) == Status::Ok);
+  MapView map;
+  REQUIRE(load_map(blob.data(), bytes, &map) == Status::Ok);
+  const RefineLayerView layer = refine_layer_view(map);
+  REQUIRE(layer.point_count == 1);
+  uint32_t begin = 0, end = 0, hint = 0;
+  layer.find(RefineCell{10, 10, 1}, &begin, &end, &hint);
+  REQUIRE(end == begin + 1);
+  float xyz[3];
+  layer.position_in(RefineCell{10, 10, 1}, layer.points[begin], xyz);
+  const float quantum = layer.cell / 256.0f;  // refine_layer.h: within half of it per axis
+  CHECK(std::fabs(xyz[0] - 10.5f) <= quantum);
+  CHECK(std::fabs(xyz[1] - 10.1f) <= quantum);
+  CHECK(std::fabs(xyz[2] - 1.1f) <= quantum);
 }

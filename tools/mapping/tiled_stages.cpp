@@ -5,7 +5,6 @@
 #include <cmath>
 #include <cstring>
 #include <unordered_map>
-#include <unordered_set>
 
 #if defined(__GLIBC__)
 #include <malloc.h>
@@ -40,10 +39,14 @@ struct Candidate {
   bool fit_ok = false;
 };
 
+// A refinement cell's owned voxels in one tile: the sum of their centroids. Sums of a cell's few
+// float centroids (one cell's magnitudes, far fewer than 2^29 of them) are exact in double, so the
+// cell's mean is the same whatever tiles its voxels came through, in whatever order.
 struct RefineCandidate {
   uint64_t cell;   // refinement cell key
-  uint64_t voxel;  // voxel key: the first in key order wins the cell
-  float point[3];  // x, y, z
+  uint64_t voxel;  // the tile's first voxel key in the cell (orders the candidates)
+  double sum[3];   // x, y, z
+  uint32_t count;
 };
 
 // One tile's fitted fields, rows in the tile's candidate order, quantised as they are fitted (the
@@ -463,18 +466,22 @@ void TiledStages::fit_fields(const VoxelLayer& layer, size_t clustered_before, s
   for (size_t k = poles_before; k < poles_.size(); ++k) fitter_.fit(layer, &fields_, &poles_[k]);
 }
 
-// Refinement candidates: long-term structure, the first owned voxel (key order) per cell.
+// Refinement candidates: long-term structure, per cell the sum of the owned voxels' centroids.
 void TiledStages::collect_refine(uint64_t id, const TileLayer& tl) {
   if (options_.refine_voxel <= 0.0f) return;
-  std::unordered_set<uint64_t> seen;
+  std::unordered_map<uint64_t, size_t> slot;  // cell -> its candidate in refine_
   for (uint32_t i = 0; i < tl.layer.size(); ++i) {
     const Voxel& v = tl.layer.voxel(i);
     if (classes_.stability(v.label) < 1.0f) continue;
     const uint64_t vk = tl.key_of_voxel(i);
     if (store_.tile_of(vk) != id) continue;
     const uint64_t cell = voxel_key(v.centroid[0], v.centroid[1], v.centroid[2], options_.refine_voxel);
-    if (!seen.insert(cell).second) continue;
-    refine_.push_back({cell, vk, {v.centroid[0], v.centroid[1], v.centroid[2]}});
+    const auto found = slot.emplace(cell, refine_.size());
+    if (found.second) refine_.push_back({cell, vk, {0, 0, 0}, 0});
+    RefineCandidate& c = refine_[found.first->second];
+    c.voxel = std::min(c.voxel, vk);
+    for (int k = 0; k < 3; ++k) c.sum[k] += double(v.centroid[k]);
+    ++c.count;
   }
 }
 
@@ -537,8 +544,10 @@ void TiledStages::flush_left_of(int32_t tx_end) {
   }
 }
 
-// Emits the refinement cells below `limit` (cell keys are x-major too): per cell the candidate with the
-// lowest voxel key, in cell order. Only a column's candidates wait.
+// Emits the refinement cells below `limit` (cell keys are x-major too): per cell the mean of its owned
+// voxels' centroids over every tile, in cell order. Only a column's candidates wait. The mean, not one
+// voxel of the cell: the first voxel in key order sat on the cell's low-x side, so a column's point
+// was off its arc by up to a voxel, and ICP's pole rows (core/src/refine.cpp) pulled scans that way.
 void TiledStages::flush_refine(uint64_t limit) {
   constexpr size_t kRefineChunkFloats = size_t(3) << 18;  // 3 MB
   std::vector<std::vector<float>>& refine_chunks = out_->refine;
@@ -546,13 +555,19 @@ void TiledStages::flush_refine(uint64_t limit) {
     return a.cell != b.cell ? a.cell < b.cell : a.voxel < b.voxel;
   });
   size_t k = 0;
-  for (; k < refine_.size() && refine_[k].cell < limit; ++k) {
-    if (k > 0 && refine_[k].cell == refine_[k - 1].cell) continue;
+  while (k < refine_.size() && refine_[k].cell < limit) {
+    double sum[3] = {0, 0, 0};
+    uint64_t count = 0;
+    const uint64_t cell = refine_[k].cell;
+    for (; k < refine_.size() && refine_[k].cell == cell; ++k) {
+      for (int a = 0; a < 3; ++a) sum[a] += refine_[k].sum[a];
+      count += refine_[k].count;
+    }
     if (refine_chunks.empty() || refine_chunks.back().size() + 3 > kRefineChunkFloats) {
       refine_chunks.emplace_back();
       refine_chunks.back().reserve(kRefineChunkFloats);
     }
-    refine_chunks.back().insert(refine_chunks.back().end(), refine_[k].point, refine_[k].point + 3);
+    for (int a = 0; a < 3; ++a) refine_chunks.back().push_back(float(sum[a] / double(count)));
     refine_floats_ += 3;
   }
   refine_.erase(refine_.begin(), refine_.begin() + k);

@@ -6,9 +6,9 @@
 //  - an instance (cluster or pole chain) belongs to the tile holding its lowest voxel key (the voxel the
 //    whole-map stages discover it from), so an instance spanning a tile border is built once, from the
 //    same voxels in the same order as in a whole-map build;
-//  - a refinement cell takes its first voxel in key order, chosen among the tiles' owned voxels (cells
-//    are final, and emitted, once the column of tiles left of them is done: tiles come x-major; in a
-//    blocked build once the column of blocks is);
+//  - a refinement cell's point is the mean of its owned voxels' centroids over all tiles (exact double
+//    sums, so the same in any tiling; cells are final, and emitted, once the column of tiles left of
+//    them is done: tiles come x-major; in a blocked build once the column of blocks is);
 //  - a semantic-layer tile belongs to the first existing map tile (in id order) it overlaps.
 // The halo (tile_halo_m) covers what those read around an owned voxel: an instance's extent plus the
 // larger of its clustering tolerance and the field radius, a semantic tile, and a pole chain's reach.
