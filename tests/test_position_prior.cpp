@@ -255,3 +255,31 @@ TEST_CASE("Without a prior nothing changes: localize(scan) and the prior-free fi
     CHECK(y.prior_outside_matches == 0);
   }
 }
+
+TEST_CASE("With a prior the query runs on the scan's labels, without the GSF filter") {
+  // The disc narrows the candidates as the filter would, and the softmax of the logits was most of the
+  // voxel layer's work: the logits then change nothing, and no field is probed. Without a prior they do
+  // (the filter probes the fields), and one-shot is the same after a prior query as before it.
+  const auto& w = tiny_world();
+  Ready r(w);
+  uint32_t probed_without_prior = 0;
+  for (uint32_t k = 0; k < 6; ++k) {
+    const auto& q = w.queries[k];
+    const PositionPrior prior = prior_near(q.truth, 12.0, 20.0f, k);
+    ScanView labels_only = q.view();
+    REQUIRE(labels_only.logits != nullptr);
+    labels_only.logits = nullptr;
+    labels_only.logit_dim = 0;
+    LocalizeResult with_logits, with_labels, free;
+    const Status a = r.loc.localize(q.view(), prior, &with_logits);
+    const Status b = r.loc.localize(labels_only, prior, &with_labels);
+    r.loc.localize(q.view(), &free);
+    CHECK(a == b);
+    CHECK(with_logits.map_T_scan.matrix() == with_labels.map_T_scan.matrix());
+    CHECK(with_logits.confidence == with_labels.confidence);
+    CHECK(with_logits.field_probes == 0);
+    CHECK(with_labels.field_probes == 0);
+    probed_without_prior += free.field_probes > 0;
+  }
+  CHECK(probed_without_prior == 6);
+}

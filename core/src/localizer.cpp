@@ -55,6 +55,9 @@ struct Localizer::Impl {
   InstanceClustering clusters;
   PoleExtraction poles;  // bound only when the label set has pole / trunk hosts
   bool poles_on = false;
+  // This scan's query runs the GSF filter (fields fitted, matches weighted by them): gsf.enabled, and no
+  // position prior (localize_in). Kept for a check that reuses the scan (scan_ready).
+  bool gsf_on = false;
   uint32_t* pole_order = nullptr;  // poles.max_instances: kept poles by score
   FieldSolver solver;
   TriangleBuilder triangle_builder;
@@ -92,7 +95,7 @@ struct Localizer::Impl {
   bool track_refine = false;                 // track() refines with ICP (the refiner has the map's layer)
 
   // The stages of localize(), in order (defined below, each with its comment).
-  Status build_voxels(const ScanView& scan, LocalizeResult& out, bool gather_index = true);
+  Status build_voxels(const ScanView& scan, LocalizeResult& out, bool gather_index = true, bool use_logits = true);
   Status find_instances(const LocalizerConfig& cfg, LocalizeResult& out);
   void fit_query_fields(const LocalizerConfig& cfg, LocalizeResult& out);
   Status build_query_triangles(LocalizeResult& out);
@@ -315,8 +318,15 @@ HypothesisReport hypothesis_report(const PoseHypothesis& p, bool fully_verified)
 // ---- The query pipeline, one stage per function; localize() below calls them in order. ----
 
 // 1. Metric-semantic layer.
-Status Localizer::Impl::build_voxels(const ScanView& scan, LocalizeResult& out, bool gather_index) {
-  const Status s = voxels.build(scan, nullptr, gather_index);
+// use_logits false: the points' labels alone (the logits' softmax per point is most of the layer's work,
+// and only the GSF filter's fields read the voxels' class probabilities).
+Status Localizer::Impl::build_voxels(const ScanView& scan, LocalizeResult& out, bool gather_index, bool use_logits) {
+  ScanView view = scan;
+  if (!use_logits) {
+    view.logits = nullptr;
+    view.logit_dim = 0;
+  }
+  const Status s = voxels.build(view, nullptr, gather_index);
   out.scan_voxels = voxels.size();
   if (s == Status::CapacityExceeded) out.capacity_truncated = true;
   return s == Status::CapacityExceeded ? Status::Ok : s;
@@ -365,7 +375,7 @@ void Localizer::Impl::fit_query_fields(const LocalizerConfig& cfg, LocalizeResul
   const uint32_t M = cfg.field.inducing_points;
   for (uint32_t i = 0; i < n; ++i) {
     q_m[i] = 0;
-    if (!cfg.gsf.enabled) continue;
+    if (!gsf_on) continue;
     uint32_t total = 0;
     const FieldGather gather{cfg.match.max_field_points, gather_ids, gather_xyz, gather_targets, gather_labels};
     uint32_t m = 0, got = 0;
@@ -430,7 +440,7 @@ void Localizer::Impl::vote_headings(const LocalizerConfig& cfg, const TriangleCo
 void Localizer::Impl::match_and_filter(const LocalizerConfig& cfg, const TriangleConfig& tc, const MapView& map,
                                        Clock* clock, LocalizeResult& out) {
   const QueryFields qf{q_inputs, q_alpha, q_chol, q_m, cfg.field.inducing_points};
-  const MatchFilterParams params{cfg.match.vertex_tie_tolerance, cfg.gsf.enabled, cfg.match.min_similarity, kFillPairs};
+  const MatchFilterParams params{cfg.match.vertex_tie_tolerance, gsf_on, cfg.match.min_similarity, kFillPairs};
   const MatchFilterStats st =
       gsf.filter_matches(triangles, centroids, qf, matcher, index, map, tc, headings, params, clock, correspondences);
   out.match_candidates = st.match_candidates;
@@ -736,7 +746,11 @@ Status Localizer::localize_in(const ScanView& scan, const PositionPrior* prior, 
   if (scan.count > cfg.max_scan_points) return finish(Status::CapacityExceeded);
   Status s = Status::Ok;
   if (!scan_ready) {  // else the voxels, instances, fields and triangles of the last call are this scan's
-    s = im.build_voxels(scan, out);
+    // With a prior the disc already narrows the candidates to a few places, the GSF filter's work (its
+    // fields would read the logits' probabilities): the query runs on the labels, without the filter
+    // (docs/vehicle-modes.md, "The prior on labels").
+    im.gsf_on = cfg.gsf.enabled && prior == nullptr;
+    s = im.build_voxels(scan, out, true, prior == nullptr);
     lap(&out.times.voxel);
     if (s != Status::Ok) return finish(s);
     s = im.find_instances(cfg, out);
@@ -801,12 +815,8 @@ Status Localizer::track(const ScanView& scan, const Eigen::Isometry3d& predicted
     return finish(Status::InvalidArgument);
   if (im.semantic.empty()) return finish(Status::Unsupported);  // nothing to verify against
   if (scan.count > cfg.max_scan_points) return finish(Status::CapacityExceeded);
-  ScanView labels_only = scan;  // tracking reads the voxels' argmax labels: the softmax per point is optional
-  if (!cfg.track.use_logits) {
-    labels_only.logits = nullptr;
-    labels_only.logit_dim = 0;
-  }
-  const Status s = im.build_voxels(labels_only, out, false);  // no instances: no gathers
+  // Tracking reads the voxels' argmax labels: the softmax per point is optional. No instances: no gathers.
+  const Status s = im.build_voxels(scan, out, false, cfg.track.use_logits);
   out.times.voxel = now(clock_) - t;
   t = now(clock_);
   if (s != Status::Ok) return finish(s);
