@@ -64,7 +64,7 @@ Status Refiner::refine(const VoxelLayer& layer, const Eigen::Isometry3d& initial
     Eigen::Matrix<double, 6, 6> H = Eigen::Matrix<double, 6, 6>::Zero();
     Eigen::Matrix<double, 6, 1> g = Eigen::Matrix<double, 6, 1>::Zero();
     double err = 0;
-    const uint32_t inl = add_point_to_plane_terms(t, q, r2, &tile_hint, &H, &g, &err);
+    const uint32_t inl = add_correspondence_rows(t, q, r2, &tile_hint, &H, &g, &err);
     ++st.iterations;  // iterations run (a settled refinement skips some)
     st.inliers = inl;
     st.rmse = inl ? std::sqrt(err / inl) : 0;
@@ -118,9 +118,8 @@ uint32_t Refiner::pick_query_points(const VoxelLayer& layer) {
 //    is off by up to its diameter; rows of columns either side of an aisle cancel most of that.
 // The small rotation turns about the sensor (t's origin), not the map's origin: its lever is the
 // point's range, not a distance of kilometres across the map, so H stays well conditioned.
-uint32_t Refiner::add_point_to_plane_terms(const Eigen::Isometry3d& t, uint32_t q, float r2, uint32_t* tile_hint,
-                                           Eigen::Matrix<double, 6, 6>* H, Eigen::Matrix<double, 6, 1>* g,
-                                           double* err) {
+uint32_t Refiner::add_correspondence_rows(const Eigen::Isometry3d& t, uint32_t q, float r2, uint32_t* tile_hint,
+                                          Eigen::Matrix<double, 6, 6>* H, Eigen::Matrix<double, 6, 1>* g, double* err) {
   auto add_row = [&](const Eigen::Vector3d& arm, const Eigen::Vector3d& n, double r) {
     Eigen::Matrix<double, 6, 1> J;
     J.head<3>() = arm.cross(n);  // d r / d (small rotation about the sensor)

@@ -58,8 +58,8 @@ class Refiner {
   struct NearestSearch;  // one query point's search of the 27 cells around it (refine.cpp)
   // The steps of refine(): the query points, then per iteration the normal equations and the update.
   uint32_t pick_query_points(const VoxelLayer& layer);
-  uint32_t add_point_to_plane_terms(const Eigen::Isometry3d& t, uint32_t q, float r2, uint32_t* tile_hint,
-                                    Eigen::Matrix<double, 6, 6>* H, Eigen::Matrix<double, 6, 1>* g, double* err);
+  uint32_t add_correspondence_rows(const Eigen::Isometry3d& t, uint32_t q, float r2, uint32_t* tile_hint,
+                                   Eigen::Matrix<double, 6, 6>* H, Eigen::Matrix<double, 6, 1>* g, double* err);
   const MapRefinePoint* find_nearest(uint32_t i, const float pf[3], float r2, uint32_t* tile_hint, float nearest[3]);
   static bool apply_update(const Eigen::Matrix<double, 6, 6>& H, const Eigen::Matrix<double, 6, 1>& g,
                            Eigen::Isometry3d* t, bool* settled);
