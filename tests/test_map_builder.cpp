@@ -28,6 +28,7 @@
 #include "mapping/map_builder.h"
 #include "mapping/map_writer.h"
 #include "mapping/scan_triangles.h"
+#include "short_run.h"
 #include "test_cloud.h"
 #include "tiny_world.h"
 
@@ -110,10 +111,17 @@ Built build(const mapping::MapBuildConfig& options, const Eigen::Vector3d& shift
   return b;
 }
 
+// The default options' build, which several test cases compare against: built once per run (each
+// build costs seconds under ASan and qemu).
+const Built& default_build() {
+  static const Built b = build(mapping::MapBuildConfig(), Eigen::Vector3d::Zero());
+  return b;
+}
+
 }  // namespace
 
 TEST_CASE("The default origin is the first pose rounded half up to a whole metre; the class table is recorded") {
-  const Built local = build(mapping::MapBuildConfig(), Eigen::Vector3d::Zero());
+  const Built& local = default_build();
   REQUIRE(local.build == Status::Ok);
   const Eigen::Vector3d first = drive().scans[0].truth.translation();  // (0, -2.5, 1.73) in the tiny world
   for (int k = 0; k < 3; ++k) CHECK(local.map.georef.origin[k] == std::floor(first[k] + 0.5));
@@ -127,7 +135,7 @@ TEST_CASE("The default origin is the first pose rounded half up to a whole metre
 }
 
 TEST_CASE("A drive shifted by a UTM-size offset gives the same map sections, with the origin shifted exactly") {
-  const Built local = build(mapping::MapBuildConfig(), Eigen::Vector3d::Zero());
+  const Built& local = default_build();
   const Built utm = build(mapping::MapBuildConfig(), Eigen::Vector3d(kEast, kNorth, 0.0));
   REQUIRE(local.build == Status::Ok);
   REQUIRE(utm.build == Status::Ok);
@@ -185,7 +193,7 @@ TEST_CASE("Poses far from the origin, non-finite poses and bad frame names are r
 }
 
 TEST_CASE("The builder's capacities are options: what they cut is counted, the rest kept by rank") {
-  const Built full = build(mapping::MapBuildConfig(), Eigen::Vector3d::Zero());
+  const Built& full = default_build();
   REQUIRE(full.build == Status::Ok);
   CHECK(full.stats.instances_dropped == 0);
   CHECK(full.stats.field_points_dropped == 0);
@@ -229,17 +237,35 @@ bool same_bytes(const Built& a, const Built& b) {
   return a.bytes == b.bytes && std::memcmp(a.blob.data(), b.blob.data(), a.bytes) == 0;
 }
 
+// The single-tile build of the drive once or out and back (drive_and_back), built once per run as
+// default_build.
+
+std::vector<uint32_t> drive_and_back() {  // out along the drive and back over its first four scans
+  std::vector<uint32_t> loop;
+  for (uint32_t f = 0; f < drive().scans.size(); ++f) loop.push_back(f);
+  for (uint32_t f = 0; f < 4; ++f) loop.push_back(f);
+  return loop;
+}
+
+const Built& whole_build(bool loop) {
+  static const Built once = build(single_tile(), Eigen::Vector3d::Zero());
+  static const Built back = build(single_tile(), Eigen::Vector3d::Zero(), drive_and_back());
+  return loop ? back : once;
+}
+
 }  // namespace
 
 TEST_CASE("A streaming build with tiny tiles and a two-tile budget spills and reloads, and gives the same map bytes") {
-  const Built whole = build(single_tile(), Eigen::Vector3d::Zero());
+  const Built& whole = whole_build(false);
   REQUIRE(whole.build == Status::Ok);
   REQUIRE(whole.stats.instances > 10);
   CHECK(whole.stats.tiles.tiles == 1);
   CHECK(whole.stats.tiles.spills == 0);
   // 10 m tiles: many cars and most field neighbourhoods cross tile borders; an instance is built by the
-  // tile of its lowest voxel with its neighbours loaded. A second size moves the borders.
+  // tile of its lowest voxel with its neighbours loaded. A second size moves the borders (not in a
+  // slow build: short_run.h).
   for (float tile : {10.0f, 26.0f}) {
+    if (tile != 10.0f && gsf_test::short_run()) break;
     INFO("tile " << tile << " m");
     const Built streamed = build(tiled(tile, 2), Eigen::Vector3d::Zero());
     REQUIRE(streamed.build == Status::Ok);
@@ -305,17 +331,18 @@ mapping::MapBuildConfig blocked(float tile_size, uint32_t block_tiles) {
 TEST_CASE("A blocked build holds one block, never spills, reads scans again, and gives the same map bytes") {
   // Out along the drive and back over its start (a drive that returns to tiles it left: add_scan's
   // build spills them), built block by block with blocks and tiles smaller than a scan.
-  std::vector<uint32_t> loop;
-  for (uint32_t f = 0; f < drive().scans.size(); ++f) loop.push_back(f);
-  for (uint32_t f = 0; f < 4; ++f) loop.push_back(f);
-  const Built whole = build(single_tile(), Eigen::Vector3d::Zero(), loop);
+  const std::vector<uint32_t> loop = drive_and_back();
+  const Built& whole = whole_build(true);
   REQUIRE(whole.build == Status::Ok);
   REQUIRE(whole.stats.instances > 10);
   const Built streamed = build(tiled(10.0f, 2), Eigen::Vector3d::Zero(), loop);
   REQUIRE(streamed.build == Status::Ok);
   CHECK(streamed.stats.tiles.spill_peak_bytes > 0);
   uint32_t blocks_of_3x3_10m_tiles = 0;
+  // Blocks of one tile, of 3 x 3 small tiles (many blocks), of 2 x 2 others, one block for the whole
+  // drive; a slow build (short_run.h) the two middle ones.
   for (const auto& [tile, block] : {std::pair<float, uint32_t>{10.0f, 1}, {10.0f, 3}, {26.0f, 2}, {64.0f, 4}}) {
+    if (gsf_test::short_run() && (block == 1 || block == 4)) continue;
     INFO("tile " << tile << " m, blocks of " << block << " x " << block);
     uint64_t reads = 0;
     const Built b = build_in_blocks(blocked(tile, block), loop, &reads);
@@ -365,10 +392,8 @@ TEST_CASE("A blocked build refuses a builder that added scans, no tiles or no bl
 
 TEST_CASE("A loop back into spilled tiles continues their sums: the same bytes as in memory") {
   // Out along the drive and back over its start: by then the start's tiles were spilled.
-  std::vector<uint32_t> loop;
-  for (uint32_t f = 0; f < drive().scans.size(); ++f) loop.push_back(f);
-  for (uint32_t f = 0; f < 4; ++f) loop.push_back(f);
-  const Built whole = build(single_tile(), Eigen::Vector3d::Zero(), loop);
+  const std::vector<uint32_t> loop = drive_and_back();
+  const Built& whole = whole_build(true);
   mapping::TileStoreStats during;
   const Built streamed = build(tiled(16.0f, 2), Eigen::Vector3d::Zero(), loop, &during);
   REQUIRE(whole.build == Status::Ok);
@@ -378,7 +403,7 @@ TEST_CASE("A loop back into spilled tiles continues their sums: the same bytes a
   CHECK(streamed.stats.tiles.spill_peak_bytes <= 2 * streamed.stats.tiles.spill_live_peak_bytes);
   CHECK(same_bytes(streamed, whole));
   // The revisit counts: its points are in the map (instances have more points than without the loop).
-  const Built once = build(single_tile(), Eigen::Vector3d::Zero());
+  const Built& once = whole_build(false);
   REQUIRE(once.build == Status::Ok);
   CHECK_FALSE(same_bytes(once, whole));
 }
@@ -529,7 +554,7 @@ TEST_CASE("A map built straight to a file is the in-memory build's bytes, and wr
 }
 
 TEST_CASE("A map sink takes the sections in id order, checks them against the header and reports write errors") {
-  const Built b = build(mapping::MapBuildConfig(), Eigen::Vector3d::Zero());
+  const Built& b = default_build();
   REQUIRE(b.build == Status::Ok);
   const MapView& m = b.map;
   const auto* base = reinterpret_cast<const uint8_t*>(b.blob.data());

@@ -13,6 +13,7 @@
 #include "gsf/port/nuscenes.h"
 #include "gsf/port/semantic_kitti.h"
 #include "mapping/map_builder.h"
+#include "short_run.h"
 #include "skip.h"
 
 using namespace gsf;
@@ -243,9 +244,9 @@ TEST_CASE("Real nuScenes-lidarseg: the opposite-direction revisit localizes, the
   INFO("window of 3: answered " << fwd.window_answered_right << " right, " << fwd.window_answered_wrong << " wrong");
   CHECK(fwd.window_answered_right >= fwd.answered_right + 5);
   CHECK(fwd.window_answered_wrong == 0);
-  // Under qemu (GSF_UNDER_EMULATOR, the aarch64 preset) the forward pair only: each map build and
-  // drive costs ~40x the host's there, and the reverse and distractor runs exercise no other code.
-  if (std::getenv("GSF_UNDER_EMULATOR")) return;
+  // In a slow build (ASan, qemu: short_run.h) the forward pair only: each map build and drive costs
+  // 10-40x the host's there, and the reverse and distractor runs exercise no other code.
+  if (gsf_test::short_run()) return;
   // The reverse: the 0002 map (109 m) covers less of what 0004's first frames see; 13 of 13 measured
   // with the 1.2 m pole diameter (6 of 13 before), 20 answered right one-shot (21 before the pattern
   // search of the turned hypotheses and 23 before the scan's own other-class weight, both 2026-12-05;
