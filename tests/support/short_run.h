@@ -7,6 +7,8 @@
 
 namespace gsf_test {
 
-inline bool short_run() { return std::getenv("GSF_TEST_SHORT") != nullptr || std::getenv("GSF_UNDER_EMULATOR") != nullptr; }
+inline bool short_run() {
+  return std::getenv("GSF_TEST_SHORT") != nullptr || std::getenv("GSF_UNDER_EMULATOR") != nullptr;
+}
 
 }  // namespace gsf_test
