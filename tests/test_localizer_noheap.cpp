@@ -2,8 +2,6 @@
 // (ASan, qemu: short_run.h) each query once per mode.
 #include <catch2/catch.hpp>
 
-#include <cstdlib>
-
 #include "alloc_counter.h"
 #include "gsf/localizer.h"
 #include "short_run.h"

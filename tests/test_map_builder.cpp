@@ -237,20 +237,23 @@ bool same_bytes(const Built& a, const Built& b) {
   return a.bytes == b.bytes && std::memcmp(a.blob.data(), b.blob.data(), a.bytes) == 0;
 }
 
-// The single-tile build of the drive once or out and back (drive_and_back), built once per run as
-// default_build.
-
-std::vector<uint32_t> drive_and_back() {  // out along the drive and back over its first four scans
+// Out along the drive and back over its first four scans.
+std::vector<uint32_t> drive_and_back() {
   std::vector<uint32_t> loop;
   for (uint32_t f = 0; f < drive().scans.size(); ++f) loop.push_back(f);
   for (uint32_t f = 0; f < 4; ++f) loop.push_back(f);
   return loop;
 }
 
+// The single-tile build of the drive once (loop false) or out and back, built once per run as
+// default_build (each only when first asked for).
 const Built& whole_build(bool loop) {
+  if (loop) {
+    static const Built back = build(single_tile(), Eigen::Vector3d::Zero(), drive_and_back());
+    return back;
+  }
   static const Built once = build(single_tile(), Eigen::Vector3d::Zero());
-  static const Built back = build(single_tile(), Eigen::Vector3d::Zero(), drive_and_back());
-  return loop ? back : once;
+  return once;
 }
 
 }  // namespace

@@ -4,7 +4,6 @@
 // (00) and ~1.15 m (08) at these loops (data README), hence the slack.
 #include <catch2/catch.hpp>
 
-#include <cstdlib>
 #include <filesystem>
 
 #include "gsf/class_table.h"
