@@ -1,7 +1,13 @@
 // Test fixture: the simulator's tiny world (mapping + query drive), its map built in memory, and the
-// query scans with synthetic logits. Built once per test process.
+// query scans with synthetic logits. Made once per test process: read from the file ctest's test_worlds
+// fixture wrote (GSF_TEST_WORLDS, tests/CMakeLists.txt) when there is one, else built in process. The
+// dozen executables that share these worlds read them instead of each building them again (about 2 s
+// each in a release build, 15 s under qemu); test_world_cache.cpp checks the file equals the build.
 #pragma once
 #include <cstdint>
+#include <cstdio>
+#include <cstdlib>
+#include <string>
 #include <vector>
 
 #include "gsf/config.h"
@@ -10,6 +16,7 @@
 #include "gsf/port/nuscenes.h"
 #include "mapping/map_builder.h"
 #include "sim/simulation.h"
+#include "world_cache.h"
 
 namespace gsf_test {
 
@@ -61,15 +68,21 @@ inline void make_scan(const gsf::sim::Raycaster& rc, const gsf::sim::SimConfig& 
 // independently, as `gsf evaluate` does).
 // nuscenes_table != nullptr: the scans are labelled as nuScenes-lidarseg would label them, and this
 // table (of lidarseg ids) is the label set of map and queries.
+// The world's config and label set; everything else of a TinyWorld is built or read.
+inline TinyWorld* new_world(const gsf::ClassTable* nuscenes_table) {
+  auto* t = new TinyWorld();
+  t->config.max_scan_points = 262144;
+  if (nuscenes_table) {
+    t->classes = *nuscenes_table;
+    t->config.classes = &t->classes;
+  }
+  return t;
+}
+
 inline TinyWorld* build_sim_world(const gsf::sim::SimConfig& sc, const gsf::ClassTable* nuscenes_table = nullptr) {
   {
-    auto* t = new TinyWorld();
-    t->config.max_scan_points = 262144;
-    const gsf::ClassTable* classes = nullptr;
-    if (nuscenes_table) {
-      t->classes = *nuscenes_table;
-      t->config.classes = classes = &t->classes;
-    }
+    TinyWorld* t = new_world(nuscenes_table);
+    const gsf::ClassTable* classes = t->config.classes;
     const gsf::sim::World world = gsf::sim::generate_world(sc.world);
     const gsf::sim::World later = gsf::sim::apply_time_gap(world, sc.time_gap);
     const gsf::sim::Raycaster map_rc(world), query_rc(later);
@@ -101,25 +114,105 @@ inline TinyWorld* build_sim_world(const gsf::sim::SimConfig& sc, const gsf::Clas
   }
 }
 
+// Writes everything of `w` that is built (map, build stats, query scans) to `path`, through a
+// temporary file renamed into place, so a reader never sees a partial file.
+inline bool save_world(const TinyWorld& w, const std::string& path) {
+  const std::string tmp = path + ".tmp";
+  FILE* f = std::fopen(tmp.c_str(), "wb");
+  if (!f) return false;
+  world_cache::Writer out(f);
+  out.bytes(world_cache::kMagic, sizeof(world_cache::kMagic));
+  out.pod(static_cast<uint64_t>(w.bytes));
+  out.array(w.blob);
+  out.pod(w.build_stats);
+  out.pod(static_cast<uint64_t>(w.queries.size()));
+  for (const QueryScan& q : w.queries) {
+    out.array(q.xyzi);
+    out.array(q.labels);
+    out.array(q.logits);
+    out.bytes(q.truth.matrix().data(), 16 * sizeof(double));
+    out.pod(static_cast<uint8_t>(q.in_zone));
+  }
+  out.bytes(world_cache::kMagic, sizeof(world_cache::kMagic));
+  const bool ok = std::fclose(f) == 0 && out.ok();
+  return ok && std::rename(tmp.c_str(), path.c_str()) == 0;
+}
+
+// Reads what save_world wrote into `t` (made by new_world with the same label set) and loads its map;
+// false for a missing, short or corrupted file.
+inline bool load_world(const std::string& path, TinyWorld* t) {
+  FILE* f = std::fopen(path.c_str(), "rb");
+  if (!f) return false;
+  world_cache::Reader in(f);
+  char magic[sizeof(world_cache::kMagic)] = {};
+  uint64_t bytes = 0, queries = 0;
+  in.bytes(magic, sizeof(magic));
+  in.pod(&bytes);
+  in.array(&t->blob);
+  in.pod(&t->build_stats);
+  in.pod(&queries);
+  for (uint64_t i = 0; in.ok() && i < queries && i < 100000; ++i) {
+    QueryScan q;
+    uint8_t in_zone = 0;
+    in.array(&q.xyzi);
+    in.array(&q.labels);
+    in.array(&q.logits);
+    in.bytes(q.truth.matrix().data(), 16 * sizeof(double));
+    in.pod(&in_zone);
+    q.in_zone = in_zone != 0;
+    t->queries.push_back(std::move(q));
+  }
+  char end[sizeof(world_cache::kMagic)] = {};
+  in.bytes(end, sizeof(end));
+  std::fclose(f);
+  t->bytes = static_cast<size_t>(bytes);
+  const auto magic_ok = [](const char* m) {
+    return std::memcmp(m, world_cache::kMagic, sizeof(world_cache::kMagic)) == 0;
+  };
+  return in.ok() && magic_ok(magic) && magic_ok(end) && t->queries.size() == queries &&
+         t->bytes <= t->blob.size() * sizeof(uint64_t) &&
+         gsf::load_map(t->blob.data(), t->bytes, &t->map) == gsf::Status::Ok;
+}
+
+// The world named `name` from the test_worlds fixture's directory (GSF_TEST_WORLDS) when it is set and
+// its file reads back whole; else `build()`.
+template <class Build>
+TinyWorld* cached_or_built(const char* name, const gsf::ClassTable* nuscenes_table, Build build) {
+  if (const char* dir = std::getenv("GSF_TEST_WORLDS")) {
+    TinyWorld* t = new_world(nuscenes_table);
+    if (load_world(std::string(dir) + "/" + name + ".world", t)) return t;
+    delete t;
+    std::fprintf(stderr, "tiny_world.h: %s/%s.world does not read back; building the world in process\n", dir, name);
+  }
+  return build();
+}
+
+inline const gsf::ClassTable& nuscenes_table() {
+  static const gsf::ClassTable table = [] {
+    gsf::ClassTable t;
+    gsf::nuscenes_lidarseg_class_table(&t);
+    return t;
+  }();
+  return table;
+}
+
 inline const TinyWorld& tiny_world() {
-  static TinyWorld* w = build_sim_world(gsf::sim::SimConfig::tiny());
+  static TinyWorld* w = cached_or_built("tiny", nullptr, [] { return build_sim_world(gsf::sim::SimConfig::tiny()); });
   return *w;
 }
 
 // The tiny world labelled as nuScenes-lidarseg would label it (no pole, trunk, sign or fence class),
 // with the built-in nuScenes-lidarseg label set: poles and trunks come from geometry.
 inline const TinyWorld& tiny_nuscenes_world() {
-  static TinyWorld* w = [] {
-    gsf::ClassTable t;
-    gsf::nuscenes_lidarseg_class_table(&t);
-    return build_sim_world(gsf::sim::SimConfig::tiny(), &t);
-  }();
+  static TinyWorld* w = cached_or_built("tiny_nuscenes", &nuscenes_table(),
+                                        [] { return build_sim_world(gsf::sim::SimConfig::tiny(), &nuscenes_table()); });
   return *w;
 }
 
 // The tiny-lattice preset: a small city and a 2-D lattice car park of identical columns.
 inline const TinyWorld& tiny_lattice_world() {
-  static TinyWorld* w = build_sim_world(gsf::sim::SimConfig::tiny_lattice());
+  static TinyWorld* w =
+      cached_or_built("tiny_lattice", nullptr, [] { return build_sim_world(gsf::sim::SimConfig::tiny_lattice()); });
   return *w;
 }
 
