@@ -283,6 +283,44 @@ TEST_CASE("Same scan and map give bit-identical results (tiny world and tiny lat
   }
 }
 
+TEST_CASE("The hypothesis reports name their hypotheses; the answer's report carries its pose") {
+  // The reports are ranked by verified score, chosen_hypothesis counts in generation order: each
+  // report's index links the two (the lattice has many near-equal hypotheses, so rank != index there).
+  const auto& w = gsf_test::tiny_lattice_world();
+  Workspace ws(w.config);
+  Localizer loc;
+  REQUIRE(loc.init(w.config, w.map, ws.data(), ws.bytes()) == Status::Ok);
+  int answers = 0, reordered = 0;
+  for (size_t k = 0; k < w.queries.size(); k += 2) {
+    LocalizeResult r;
+    if (loc.localize(w.queries[k].view(), &r) != Status::Ok || !r.verified) continue;
+    const uint32_t reported = std::min(r.hypotheses, kMaxReportedHypotheses);
+    std::vector<bool> seen(r.hypotheses, false);
+    int answer_reports = 0;
+    for (uint32_t h = 0; h < reported; ++h) {
+      const HypothesisReport& p = r.hypothesis[h];
+      REQUIRE(p.index < r.hypotheses);
+      CHECK_FALSE(seen[p.index]);  // distinct: a permutation's prefix
+      seen[p.index] = true;
+      if (p.index != r.chosen_hypothesis) continue;
+      ++answer_reports;
+      reordered += h != p.index;
+      const Eigen::Vector3d t = r.map_T_scan.translation();
+      const double yaw = std::atan2(r.map_T_scan.linear()(1, 0), r.map_T_scan.linear()(0, 0)) * 180.0 / M_PI;
+      double dyaw = std::fabs(yaw - p.yaw_deg);
+      dyaw = std::min(dyaw, 360.0 - dyaw);
+      INFO("query " << k << ": answer at " << t.x() << ", " << t.y() << ", report at " << p.x << ", " << p.y);
+      CHECK(std::hypot(t.x() - p.x, t.y() - p.y) < 2.0);  // refinement moves it little
+      CHECK(dyaw < 3.0);
+    }
+    CHECK(answer_reports == 1);
+    ++answers;
+  }
+  CHECK(answers >= 10);
+  INFO("answers whose report's rank differs from its index: " << reordered);
+  CHECK(reordered > 0);  // the case the index is for occurs in the lattice
+}
+
 TEST_CASE("Hostile input gets a status and the localizer stays usable") {
   const auto& w = tiny_world();
   LocalizerConfig cfg = w.config;

@@ -513,8 +513,10 @@ void Localizer::Impl::choose_answer(const LocalizerConfig& cfg, LocalizeResult& 
   out.chosen_hypothesis = choice.index;
   out.verified = choice.verified;
   out.other_class_weight = choice.verified ? answer.disagree_weights().other_class : 0.0f;
-  for (uint32_t k = 0; k < choice.ranked; ++k)
+  for (uint32_t k = 0; k < choice.ranked; ++k) {
     out.hypothesis[k] = hypothesis_report(hypotheses[choice.rank[k]], choice.fully_verified[k]);
+    out.hypothesis[k].index = choice.rank[k];
+  }
 }
 
 // 9b. The answer's roll and pitch from the scan's and the map's ground, its height from every

@@ -127,6 +127,7 @@ void write_hypotheses(JsonWriter& j, const LocalizeResult& x, const QueryTruth* 
   for (uint32_t h = 0; h < x.hypotheses && h < kMaxReportedHypotheses; ++h) {  // best verified first
     const HypothesisReport& p = x.hypothesis[h];
     j.begin_object();
+    j.field("index", p.index);  // as chosen_hypothesis counts: the answer's report has index == it
     j.field("x", p.x);
     j.field("y", p.y);
     j.field("yaw_deg", p.yaw_deg);

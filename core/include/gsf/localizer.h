@@ -41,6 +41,9 @@ struct HypothesisReport {
   float verified_agree = 0, verified_disagree = 0;  // the score's two stability-weighted parts
   uint32_t verified_unknown = 0;                    // sampled voxels that landed outside the map's semantic layer
   bool fully_verified = false;                      // scored on verify.max_points (else only the coarse sample)
+  // Its place among all the hypotheses, as LocalizeResult::chosen_hypothesis counts (0 = the maximum
+  // clique): the reports are ranked by verified score, so report k is the answer when index equals it.
+  uint32_t index = 0;
 };
 constexpr uint32_t kMaxReportedHypotheses = 16;  // the best by verified score (all of them when fewer)
 constexpr uint32_t kMaxWindowScans = 4;          // WindowConfig::scans at most (localize_sequence)
@@ -84,7 +87,7 @@ struct LocalizeResult {
   uint32_t vote_pairs_dropped = 0;       // ... and pairs ranked out of them
   uint32_t clique_searches = 0;
   uint32_t hypotheses = 0;         // distinct pose hypotheses (<= hypotheses.max_hypotheses)
-  uint32_t chosen_hypothesis = 0;  // index of the answer among them (0 = the maximum clique)
+  uint32_t chosen_hypothesis = 0;  // index of the answer among them (0 = the maximum clique; HypothesisReport::index)
   bool verified = false;           // the answer was chosen by whole-scan verification
   // What verification charged a voxel on a cell of another above-ground class, estimated for this scan
   // (detail/disagree_weights.h); every other disagreement costs verify.disagree_weight.
