@@ -295,9 +295,10 @@ bool is_rigid_pose(const Eigen::Isometry3d& T, double max_m) {
 
 static_assert(AnswerChoice::kMaxRanked == kMaxReportedHypotheses, "every ranked hypothesis is reported");
 
-// A pose hypothesis as LocalizeResult reports it.
-HypothesisReport hypothesis_report(const PoseHypothesis& p, bool fully_verified) {
+// Pose hypothesis number `index` as LocalizeResult reports it.
+HypothesisReport hypothesis_report(const PoseHypothesis& p, uint32_t index, bool fully_verified) {
   HypothesisReport r;
+  r.index = index;
   r.x = static_cast<float>(p.map_T_scan.translation().x());
   r.y = static_cast<float>(p.map_T_scan.translation().y());
   r.yaw_deg = static_cast<float>(std::atan2(p.map_T_scan.linear()(1, 0), p.map_T_scan.linear()(0, 0)) * kDegPerRad);
@@ -513,10 +514,8 @@ void Localizer::Impl::choose_answer(const LocalizerConfig& cfg, LocalizeResult& 
   out.chosen_hypothesis = choice.index;
   out.verified = choice.verified;
   out.other_class_weight = choice.verified ? answer.disagree_weights().other_class : 0.0f;
-  for (uint32_t k = 0; k < choice.ranked; ++k) {
-    out.hypothesis[k] = hypothesis_report(hypotheses[choice.rank[k]], choice.fully_verified[k]);
-    out.hypothesis[k].index = choice.rank[k];
-  }
+  for (uint32_t k = 0; k < choice.ranked; ++k)
+    out.hypothesis[k] = hypothesis_report(hypotheses[choice.rank[k]], choice.rank[k], choice.fully_verified[k]);
 }
 
 // 9b. The answer's roll and pitch from the scan's and the map's ground, its height from every

@@ -64,10 +64,6 @@ inline void make_scan(const gsf::sim::Raycaster& rc, const gsf::sim::SimConfig& 
   out->truth = pose;
 }
 
-// Simulates `sc`, builds its map in memory and the query scans (map and query logits drawn
-// independently, as `gsf evaluate` does).
-// nuscenes_table != nullptr: the scans are labelled as nuScenes-lidarseg would label them, and this
-// table (of lidarseg ids) is the label set of map and queries.
 // The world's config and label set; everything else of a TinyWorld is built or read.
 inline TinyWorld* new_world(const gsf::ClassTable* nuscenes_table) {
   auto* t = new TinyWorld();
@@ -79,6 +75,10 @@ inline TinyWorld* new_world(const gsf::ClassTable* nuscenes_table) {
   return t;
 }
 
+// Simulates `sc`, builds its map in memory and the query scans (map and query logits drawn
+// independently, as `gsf evaluate` does).
+// nuscenes_table != nullptr: the scans are labelled as nuScenes-lidarseg would label them, and this
+// table (of lidarseg ids) is the label set of map and queries.
 inline TinyWorld* build_sim_world(const gsf::sim::SimConfig& sc, const gsf::ClassTable* nuscenes_table = nullptr) {
   {
     TinyWorld* t = new_world(nuscenes_table);
