@@ -28,6 +28,7 @@
 #include "mapping/map_builder.h"
 #include "mapping/map_writer.h"
 #include "mapping/scan_triangles.h"
+#include "mapping/workspace.h"
 #include "short_run.h"
 #include "test_cloud.h"
 #include "tiny_world.h"
@@ -132,6 +133,19 @@ TEST_CASE("The default origin is the first pose rounded half up to a whole metre
   CHECK(local.map.params.class_table_id == kitti.id());
   CHECK(local.map.counts.instances > 10);
   CHECK(local.map.counts.triangles > 10);
+}
+
+TEST_CASE("The map is the same bytes whatever its workspaces held before (no stage reads what it did not write)") {
+  const Built& zero = default_build();
+  REQUIRE(zero.build == Status::Ok);
+  for (int fill : {0x00, 0xA5}) {  // and the default build: as the allocator gave them
+    mapping::workspace_fill_for_tests = fill;
+    const Built b = build(mapping::MapBuildConfig(), Eigen::Vector3d::Zero());
+    mapping::workspace_fill_for_tests = -1;
+    REQUIRE(b.build == Status::Ok);
+    REQUIRE(b.bytes == zero.bytes);
+    CHECK(std::memcmp(b.blob.data(), zero.blob.data(), b.bytes) == 0);
+  }
 }
 
 TEST_CASE("A drive shifted by a UTM-size offset gives the same map sections, with the origin shifted exactly") {

@@ -494,7 +494,7 @@ Status MapBuilder::write_triangles(MapSink& sink, const MapContent& content, Map
   Status s = tb.build(v.vx, 3, v.vl, v.count, tris);
   if (s != Status::Ok) return s;
   std::vector<Triangle> all(tris.data(), tris.data() + tris.size());
-  std::vector<uint64_t>().swap(tws.memory);  // `tris` is copied to `all`
+  tws.memory.reset();  // `tris` is copied to `all`
   if (options_.scan_triangles && !detections_.empty()) {
     // What a query at each mapping scan's pose would form (scan_triangles.h), over the same vertices.
     const std::vector<uint32_t> nearest =

@@ -97,7 +97,10 @@ Status TileStore::read_spilled(const Tile& tile, const Wanted& wanted,
                                std::vector<std::pair<uint64_t, VoxelAccum>>* out) {
   if (std::fflush(spill_file_) != 0 || fseeko(spill_file_, static_cast<off_t>(tile.spill_offset), SEEK_SET) != 0)
     return Status::IoError;
-  std::vector<unsigned char> buf(kIoChunkRecords * kRecordBytes);
+  // Sized for this tile's records, up to a chunk: a zeroed 4096-record chunk per read of a small tile
+  // was most of the builder's page faults.
+  std::vector<unsigned char> buf(static_cast<size_t>(std::min<uint64_t>(kIoChunkRecords, tile.spill_count)) *
+                                 kRecordBytes);
   for (uint64_t done = 0; done < tile.spill_count;) {
     const size_t n = static_cast<size_t>(std::min<uint64_t>(kIoChunkRecords, tile.spill_count - done));
     if (std::fread(buf.data(), 1, n * kRecordBytes, spill_file_) != n * kRecordBytes) return Status::IoError;
@@ -307,7 +310,7 @@ Status TileStore::compact() {
 // Copies `bytes` from offset `from` down to `to` (< from) chunk by chunk, front first: a chunk is read
 // before any later write can reach it, so overlapping ranges copy correctly.
 Status TileStore::move_bytes(uint64_t from, uint64_t to, uint64_t bytes) {
-  std::vector<unsigned char> buf(kIoChunkRecords * kRecordBytes);
+  std::vector<unsigned char> buf(static_cast<size_t>(std::min<uint64_t>(kIoChunkRecords * kRecordBytes, bytes)));
   if (std::fflush(spill_file_) != 0) return Status::IoError;
   for (uint64_t done = 0; done < bytes;) {
     const size_t n = static_cast<size_t>(std::min<uint64_t>(buf.size(), bytes - done));
