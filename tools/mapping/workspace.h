@@ -21,8 +21,8 @@ inline Arena aligned_arena(void* data, size_t bytes) {
 inline int workspace_fill_for_tests = -1;
 
 // Arena-backed stage objects on the heap, with at least `bytes` usable. Not zeroed: the stages initialise
-// what they use, as on board, and zeroing a tile's workspace was a quarter of the builder's time under ASan
-// (a page fault per page, most never used).
+// what they use, as on board (a caller's buffer is not zeroed either); test_map_builder holds them to it
+// through workspace_fill_for_tests.
 struct Workspace {
   std::unique_ptr<uint64_t[]> memory;
   Arena arena;
