@@ -27,9 +27,11 @@ struct Workspace {
   std::unique_ptr<uint64_t[]> memory;
   Arena arena;
   explicit Workspace(size_t bytes)
-      : memory(new uint64_t[bytes / 8 + 3]), arena(aligned_arena(memory.get(), (bytes / 8 + 3) * 8)) {
-    if (workspace_fill_for_tests >= 0) std::memset(memory.get(), workspace_fill_for_tests, (bytes / 8 + 3) * 8);
+      : memory(new uint64_t[words(bytes)]), arena(aligned_arena(memory.get(), words(bytes) * 8)) {
+    if (workspace_fill_for_tests >= 0) std::memset(memory.get(), workspace_fill_for_tests, words(bytes) * 8);
   }
+  // 8-byte words holding `bytes` and the up to 15 bytes lost to the 16-byte alignment.
+  static size_t words(size_t bytes) { return bytes / 8 + 3; }
 };
 
 }  // namespace gsf::mapping
