@@ -34,6 +34,7 @@ cross  --map-beams 64 --beams 16 --label-noise 0.03
 cheap  --beams 16 --label-noise 0.10 --object-confusion 0.15 --thin-miss 0.6
 edge   --map-coverage 0.6 --label-noise 0.03
 ns     --label-set nuscenes --label-noise 0.03
+spur   --label-noise 0.03 --spurious-objects 1.0
 "
 
 family_flags() {  # the suite.sh options of family $1, or a non-zero status for an unknown name

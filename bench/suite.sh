@@ -14,7 +14,7 @@
 #   --jobs N                  worlds in parallel (env SUITE_JOBS; default 2)
 #   --preset NAME             simulate preset (default suite; tiny-lattice for a smoke run)
 #   --label-noise P           (default 0.03)    --instance-ids   keep instance ids (default: zeroed)
-#   --object-confusion P      --thin-miss P     segmentation-error families (gsf simulate; default: not
+#   --object-confusion P      --thin-miss P     --spurious-objects P    segmentation-error families (gsf simulate; default: not
 #   --beams N                 --map-beams N     --map-coverage F   passed, so an older --sim-gsf works): whole objects
 #                             relabelled, thin things missed with range, query / mapping LiDAR beams
 #   --label-set NAME          labels the worlds are written with: semantic-kitti (default) or nuscenes
@@ -53,7 +53,7 @@ while [ $# -gt 0 ]; do
     --preset) preset=$2; shift 2 ;;
     --label-noise) label_noise=$2; shift 2 ;;
     --label-set) label_set=$2; shift 2 ;;
-    --object-confusion|--thin-miss|--beams|--map-beams|--map-coverage) sim_extra="$sim_extra $1 $2"; shift 2 ;;
+    --object-confusion|--thin-miss|--spurious-objects|--beams|--map-beams|--map-coverage) sim_extra="$sim_extra $1 $2"; shift 2 ;;
     --instance-ids) ids_flag=""; shift ;;
     --modes) modes=$2; shift 2 ;;
     --gsf) gsf=$2; shift 2 ;;

@@ -1,6 +1,6 @@
 // Simulated network errors on ground-truth labels (tools/label_errors), per label space: point noise
 // rate and partners, whole-object confusion (by instance id and by grid components), determinism
-// whatever the point order, P = 0 changes nothing, nuScenes thin misses are a no-op.
+// whatever the point order, P = 0 changes nothing, nuScenes thin misses are a no-op, spurious objects.
 #include <catch2/catch.hpp>
 
 #include <algorithm>
@@ -232,4 +232,38 @@ TEST_CASE("Thin misses act on SemanticKITTI poles far away and are a no-op on nu
   CHECK(nus.labels == nus_clean);
   apply_label_errors(rates, LabelSpace::SemanticKitti, kitti.xyzi.data(), kitti.labels.data(), kitti.size(), 1);
   CHECK(std::all_of(kitti.labels.begin(), kitti.labels.end(), [](uint32_t l) { return l == 50u; }));
+}
+
+TEST_CASE("Spurious objects: round(P x instances) wall or hedge patches in range become poles or trunks") {
+  Scan s;
+  for (int p = 0; p < 4; ++p) s.post(8.0f + 2.0f * p, -6.0f, 5.0f, (uint32_t(p + 1) << 16) | 80u);  // 4 instances
+  s.box(6.0f, 10.0f, 20.0f, 0.5f, 4.0f, 50);    // a wall 10 m away: in range
+  s.box(-30.0f, 50.0f, 20.0f, 0.5f, 4.0f, 70);  // a hedge beyond kSpuriousFar: never chosen
+  s.box(5.0f, -2.0f, 12.0f, 12.0f, 0.0f, 40);   // road: never relabelled
+  const std::vector<uint32_t> clean = s.labels;
+
+  std::vector<uint32_t> none = clean;
+  apply_spurious_objects(s.xyzi.data(), none.data(), s.size(), 0.0f, 3);
+  CHECK(none == clean);
+
+  std::vector<uint32_t> labels = clean;
+  apply_spurious_objects(s.xyzi.data(), labels.data(), s.size(), 0.5f, 3);  // 0.5 x 4 instances: 2 patches
+  std::map<uint32_t, std::vector<uint32_t>> patches;                        // spurious instance id -> its points
+  for (uint32_t i = 0; i < s.size(); ++i) {
+    if (labels[i] == clean[i]) continue;
+    REQUIRE((clean[i] & 0xFFFF) == 50u);  // only the wall in range changes, to pole with a new instance id
+    CHECK((labels[i] & 0xFFFF) == 80u);
+    CHECK((labels[i] >> 16) >= kSpuriousInstanceBase);
+    patches[labels[i] >> 16].push_back(i);
+  }
+  REQUIRE(patches.size() == 2);
+  for (const auto& [id, points] : patches) {  // each patch: within 2 x kSpuriousRadius across, horizontally
+    for (uint32_t a : points)
+      for (uint32_t b : points)
+        CHECK(std::hypot(s.xyzi[4 * a] - s.xyzi[4 * b], s.xyzi[4 * a + 1] - s.xyzi[4 * b + 1]) <=
+              2.0f * kSpuriousRadius + 1e-4f);
+  }
+  std::vector<uint32_t> again = clean;
+  apply_spurious_objects(s.xyzi.data(), again.data(), s.size(), 0.5f, 3);
+  CHECK(again == labels);  // the same seed, the same patches
 }

@@ -26,6 +26,7 @@ bool parse_sensing(const Args& args, sim::SimConfig* cfg, std::string* err) {
   if (!get_share(args, "label-noise", &cfg->label_noise, err)) return false;
   if (!get_share(args, "object-confusion", &cfg->object_confusion, err)) return false;
   if (!get_share(args, "thin-miss", &cfg->thin_miss, err)) return false;
+  if (!get_share(args, "spurious-objects", &cfg->spurious_objects, err)) return false;
   cfg->instance_ids = !args.flag("no-instance-ids");
   if (args.get("label-set") != "semantic-kitti" && args.get("label-set") != "nuscenes") {
     *err = "--label-set must be semantic-kitti or nuscenes";
@@ -150,6 +151,10 @@ std::vector<OptionSpec> simulate_specs() {
       {"thin-miss",
        "P 0..1: pole, sign and trunk points missed (written as building / vegetation) with probability P x "
        "clamp((range - 10 m) / 50 m, 0, 1)",
+       "0"},
+      {"spurious-objects",
+       "share 0..1: per scan, that many times its instance count of wall or hedge patches (0.3 m) written as a "
+       "pole or trunk, an unstable segmentation's objects no map holds",
        "0"},
       {"no-instance-ids", "write labels with the instance id bits zeroed", "", true},
       {"label-set",

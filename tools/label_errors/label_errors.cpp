@@ -145,6 +145,33 @@ void apply_thin_miss(const float* xyzi, uint32_t* labels, uint32_t count, float 
   }
 }
 
+void apply_spurious_objects(const float* xyzi, uint32_t* labels, uint32_t count, float p, uint64_t seed) {
+  if (count == 0 || p <= 0.0f) return;
+  std::vector<uint32_t> ids;
+  for (uint32_t i = 0; i < count; ++i)
+    if (labels[i] >> 16) ids.push_back(labels[i] >> 16);
+  std::sort(ids.begin(), ids.end());
+  const size_t instances = size_t(std::unique(ids.begin(), ids.end()) - ids.begin());
+  gsf::Rng rng(seed);
+  const uint32_t n = static_cast<uint32_t>(std::floor(p * float(instances) + rng.uniform01()));
+  for (uint32_t k = 0; k < n; ++k) {
+    for (int attempt = 0; attempt < 64; ++attempt) {  // a wall or hedge point in range, if the scan has one
+      const uint32_t s = rng.uniform(count);
+      const uint16_t sem = static_cast<uint16_t>(labels[s] & 0xFFFFu);
+      const float r = std::hypot(xyzi[4 * s], xyzi[4 * s + 1]);
+      if ((sem != 50 && sem != 70) || !(r >= kSpuriousNear && r <= kSpuriousFar)) continue;
+      const float cx = xyzi[4 * s], cy = xyzi[4 * s + 1];
+      const uint32_t word = (kSpuriousInstanceBase + k) << 16;
+      for (uint32_t i = 0; i < count; ++i) {
+        const uint16_t c = static_cast<uint16_t>(labels[i] & 0xFFFFu);
+        if ((c == 50 || c == 70) && std::hypot(xyzi[4 * i] - cx, xyzi[4 * i + 1] - cy) <= kSpuriousRadius)
+          labels[i] = word | (c == 50 ? 80u : 71u);
+      }
+      break;
+    }
+  }
+}
+
 namespace {
 
 // Object grouping without instance ids: points of one class in 26-connected cells of a kObjectCell grid.

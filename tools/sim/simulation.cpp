@@ -291,6 +291,9 @@ void apply_sensing(const SimConfig& c, int sequence, uint32_t frame, SimScan* sc
   if (c.thin_miss > 0)
     apply_thin_miss(scan->xyzi.data(), scan->labels.data(), scan->size(), c.thin_miss,
                     gsf::mix64(seed ^ label_errors::kThinSalt));
+  if (c.spurious_objects > 0)
+    apply_spurious_objects(scan->xyzi.data(), scan->labels.data(), scan->size(), c.spurious_objects,
+                           gsf::mix64(seed ^ label_errors::kSpuriousSalt));
   if (c.label_noise > 0)
     apply_label_noise(scan->labels.data(), scan->size(), c.label_noise, gsf::mix64(seed ^ label_errors::kNoiseSalt));
   if (!c.instance_ids) strip_instance_ids(scan->labels.data(), scan->size());
@@ -357,10 +360,10 @@ void write_zone_meta(std::ostream& meta, const SimConfig& c, const World& world,
 // meta.json's "sensing" object: the label errors and label format of the written scans.
 void write_sensing_meta(std::ostream& meta, const SimConfig& c) {
   meta << "  \"sensing\": {\"label_noise\": " << c.label_noise << ", \"object_confusion\": " << c.object_confusion
-       << ", \"thin_miss\": " << c.thin_miss << ", \"map_coverage\": " << c.map_coverage
-       << ", \"map_beams\": " << drive_lidar(c, 0).beams << ", \"beams\": " << drive_lidar(c, 1).beams
-       << ", \"instance_ids\": " << (c.instance_ids ? "true" : "false") << ", \"label_set\": \""
-       << (c.nuscenes_labels ? "nuscenes" : "semantic-kitti") << "\""
+       << ", \"thin_miss\": " << c.thin_miss << ", \"spurious_objects\": " << c.spurious_objects
+       << ", \"map_coverage\": " << c.map_coverage << ", \"map_beams\": " << drive_lidar(c, 0).beams
+       << ", \"beams\": " << drive_lidar(c, 1).beams << ", \"instance_ids\": " << (c.instance_ids ? "true" : "false")
+       << ", \"label_set\": \"" << (c.nuscenes_labels ? "nuscenes" : "semantic-kitti") << "\""
        << "},\n";
 }
 

@@ -58,6 +58,9 @@ struct SimConfig {
   // Thin things missed with range: P of the points of poles, signs and trunks beyond kThinMissFar
   // (linearly from kThinMissNear) take the class behind them (apply_thin_miss).
   float thin_miss = 0.0f;
+  // Spurious thin objects (apply_spurious_objects): p x the scan's instances, patches of wall or hedge
+  // labelled pole or trunk, drawn per scan.
+  float spurious_objects = 0.0f;
   // Label set of the written scans: false = SemanticKITTI (labels/, uint32); true = nuScenes-lidarseg
   // (lidarseg/, uint8, kitti_to_nuscenes): poles, signs, fences and trunks lose their classes inside
   // static.manmade / static.vegetation, as in real nuScenes data.
@@ -96,6 +99,7 @@ uint64_t scan_seed(uint64_t seed, int sequence, uint32_t frame);
 // tools/label_errors, shared with the CLI's real-data runs; the simulator applies them as it writes.
 using label_errors::apply_label_noise;
 using label_errors::apply_object_confusion;
+using label_errors::apply_spurious_objects;
 using label_errors::apply_thin_miss;
 using label_errors::kThinMissFar;
 using label_errors::kThinMissNear;
