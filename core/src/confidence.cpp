@@ -8,7 +8,7 @@
 namespace gsf {
 
 // bench/fit_confidence.py on the training suites (docs/confidence.md).
-const ConfidenceModel kConfidenceModel = {-1.736f, 2.563f, 12.264f, -12.921f, 1.111f, 2.941f, -5.121f, 25.488f};
+const ConfidenceModel kConfidenceModel = {-1.911f, 3.150f, 4.443f, -13.687f, 1.163f, 3.014f, -5.006f, 29.669f};
 
 namespace {
 

@@ -31,7 +31,7 @@
 // one factor: both ask whether the answer is a peak, and a strong turned comparison makes up for a weak
 // shifted one (along a uniform street a shift costs little) and back; as two factors each had to pass
 // alone, which cost the simulated nuScenes-labelled and real scans, and let more distractors through.
-// The eight numbers are fitted on simulated suites of fourteen segmentation-error, sensor and label-set
+// The eight numbers are fitted on simulated suites of fifteen segmentation-error, sensor and label-set
 // families, with queries against other worlds' maps among them (bench/fit_confidence.py;
 // docs/confidence.md has the command and the data), and checked on other seeds and on real data.
 #pragma once
