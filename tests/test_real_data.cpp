@@ -229,9 +229,10 @@ TEST_CASE("Real nuScenes-lidarseg: the opposite-direction revisit localizes, the
   // measured; the issue's target is 9).
   CHECK(fwd.correct_8_to_20 >= 11);
   CHECK(fwd.answered_wrong == 0);
-  // One scan at a time: 24 answered right measured (pattern search of the turned hypotheses, 2026-12-05;
-  // 23 with the scan's own other-class weight before it, 24 before the sparse scans' looser triangle
-  // match, 27 with the four-factor confidence model of 2026-12-03 on the same poles).
+  // One scan at a time: 27 answered right measured (the confidence refitted with the spur family,
+  // 2026-12-05 evening; 24 with the pattern search of the turned hypotheses before it, 23 with the
+  // scan's own other-class weight, 24 before the sparse scans' looser triangle match, 27 with the
+  // four-factor confidence model of 2026-12-03 on the same poles).
   CHECK(fwd.answered_right >= 22);
   INFO("shares below the all-instances share: " << fwd.share_below_all
                                                 << ", over fewer instances: " << fwd.share_over_fewer);
@@ -239,9 +240,10 @@ TEST_CASE("Real nuScenes-lidarseg: the opposite-direction revisit localizes, the
   CHECK(fwd.share_over_fewer >= 10);
   CHECK(fwd.recount_below_hypothesis == 0);
   // Several scans (issue 27): the drive's last three scans tied by its odometry answer what one scan
-  // cannot vouch for alone (32 of 40 measured against 24 one-shot; 33 before 2026-12-05), never wrongly.
+  // cannot vouch for alone (32 of 40 measured against 27 one-shot; 32-33 against 24 before the refit of
+  // 2026-12-05 evening), never wrongly.
   INFO("window of 3: answered " << fwd.window_answered_right << " right, " << fwd.window_answered_wrong << " wrong");
-  CHECK(fwd.window_answered_right >= fwd.answered_right + 5);
+  CHECK(fwd.window_answered_right >= fwd.answered_right + 3);
   CHECK(fwd.window_answered_wrong == 0);
   // In a slow build (ASan, qemu: short_run.h) the forward pair only: each map build and drive costs
   // 10-40x the host's there, and the reverse and distractor runs exercise no other code.
