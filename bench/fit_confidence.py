@@ -112,11 +112,16 @@ def evidence(e, name):
     if name == "excess_inliers":
         return float(e["inliers"]) - 3.0
     if name == "beyond_clique":
-        return max(0.0, (e["inliers"] / e["inlier_share"] if e["inlier_share"] > 0 else 0.0) - 3.0)
+        return max(0.0, instances_on_map(e) - 3.0)
     if name == "excess_share":
-        on_map = e["inliers"] / e["inlier_share"] if e["inlier_share"] > 0 else 0.0
+        on_map = instances_on_map(e)
         return (e["inliers"] - 3.0) / (on_map - 3.0) if on_map > 3.0 else 0.0
     return float(e[name])
+
+
+def instances_on_map(e):
+    """The inlier share's denominator: the scan's instances on the map's observed cells at the answer."""
+    return e["inliers"] / e["inlier_share"] if e["inlier_share"] > 0 else 0.0
 
 
 def factor_inputs(m, z):
