@@ -79,6 +79,13 @@ TEST_CASE("Levelling keeps verification's yaw and the position and maps the scan
     CHECK(L.translation() == T.translation());  // turned about the sensor
     CHECK(L.linear().determinant() == Approx(1.0).margin(1e-12));
   }
+  // An upside-down up (no ground fit gives one, but the function takes any): still a rotation that
+  // maps it to the vertical, not a reflection or NaN.
+  Eigen::Isometry3d F = T;
+  level_answer(-Eigen::Vector3d::UnitZ(), Eigen::Vector3d::UnitZ(), &F);
+  CHECK((F.linear() * -Eigen::Vector3d::UnitZ() - Eigen::Vector3d::UnitZ()).norm() < 1e-12);
+  CHECK(F.linear().determinant() == Approx(1.0).margin(1e-12));
+  CHECK((F.linear().transpose() * F.linear() - Eigen::Matrix3d::Identity()).norm() < 1e-12);
 }
 
 namespace {

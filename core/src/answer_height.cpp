@@ -43,6 +43,23 @@ uint32_t consensus_height(const float* a, const float* b, const float* w, uint32
 
 namespace {
 
+// The shortest rotation taking unit vector a onto unit vector b (Rodrigues). Eigen's
+// Quaternion::FromTwoVectors does the same but pulls in JacobiSVD for the opposite case, which
+// tripled this file's compile time; up vectors are never opposite here (both have z > 0), and for
+// a.b near -1 a half turn about an axis across a is returned.
+Eigen::Matrix3d rotation_onto(const Eigen::Vector3d& a, const Eigen::Vector3d& b) {
+  const Eigen::Vector3d v = a.cross(b);
+  const double c = a.dot(b);
+  if (c < -1.0 + 1e-9) {
+    const Eigen::Vector3d axis =
+        (std::fabs(a.x()) < 0.9 ? a.cross(Eigen::Vector3d::UnitX()) : a.cross(Eigen::Vector3d::UnitY())).normalized();
+    return 2.0 * axis * axis.transpose() - Eigen::Matrix3d::Identity();
+  }
+  Eigen::Matrix3d vx;
+  vx << 0.0, -v.z(), v.y(), v.z(), 0.0, -v.x(), -v.y(), v.x(), 0.0;
+  return Eigen::Matrix3d::Identity() + vx + vx * vx / (1.0 + c);
+}
+
 // Plane through the ground voxels near the sensor (with band > 0: only those within band of `plane`):
 // its normal (pointing up) and offset into *out (n . p + d = 0). Returns how many voxels it fitted.
 uint32_t fit_ground(const VoxelLayer& voxels, const Eigen::Vector4d& plane, double band, Eigen::Vector4d* out) {
@@ -86,10 +103,8 @@ void level_answer(const Eigen::Vector3d& scan_up, const Eigen::Vector3d& map_up,
   const double yaw = std::atan2(T->linear()(1, 0), T->linear()(0, 0));
   // Level the scan (its up to the vertical), turn about the vertical, tilt the vertical onto map_up; the
   // turn is solved so the result reads verification's yaw (a few fixed-point steps: the tilt is small).
-  const Eigen::Matrix3d level =
-      Eigen::Quaterniond::FromTwoVectors(scan_up.normalized(), Eigen::Vector3d::UnitZ()).toRotationMatrix();
-  const Eigen::Matrix3d lean =
-      Eigen::Quaterniond::FromTwoVectors(Eigen::Vector3d::UnitZ(), map_up.normalized()).toRotationMatrix();
+  const Eigen::Matrix3d level = rotation_onto(scan_up.normalized(), Eigen::Vector3d::UnitZ());
+  const Eigen::Matrix3d lean = rotation_onto(Eigen::Vector3d::UnitZ(), map_up.normalized());
   auto turned = [&](double turn) -> Eigen::Matrix3d {
     return lean * Eigen::AngleAxisd(turn, Eigen::Vector3d::UnitZ()).toRotationMatrix() * level;
   };
