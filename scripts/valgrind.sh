@@ -6,8 +6,7 @@ set -euo pipefail
 cd "$(dirname "$0")/.."
 cmake --preset release >/dev/null && cmake --build --preset release >/dev/null
 run() { echo "=== valgrind $*"; valgrind --error-exitcode=1 --leak-check=full -q "$@" | tail -n 2; }
-run build/release/tests/test_map_format
-run build/release/tests/test_backend
-run build/release/tests/test_scene_graph
+# Most test files share one executable (tests/CMakeLists.txt); -# tags each test case with its file.
+run build/release/tests/gsf_unit_tests -# "[#test_map_format],[#test_backend],[#test_scene_graph]"
 run build/release/tests/test_localizer "Hostile input gets a status and the localizer stays usable"
 echo "scripts/valgrind.sh: clean"

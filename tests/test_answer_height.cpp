@@ -14,6 +14,8 @@
 #include "gsf/detail/voxel_layer.h"
 #include "test_cloud.h"
 
+namespace test_answer_height {
+
 using namespace gsf;
 using gsf_test::ArenaBuffer;
 
@@ -147,3 +149,5 @@ TEST_CASE("The scan's ground gives the sensor's lean; too little ground gives no
   CHECK_FALSE(scan_ground_up(layer, &up));
   CHECK(up == Eigen::Vector3d(1, 2, 3));
 }
+
+}  // namespace test_answer_height

@@ -16,6 +16,8 @@
 #include "lattice_layer.h"
 #include "test_cloud.h"
 
+namespace test_answer_selection {
+
 using namespace gsf;
 using gsf_test::ArenaBuffer;
 
@@ -306,3 +308,5 @@ TEST_CASE("choose(): the best hypothesis turned more than 90 deg from the leader
   CHECK(s.selector.chosen() == 1);  // the truth, once searched
   CHECK(planar_distance(s.selector.answer_pose(), pose_at(24.0, 0.0)) < planar_distance(poses[1], pose_at(24.0, 0.0)));
 }
+
+}  // namespace test_answer_selection

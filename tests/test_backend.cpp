@@ -11,6 +11,8 @@
 #include "gsf/detail/pose_solver.h"
 #include "random_points.h"
 
+namespace test_backend {
+
 using namespace gsf;
 using gsf_test::random_points;
 using gsf_test::some_pose;
@@ -63,3 +65,5 @@ TEST_CASE("Consistency graph + clique find the inliers of a rigid motion; Kabsch
   const float zero_w[3] = {0, 0, 0};
   CHECK(kabsch(a.data(), b.data(), zero_w, 3, &est) == Status::InvalidInput);
 }
+
+}  // namespace test_backend

@@ -12,6 +12,8 @@
 #include "gsf/port/class_table_file.h"
 #include "gsf/port/nuscenes.h"
 
+namespace test_class_table {
+
 using namespace gsf;
 
 TEST_CASE("SemanticKITTI table equals class_from_kitti and stability_weight for every id") {
@@ -284,3 +286,5 @@ TEST_CASE("Class table file: load from disk, missing file, the nuScenes example 
           Status::Ok);
   CHECK(t.id() == nusc.id());
 }
+
+}  // namespace test_class_table

@@ -13,6 +13,8 @@
 #include "mapping/semantic_layer.h"
 #include "tiny_world.h"
 
+namespace test_confidence {
+
 using namespace gsf;
 
 namespace {
@@ -307,3 +309,5 @@ TEST_CASE("Hostile scans and a map without a semantic layer: a status or a confi
   CHECK(r.confidence == 0.0);
   CHECK(!r.confident);
 }
+
+}  // namespace test_confidence

@@ -11,6 +11,8 @@
 #include "gsf/gsf.h"
 #include "gsf/parameters.h"
 
+namespace test_config {
+
 using namespace gsf;
 
 TEST_CASE("The parameter list: unique names, at most 25 user-facing, defaults valid and inside their ranges") {
@@ -157,3 +159,5 @@ TEST_CASE("gsf_config carries the user-facing parameters; gsf_config_check names
   for (uint32_t i = 0; i < parameter_count(); ++i) user += parameter(i).level == ParamLevel::User;
   CHECK(user == 25);  // each one a gsf_config field (c_api.cpp asserts the struct holds exactly those)
 }
+
+}  // namespace test_config

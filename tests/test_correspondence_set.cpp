@@ -8,6 +8,8 @@
 #include "arena_buffer.h"
 #include "gsf/detail/correspondence_set.h"
 
+namespace test_correspondence_set {
+
 using namespace gsf;
 using gsf_test::ArenaBuffer;
 
@@ -149,3 +151,5 @@ TEST_CASE("Pairs below the GSF gate (tier 0) rank after every pair that passed, 
   CHECK(cs.select(5, query, map.data(), 100) == 5);
   CHECK(cs.selected_pair(4).query == 3);
 }
+
+}  // namespace test_correspondence_set

@@ -11,6 +11,8 @@
 #include "gsf/detail/semantic_grid.h"
 #include "lattice_layer.h"
 
+namespace test_disagree_weights {
+
 using namespace gsf;
 using gsf_test::Cloud;
 using gsf_test::LatticeLayer;
@@ -119,3 +121,5 @@ TEST_CASE("A whole object given the wrong class: the scan's own weights separate
   CHECK(scan_disagree_weights(points.data(), n, fixture.layer.view, at(sensor_x), nullptr, 0, 4096, 3.0f).other_class <
         0.5f);
 }
+
+}  // namespace test_disagree_weights

@@ -12,6 +12,8 @@
 #include "gsf/detail/wasserstein.h"
 #include "tiny_world.h"
 
+namespace test_field_sim {
+
 using namespace gsf;
 
 namespace {
@@ -120,3 +122,5 @@ TEST_CASE("Identical zone columns with different surroundings differ more than o
   // vertices per triangle and a clique, which is why its zone success is higher than this pairwise rate.
   CHECK(same_closer * 100 >= pairs * 62);
 }
+
+}  // namespace test_field_sim

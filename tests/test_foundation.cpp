@@ -10,6 +10,8 @@
 #include "gsf/semantic_classes.h"
 #include "gsf/status.h"
 
+namespace test_foundation {
+
 using namespace gsf;
 
 TEST_CASE("Arena: counting pass predicts the real layout exactly") {
@@ -130,3 +132,5 @@ TEST_CASE("Semantic class table round trips and stability follows Table III") {
   CHECK(stability_weight(kBuilding) == Approx(1.0f));
   CHECK(stability_weight(-1) == 0.0f);
 }
+
+}  // namespace test_foundation

@@ -11,6 +11,8 @@
 #include "gsf/detail/sparsify.h"
 #include "gsf/detail/wasserstein.h"
 
+namespace test_gaussian_field {
+
 using namespace gsf;
 
 namespace {
@@ -295,3 +297,5 @@ TEST_CASE("W2 between fields is invariant when data and grid move rigidly togeth
   CHECK(w2_between(0.7f) == Approx(d0).epsilon(1e-3));
   CHECK(w2_between(-2.1f) == Approx(d0).epsilon(1e-3));
 }
+
+}  // namespace test_gaussian_field

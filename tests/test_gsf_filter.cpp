@@ -13,6 +13,8 @@
 #include "gsf/detail/map_quantization.h"
 #include "gsf/map_format.h"
 
+namespace test_gsf_filter {
+
 using namespace gsf;
 
 namespace {
@@ -214,3 +216,5 @@ TEST_CASE("GSF filter caches: hits cost nothing, full caches compute into scratc
   CHECK(b.similarity(qf, 0, map.view, 0, 2) == s0);
   CHECK(b.comparisons() == 1);
 }
+
+}  // namespace test_gsf_filter

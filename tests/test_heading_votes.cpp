@@ -19,6 +19,8 @@
 #include "gsf/map_format.h"
 #include "gsf/semantic_classes.h"
 
+namespace test_heading_votes {
+
 using namespace gsf;
 using gsf_test::ArenaBuffer;
 
@@ -226,3 +228,5 @@ TEST_CASE("Heading votes: bind refuses zero bins; required_bytes is what bind ta
   CHECK(hv.bind(short_arena, kBins) == Status::BufferTooSmall);
   CHECK(hv.bind(buf.arena, 0) == Status::InvalidArgument);
 }
+
+}  // namespace test_heading_votes

@@ -18,6 +18,8 @@
 #include "gsf/detail/voxel_layer.h"
 #include "skip.h"
 
+namespace test_instance_clustering {
+
 using namespace gsf;
 using gsf_test::ArenaBuffer;
 
@@ -561,3 +563,5 @@ TEST_CASE("Real SemanticKITTI scans: car instances against the ground-truth inst
     CHECK(poles + trunks + signs >= 2);  // the street furniture the localizer needs
   }
 }
+
+}  // namespace test_instance_clustering

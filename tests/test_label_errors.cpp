@@ -12,6 +12,8 @@
 #include "gsf/detail/rng.h"
 #include "label_errors/label_errors.h"
 
+namespace test_label_errors {
+
 using namespace gsf::label_errors;
 
 namespace {
@@ -267,3 +269,5 @@ TEST_CASE("Spurious objects: round(P x instances) wall or hedge patches in range
   apply_spurious_objects(s.xyzi.data(), again.data(), s.size(), 0.5f, 3);
   CHECK(again == labels);  // the same seed, the same patches
 }
+
+}  // namespace test_label_errors

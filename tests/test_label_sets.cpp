@@ -12,6 +12,8 @@
 #include "gsf/port/nuscenes.h"
 #include "tiny_world.h"
 
+namespace test_label_sets {
+
 using namespace gsf;
 
 namespace {
@@ -195,3 +197,5 @@ TEST_CASE("nuScenes-lidarseg writer and reader round trip, raw or mapped labels"
   }
   std::filesystem::remove_all(root);
 }
+
+}  // namespace test_label_sets

@@ -10,6 +10,8 @@
 #include "gsf/localizer.h"
 #include "tiny_world.h"
 
+namespace test_lattice_e2e {
+
 using namespace gsf;
 
 namespace {
@@ -66,3 +68,5 @@ TEST_CASE("Tiny lattice: verification localizes lattice queries the maximum cliq
   CHECK(std::max(verified_instance.zone_ok, verified_gsf.zone_ok) >
         std::max(paper_instance.zone_ok, paper_gsf.zone_ok));
 }
+
+}  // namespace test_lattice_e2e

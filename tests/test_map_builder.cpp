@@ -33,6 +33,8 @@
 #include "test_cloud.h"
 #include "tiny_world.h"
 
+namespace test_map_builder {
+
 using namespace gsf;
 
 namespace {
@@ -792,3 +794,5 @@ TEST_CASE("A refinement cell's point is the mean of its voxels' centroids, not o
   CHECK(std::fabs(xyz[1] - 10.1f) <= quantum);
   CHECK(std::fabs(xyz[2] - 1.1f) <= quantum);
 }
+
+}  // namespace test_map_builder

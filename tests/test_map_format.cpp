@@ -14,6 +14,8 @@
 #include "gsf/map_format.h"
 #include "gsf/semantic_classes.h"
 
+namespace test_map_format {
+
 using namespace gsf;
 
 namespace {
@@ -480,3 +482,5 @@ TEST_CASE("The fuzz seed map is the current format's (GSF_WRITE_SEED=1 rewrites 
   REQUIRE(file.size() == bytes);
   CHECK(std::memcmp(file.data(), seed.data(), bytes) == 0);
 }
+
+}  // namespace test_map_format

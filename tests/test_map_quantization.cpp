@@ -16,6 +16,8 @@
 #include "gsf/semantic_classes.h"
 #include "mapping/refine_layer_builder.h"
 
+namespace test_map_quantization {
+
 using namespace gsf;
 
 namespace {
@@ -196,3 +198,5 @@ TEST_CASE("Refinement normals dequantise within 0.4 degrees and stay unit length
   RefineLayerView::normal(none, back);
   CHECK((back[0] == 0.0f && back[1] == 0.0f && back[2] == 0.0f));  // no normal stays no normal
 }
+
+}  // namespace test_map_quantization

@@ -11,6 +11,8 @@
 #include "gsf/map_format.h"
 #include "gsf/port/mapped_file.h"
 
+namespace test_mapped_file {
+
 using namespace gsf;
 
 namespace {
@@ -79,3 +81,5 @@ TEST_CASE("Reopening replaces the contents; closing empties") {
   CHECK(f.size() == 0);
   CHECK_FALSE(f.mapped());
 }
+
+}  // namespace test_mapped_file

@@ -10,6 +10,8 @@
 #include "arena_buffer.h"
 #include "gsf/detail/max_clique.h"
 
+namespace test_max_clique {
+
 using namespace gsf;
 using Buffer = gsf_test::ArenaBuffer;
 
@@ -176,3 +178,5 @@ TEST_CASE("A clique search restricted to allowed vertices is the maximum clique 
     }
   }
 }
+
+}  // namespace test_max_clique

@@ -27,6 +27,8 @@
 #include "skip.h"
 #include "test_cloud.h"
 
+namespace test_pole_extraction {
+
 using namespace gsf;
 using gsf_test::ArenaBuffer;
 using gsf_test::Cloud;
@@ -716,3 +718,5 @@ TEST_CASE("Real nuScenes-lidarseg: poles and trunks from static.manmade and stat
   CHECK(near >= 10);
   CHECK(again * 2 >= near);
 }
+
+}  // namespace test_pole_extraction

@@ -14,6 +14,8 @@
 #include "gsf/port/semantic_kitti.h"
 #include "skip.h"
 
+namespace test_port {
+
 using namespace gsf;
 using namespace gsf::port;
 namespace fs = std::filesystem;
@@ -265,3 +267,5 @@ TEST_CASE("Logit synthesis: deterministic, argmax agrees at the documented rate,
   CHECK(agree_pole / 10000.0 == Approx(1.0 - confusion_probability(kPole)).margin(0.02));
   CHECK(agree_veg / 10000.0 == Approx(1.0 - confusion_probability(kVegetation)).margin(0.02));
 }
+
+}  // namespace test_port

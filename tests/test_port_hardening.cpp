@@ -24,6 +24,8 @@
 #include "gsf/port/semantic_kitti.h"
 #include "skip.h"
 
+namespace test_port_hardening {
+
 using namespace gsf;
 using namespace gsf::port;
 namespace fs = std::filesystem;
@@ -653,3 +655,5 @@ TEST_CASE("Logit model: per-class agreement at 1 - p, partners only, order indep
     CHECK(std::fabs(sum / double(logits.size())) < 0.01);
   }
 }
+
+}  // namespace test_port_hardening

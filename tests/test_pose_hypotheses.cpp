@@ -11,6 +11,8 @@
 #include "gsf/detail/max_clique.h"
 #include "gsf/detail/pose_hypotheses.h"
 
+namespace test_pose_hypotheses {
+
 using namespace gsf;
 using gsf_test::ArenaBuffer;
 
@@ -243,3 +245,5 @@ TEST_CASE("Shift votes over the pairs ranked out of the graph find the true shif
   PoseHypotheses bad;
   CHECK(bad.bind(small.arena, 64, 8, 32) == Status::InvalidArgument);
 }
+
+}  // namespace test_pose_hypotheses

@@ -13,6 +13,8 @@
 #include "gsf/detail/pose_solver.h"
 #include "random_points.h"
 
+namespace test_pose_solver {
+
 using namespace gsf;
 using gsf_test::random_points;
 using gsf_test::some_pose;
@@ -225,3 +227,5 @@ TEST_CASE("TLS follows the weights: a heavier consistent group wins over a large
   CHECK((plain.b_T_a.translation() - QB.translation()).norm() < 1e-6);
   CHECK(plain.inliers == 30);
 }
+
+}  // namespace test_pose_solver

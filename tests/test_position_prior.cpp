@@ -10,6 +10,8 @@
 #include "gsf/localizer.h"
 #include "tiny_world.h"
 
+namespace test_position_prior {
+
 using namespace gsf;
 using gsf_test::tiny_world;
 
@@ -283,3 +285,5 @@ TEST_CASE("With a prior the query runs on the scan's labels, without the GSF fil
   }
   CHECK(probed_without_prior == 6);
 }
+
+}  // namespace test_position_prior

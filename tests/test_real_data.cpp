@@ -15,6 +15,8 @@
 #include "short_run.h"
 #include "skip.h"
 
+namespace test_real_data {
+
 using namespace gsf;
 
 namespace {
@@ -271,3 +273,5 @@ TEST_CASE("Real nuScenes-lidarseg: the opposite-direction revisit localizes, the
   CHECK(distractor.answered_wrong == 0);
   CHECK(distractor.window_answered_wrong == 0);
 }
+
+}  // namespace test_real_data

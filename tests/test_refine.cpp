@@ -17,6 +17,8 @@
 #include "mapping/refine_layer_builder.h"
 #include "test_cloud.h"
 
+namespace test_refine {
+
 using namespace gsf;
 using gsf_test::ArenaBuffer;
 using gsf_test::Cloud;
@@ -468,3 +470,5 @@ TEST_CASE("The map's ground lookup refuses a disc wider than its tile limit (bou
   CHECK(layer.view.ground_near(0.0f, 0.0f, 40.0f, 50, none) == 0);  // 80 m across: 6 tiles a side
   CHECK(none[0] == 7.0f);
 }
+
+}  // namespace test_refine

@@ -7,6 +7,8 @@
 
 #include "baselines/scan_context.h"
 
+namespace test_scan_context {
+
 using gsf::bench::ScanContextConfig;
 
 namespace {
@@ -76,3 +78,5 @@ TEST_CASE("Scan Context: distance is zero to itself and NaN points are ignored")
   auto c = gsf::bench::make_scan_context(cfg, other.data(), 4, static_cast<uint32_t>(other.size() / 4));
   CHECK(gsf::bench::scan_context_distance(cfg, a, c, nullptr) > 0.1f);
 }
+
+}  // namespace test_scan_context

@@ -14,6 +14,8 @@
 #include "gsf/localizer.h"
 #include "tiny_world.h"
 
+namespace test_scan_window {
+
 using namespace gsf;
 
 namespace {
@@ -208,3 +210,5 @@ TEST_CASE("window.scans = 1 is one-shot localization; bad odometry is refused") 
   Localizer fresh;
   CHECK(fresh.localize_sequence(w.queries[0].view(), Eigen::Isometry3d::Identity(), &r) == Status::NotInitialized);
 }
+
+}  // namespace test_scan_window

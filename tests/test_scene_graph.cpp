@@ -16,6 +16,8 @@
 #include "skip.h"
 #include "test_cloud.h"
 
+namespace test_scene_graph {
+
 using namespace gsf;
 
 namespace {
@@ -266,3 +268,5 @@ TEST_CASE("Real SemanticKITTI scan: instances in a plausible range", "[real-data
   CHECK(clusters.size() >= gt.size() / 2);
   CHECK(clusters.size() <= gt.size() * 3 + 10);
 }
+
+}  // namespace test_scene_graph

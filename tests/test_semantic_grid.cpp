@@ -19,6 +19,8 @@
 #include "mapping/semantic_layer.h"
 #include "test_cloud.h"
 
+namespace test_semantic_grid {
+
 using namespace gsf;
 using gsf_test::Cloud;
 using gsf_test::lattice_scan;
@@ -319,3 +321,5 @@ TEST_CASE("Each palette entry's neighbour mask is the union of its cell's four e
   CHECK(std::equal(spal.begin(), spal.end(), sv.semantic_palette));
   CHECK(std::equal(scells.begin(), scells.end(), sv.semantic_cells));
 }
+
+}  // namespace test_semantic_grid

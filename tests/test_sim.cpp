@@ -16,6 +16,8 @@
 #include "mapping/map_builder.h"
 #include "sim/simulation.h"
 
+namespace test_sim {
+
 using namespace gsf::sim;
 
 TEST_CASE("A scan transformed by its pose lands on the known geometry") {
@@ -680,3 +682,5 @@ TEST_CASE("Error families through run_simulation: both drives, before ids are st
     CHECK(meta.find(key) != std::string::npos);
   fs::remove_all(tmp);
 }
+
+}  // namespace test_sim

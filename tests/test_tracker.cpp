@@ -11,6 +11,8 @@
 #include "gsf/localizer.h"
 #include "tiny_world.h"
 
+namespace test_tracker {
+
 using namespace gsf;
 using gsf_test::tiny_world;
 
@@ -146,3 +148,5 @@ TEST_CASE("Tracking refuses a prediction that is not a rigid pose and repeats it
   Localizer idle;
   CHECK(idle.track(w.queries[0].view(), p, &out) == Status::NotInitialized);
 }
+
+}  // namespace test_tracker

@@ -14,6 +14,8 @@
 #include "gsf/semantic_classes.h"
 #include "random_points.h"
 
+namespace test_triangle {
+
 using namespace gsf;
 using gsf_test::random_points;
 using gsf_test::some_pose;
@@ -150,3 +152,5 @@ TEST_CASE("The vertex-set key is the same for every order of three ids and diffe
       for (uint32_t c = b + 1; c < 12; ++c) keys.insert(triangle_vertex_set_key(c, a, b));
   CHECK(keys.size() == 220);  // 12 choose 3: no two sets share a key
 }
+
+}  // namespace test_triangle

@@ -13,6 +13,8 @@
 #include "gsf/detail/triangle_matcher.h"
 #include "random_points.h"
 
+namespace test_triangle_index {
+
 using namespace gsf;
 using gsf_test::random_points;
 using gsf_test::some_pose;
@@ -108,3 +110,5 @@ TEST_CASE("Triangle index: lookup equals brute force, validate rejects bad array
     for (uint32_t k = 0; k < matcher.size(); ++k) CHECK(matcher.match_at(k).map != t);
   }
 }
+
+}  // namespace test_triangle_index

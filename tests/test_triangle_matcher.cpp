@@ -11,6 +11,8 @@
 #include "gsf/detail/triangle_matcher.h"
 #include "gsf/semantic_classes.h"
 
+namespace test_triangle_matcher {
+
 using namespace gsf;
 using gsf_test::ArenaBuffer;
 
@@ -182,3 +184,5 @@ TEST_CASE("A mirror image has the same sides but the other sense: the matcher re
   const uint8_t o = matcher.match_at(0).order;
   CHECK((o >= 1 && o <= 3));
 }
+
+}  // namespace test_triangle_matcher

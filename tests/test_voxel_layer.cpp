@@ -13,6 +13,8 @@
 #include "gsf/detail/voxel_layer.h"
 #include "test_cloud.h"
 
+namespace test_voxel_layer {
+
 using namespace gsf;
 using gsf_test::ArenaBuffer;
 
@@ -520,3 +522,5 @@ TEST_CASE("prob_samples at or above every voxel's count is bitwise the exact lay
     }
   }
 }
+
+}  // namespace test_voxel_layer

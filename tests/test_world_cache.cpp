@@ -10,6 +10,8 @@
 
 #include "tiny_world.h"
 
+namespace test_world_cache {
+
 namespace {
 
 const gsf_test::TinyWorld& built_tiny_world() {
@@ -118,3 +120,5 @@ TEST_CASE("a short, corrupted or missing world file is refused") {
     CHECK_FALSE(load(path));
   }
 }
+
+}  // namespace test_world_cache

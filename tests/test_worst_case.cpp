@@ -10,6 +10,8 @@
 #include "gsf/localizer.h"
 #include "mapping/map_builder.h"
 
+namespace test_worst_case {
+
 using namespace gsf;
 
 TEST_CASE("A dense random consistency graph: the clique search stops at its node budget with a valid clique") {
@@ -138,3 +140,5 @@ TEST_CASE("A lattice where every triangle collides in the hash: matches, corresp
   CHECK(cut.match_candidates == full.match_candidates);  // the same candidates, ranked, then capped
   CHECK(cut.match_dropped == cut.match_candidates - cut.triangle_matches);
 }
+
+}  // namespace test_worst_case
