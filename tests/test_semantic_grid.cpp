@@ -107,6 +107,61 @@ TEST_CASE("The pattern search's sample sizes: defaults as before, coarse to fine
 
 namespace {
 
+// The pattern search written plainly: every round halves the steps, each pass probes all six moves
+// (+-x, +-y, +-yaw about the sensor) on max_points / 4 samples and takes any that scores higher, at most
+// two passes a round. The library skips the probe that undoes the last move (its pose was scored already,
+// lower); the poses it ends at must be these.
+Eigen::Isometry3d plain_pattern_search(const VoxelLayer& voxels, const SemanticGridView& grid,
+                                       const Eigen::Isometry3d& T, const float* weights) {
+  Eigen::Isometry3d best = T;
+  float best_score = verify_pose(voxels, grid, best, 1024, weights).score;
+  double step = double(0.4f), turn = deg_to_rad(double(0.8f));  // the library takes float steps
+  for (int r = 0; r < 3; ++r, step *= 0.5, turn *= 0.5) {
+    bool moved = true;
+    for (int pass = 0; pass < 2 && moved; ++pass) {
+      moved = false;
+      for (int k = 0; k < 6; ++k) {
+        Eigen::Isometry3d c = best;
+        if (k < 4) {
+          c.translation().x() += (k == 0 ? step : k == 1 ? -step : 0.0);
+          c.translation().y() += (k == 2 ? step : k == 3 ? -step : 0.0);
+        } else {
+          c.linear() =
+              c.linear() * Eigen::AngleAxisd(k == 4 ? turn : -turn, Eigen::Vector3d::UnitZ()).toRotationMatrix();
+        }
+        const float sc = verify_pose(voxels, grid, c, 1024, weights).score;
+        if (sc > best_score) best_score = sc, best = c, moved = true;
+      }
+    }
+  }
+  return best;
+}
+
+}  // namespace
+
+TEST_CASE("The pattern search ends where the plain search of every move does") {
+  LatticeVerification fixture;
+  fixture.build(lattice_scan(24.0f, true));
+  int moved = 0;
+  std::mt19937 rng(7);
+  std::uniform_real_distribution<double> metres(-1.5, 1.5), radians(-0.04, 0.04);
+  for (int trial = 0; trial < 40; ++trial) {
+    const Eigen::Vector3d off(metres(rng), metres(rng), radians(rng));
+    Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
+    T.linear() = Eigen::AngleAxisd(off.z(), Eigen::Vector3d::UnitZ()).toRotationMatrix();
+    T.translation() = Eigen::Vector3d(24.0 + off.x(), off.y(), 0.0);
+    Eigen::Isometry3d found;
+    verify_pose_refined(fixture.voxels, fixture.layer.view, T, 4096, fixture.weights, 3, 0.4f, 0.8f, &found, 4, 4);
+    const Eigen::Isometry3d plain = plain_pattern_search(fixture.voxels, fixture.layer.view, T, fixture.weights);
+    INFO("start offset " << off.transpose());
+    CHECK((found.matrix() - plain.matrix()).norm() < 1e-9);
+    moved += !found.isApprox(T, 1e-12);
+  }
+  CHECK(moved >= 30);  // the searches moved: the check compares searches, not start poses
+}
+
+namespace {
+
 // The verification rule of semantic_grid.h written plainly over SemanticGridView::cell_at (std::floor,
 // divisions, one call per cell): the reference the optimised scorer must match bit for bit.
 PoseVerification plain_verify(const VoxelLayer& voxels, const SemanticGridView& g, const Eigen::Isometry3d& T,

@@ -314,9 +314,11 @@ PoseVerification search_pose(const Source& src, const SemanticGridView& grid, co
       best_score = score_pose(src, grid, best, points, weights, disagree).score;
     }
     bool moved = true;
+    int last_move = -1;  // the probe opposite the last move returns to the pose it left, known worse
     for (int pass = 0; pass < 2 && moved; ++pass) {
       moved = false;
       for (int k = 0; k < 6; ++k) {
+        if (last_move >= 0 && k == (last_move ^ 1)) continue;
         Eigen::Isometry3d c = best;
         if (k < 4) {
           c.translation().x() += (k == 0 ? step : k == 1 ? -step : 0.0);
@@ -331,6 +333,7 @@ PoseVerification search_pose(const Source& src, const SemanticGridView& grid, co
           best_score = sc;
           best = c;
           moved = any_move = true;
+          last_move = k;
         }
       }
     }
