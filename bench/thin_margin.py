@@ -1,0 +1,64 @@
+#!/usr/bin/env python3
+"""How often a thin-margin answer is right, per family (issue 24, the calibration limit).
+
+A thin-margin answer: its best rival scores nearly as well (z_rival < 1.2 and rival_margin < 0.1 in
+diagnostics.confidence_evidence) while the answer explains most of the scan's instances on the map
+(inlier_share > 0.5), from at least 5 instances (fewer are capped at 0.5 anyway). The confidence sees
+the same evidence in every family, so it gives these answers about one probability; when the share that
+is right differs by family, no single calibration can hold on every family, and the table says by how
+much. Distractor directories (bench/distractors.sh) are left out: every answer there is wrong.
+
+Usage: bench/thin_margin.py DIR [DIR ...] [--model=a_r,...]
+DIR is a bench/families.sh output (DIR/<family>/<world>/results.json). The model defaults to
+kConfidenceModel of core/src/confidence.cpp. Standard library only."""
+import argparse
+import glob
+import json
+import os
+
+import declined_right
+import fit_confidence as fc
+
+Z_RIVAL, MARGIN, SHARE, MIN_INSTANCES = 1.2, 0.1, 0.5, 5
+
+
+def thin_margin(e, q):
+    return (q["diagnostics"].get("instances", 0) >= MIN_INSTANCES and e["z_rival"] < Z_RIVAL and
+            e["rival_margin"] < MARGIN and e["inlier_share"] > SHARE)
+
+
+def family_rows(family_dir, m):
+    """(answers with a pose, thin-margin ones, of those right, their mean predicted probability)."""
+    posed = thin = right = 0
+    predicted = 0.0
+    for f in sorted(glob.glob(os.path.join(family_dir, "*", "results.json"))):
+        for q in json.load(open(f)).get("modes", {}).get("gsf", {}).get("queries", []):
+            e = q.get("diagnostics", {}).get("confidence_evidence")
+            if q.get("status") != "Ok" or not e or e.get("samples", 0) == 0:
+                continue
+            posed += 1
+            if thin_margin(e, q):
+                thin += 1
+                right += bool(q["success"])
+                predicted += fc.probability(m, fc.features(e, q))
+    return posed, thin, right, predicted
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("dirs", nargs="+")
+    ap.add_argument("--model", default="")
+    a = ap.parse_args()
+    m = [float(v) for v in a.model.split(",")] if a.model else declined_right.library_model()
+    print("| family | answers with a pose | thin margin | of those right | mean predicted |")
+    print("| --- | ---: | ---: | ---: | ---: |")
+    for d in a.dirs:
+        for family_dir in sorted(p for p in glob.glob(os.path.join(d, "*")) if os.path.isdir(p)):
+            posed, thin, right, predicted = family_rows(family_dir, m)
+            if thin:
+                print(f"| {os.path.basename(family_dir)} | {posed} | {thin} | {100.0 * right / thin:.1f}% | "
+                      f"{100.0 * predicted / thin:.1f}% |")
+
+
+if __name__ == "__main__":
+    main()
