@@ -1,0 +1,98 @@
+#!/usr/bin/env bash
+# Several scans against one-shot on the 10 Hz stretches (issue 27, item 3; docs/vehicle-modes.md,
+# "Measured: one-shot vs N = 3 on the stretches"): per seed and zone type a suite world with six
+# stretches of 20 scans (sequence 02), its map, then `gsf evaluate --sequence-window N` for N = 1
+# (one-shot) and 3, with the default labels and with --label-noise 0.15. Prints one table row per world
+# and a total: success / answered / confident wrong of all scans, and answered of the scans in the
+# repetitive zone. Two worlds at a time.
+#
+#   bash bench/window_zones.sh OUT [--seeds "11 12 13 14"] [--zones "row lattice hall avenue"] [--gsf BIN]
+set -euo pipefail
+here=$(pwd)
+cd "$(dirname "$0")/.."
+out=${1:?usage: bench/window_zones.sh OUT [--seeds S] [--zones Z] [--gsf BIN]}
+shift
+case "$out" in /*) ;; *) out=$here/$out ;; esac
+seeds="11 12 13 14"
+zones="row lattice hall avenue"
+gsf=""
+while [ $# -gt 0 ]; do
+  case "$1" in
+    --seeds) seeds=$2; shift 2 ;;
+    --zones) zones=$2; shift 2 ;;
+    --gsf) gsf=$2; shift 2 ;;
+    *) echo "window_zones.sh: unknown option $1" >&2; exit 2 ;;
+  esac
+done
+if [ -z "$gsf" ]; then
+  cmake --preset release >/dev/null && cmake --build --preset release >/dev/null
+  gsf=build/release/tools/gsf
+fi
+gsf=$(readlink -f "$gsf")
+mkdir -p "$out"
+
+one_world() {  # seed zone
+  local d=$out/$1-$2
+  mkdir -p "$d"
+  "$gsf" simulate --out "$d/ds" --preset suite --seed "$1" --zone "$2" --stretches 6 --quiet
+  "$gsf" build-map --dataset "$d/ds" --out "$d/m.map" --quiet >/dev/null
+  for n in 1 3; do
+    for noise in 0 0.15; do
+      "$gsf" evaluate --map "$d/m.map" --dataset "$d/ds" --sequence-window "$n" --label-noise "$noise" \
+        --json "$d/w$n-$noise.json" --quiet >"$d/w$n-$noise.txt"
+    done
+  done
+  rm -rf "$d/ds" "$d/m.map"
+}
+
+running=0
+for s in $seeds; do
+  for z in $zones; do
+    one_world "$s" "$z" &
+    running=$((running + 1))
+    if [ "$running" -ge 2 ]; then wait -n; running=$((running - 1)); fi
+  done
+done
+wait
+
+python3 - "$out" "$seeds" "$zones" <<'EOF'
+import sys
+out, seeds, zones = sys.argv[1], sys.argv[2].split(), sys.argv[3].split()
+runs = [("1", "0"), ("3", "0"), ("1", "0.15"), ("3", "0.15")]
+total = {r: [0, 0, 0, 0, 0, 0] for r in runs}  # scans, success, answered, wrong, zone scans, zone answered
+
+
+def read(path):
+    rows = {}
+    for line in open(path):
+        f = line.split()
+        if f and f[0] in ("all", "zone"):
+            n = int(f[1])
+            rows[f[0]] = (n, round(n * float(f[2].rstrip("%")) / 100), round(n * float(f[3].rstrip("%")) / 100),
+                          int(f[4]))
+    return rows
+
+
+print("| seed, zone | one-shot | N = 3 | label noise 0.15: one-shot | N = 3 |")
+print("| --- | --- | --- | --- | --- |")
+for s in seeds:
+    for z in zones:
+        cells = []
+        for n, noise in runs:
+            r = read(f"{out}/{s}-{z}/w{n}-{noise}.txt")
+            a = r["all"]
+            t = total[(n, noise)]
+            t[0] += a[0]; t[1] += a[1]; t[2] += a[2]; t[3] += a[3]
+            cell = f"{a[1]} / {a[2]} / {a[3]}"
+            if "zone" in r and r["zone"][0] > 0:
+                t[4] += r["zone"][0]; t[5] += r["zone"][2]
+                cell += f" ({r['zone'][2]} of {r['zone'][0]})"
+            cells.append(cell)
+        print(f"| {s} {z} | " + " | ".join(cells) + " |")
+cells = []
+for r in runs:
+    t = total[r]
+    share = f", {100.0 * t[5] / t[4]:.1f}%" if t[4] else ""
+    cells.append(f"{t[1]} / {t[2]} / {t[3]} ({t[5]} of {t[4]}{share})")
+print("| **all** | " + " | ".join(cells) + " |")
+EOF
