@@ -2,25 +2,28 @@
 # Several scans against one-shot on the 10 Hz stretches (issue 27, item 3; docs/vehicle-modes.md,
 # "Measured: one-shot vs N = 3 on the stretches"): per seed and zone type a suite world with six
 # stretches of 20 scans (sequence 02), its map, then `gsf evaluate --sequence-window N` for N = 1
-# (one-shot) and 3, with the default labels and with --label-noise 0.15. Prints one table row per world
-# and a total: success / answered / confident wrong of all scans, and answered of the scans in the
+# (one-shot) and 3 (--window N: another), with the default labels and with --label-noise 0.15.
+# Prints one table row per world and a total: success / answered / confident wrong of all scans, and answered of the scans in the
 # repetitive zone. Two worlds at a time.
 #
-#   bash bench/window_zones.sh OUT [--seeds "11 12 13 14"] [--zones "row lattice hall avenue"] [--gsf BIN]
+#   bash bench/window_zones.sh OUT [--seeds "11 12 13 14"] [--zones "row lattice hall avenue"] [--window N]
+#                                  [--gsf BIN]
 set -euo pipefail
 here=$(pwd)
 cd "$(dirname "$0")/.."
-out=${1:?usage: bench/window_zones.sh OUT [--seeds S] [--zones Z] [--gsf BIN]}
+out=${1:?usage: bench/window_zones.sh OUT [--seeds S] [--zones Z] [--window N] [--gsf BIN]}
 shift
 case "$out" in /*) ;; *) out=$here/$out ;; esac
 seeds="11 12 13 14"
 zones="row lattice hall avenue"
 gsf=""
+window=3
 while [ $# -gt 0 ]; do
   case "$1" in
     --seeds) seeds=$2; shift 2 ;;
     --zones) zones=$2; shift 2 ;;
     --gsf) gsf=$2; shift 2 ;;
+    --window) window=$2; shift 2 ;;
     *) echo "window_zones.sh: unknown option $1" >&2; exit 2 ;;
   esac
 done
@@ -36,7 +39,7 @@ one_world() {  # seed zone
   mkdir -p "$d"
   "$gsf" simulate --out "$d/ds" --preset suite --seed "$1" --zone "$2" --stretches 6 --quiet
   "$gsf" build-map --dataset "$d/ds" --out "$d/m.map" --quiet >/dev/null
-  for n in 1 3; do
+  for n in 1 "$window"; do
     for noise in 0 0.15; do
       "$gsf" evaluate --map "$d/m.map" --dataset "$d/ds" --sequence-window "$n" --label-noise "$noise" \
         --json "$d/w$n-$noise.json" --quiet >"$d/w$n-$noise.txt"
@@ -55,10 +58,10 @@ for s in $seeds; do
 done
 wait
 
-python3 - "$out" "$seeds" "$zones" <<'EOF'
+python3 - "$out" "$seeds" "$zones" "$window" <<'EOF'
 import sys
-out, seeds, zones = sys.argv[1], sys.argv[2].split(), sys.argv[3].split()
-runs = [("1", "0"), ("3", "0"), ("1", "0.15"), ("3", "0.15")]
+out, seeds, zones, window = sys.argv[1], sys.argv[2].split(), sys.argv[3].split(), sys.argv[4]
+runs = [("1", "0"), (window, "0"), ("1", "0.15"), (window, "0.15")]
 total = {r: [0, 0, 0, 0, 0, 0] for r in runs}  # scans, success, answered, wrong, zone scans, zone answered
 
 
@@ -73,7 +76,7 @@ def read(path):
     return rows
 
 
-print("| seed, zone | one-shot | N = 3 | label noise 0.15: one-shot | N = 3 |")
+print(f"| seed, zone | one-shot | N = {window} | label noise 0.15: one-shot | N = {window} |")
 print("| --- | --- | --- | --- | --- |")
 for s in seeds:
     for z in zones:
