@@ -13,35 +13,27 @@ DIR is a bench/families.sh output (DIR/<family>/<world>/results.json). The model
 kConfidenceModel of core/src/confidence.cpp. Standard library only."""
 import argparse
 import glob
-import json
 import os
 
 import declined_right
 import fit_confidence as fc
 
-Z_RIVAL, MARGIN, SHARE, MIN_INSTANCES = 1.2, 0.1, 0.5, 5
+Z_RIVAL, MARGIN, SHARE = 1.2, 0.1, 0.5
 
 
-def thin_margin(e, q):
-    return (q["diagnostics"].get("instances", 0) >= MIN_INSTANCES and e["z_rival"] < Z_RIVAL and
-            e["rival_margin"] < MARGIN and e["inlier_share"] > SHARE)
+def thin_margin(z):
+    """z: fit_confidence.features' tuple ((z_rival, rival_margin), (z_shift, z_turn), (inlier_share,)),
+    clipped to ranges that hold these thresholds."""
+    (z_rival, margin), _, (share,) = z
+    return z_rival < Z_RIVAL and margin < MARGIN and share > SHARE
 
 
 def family_rows(family_dir, m):
-    """(answers with a pose, thin-margin ones, of those right, their mean predicted probability)."""
-    posed = thin = right = 0
-    predicted = 0.0
-    for f in sorted(glob.glob(os.path.join(family_dir, "*", "results.json"))):
-        for q in json.load(open(f)).get("modes", {}).get("gsf", {}).get("queries", []):
-            e = q.get("diagnostics", {}).get("confidence_evidence")
-            if q.get("status") != "Ok" or not e or e.get("samples", 0) == 0:
-                continue
-            posed += 1
-            if thin_margin(e, q):
-                thin += 1
-                right += bool(q["success"])
-                predicted += fc.probability(m, fc.features(e, q))
-    return posed, thin, right, predicted
+    """(answers with a pose, thin-margin ones, of those right, their mean predicted probability), from
+    fit_confidence.records (the queries with a pose and confidence evidence)."""
+    recs = fc.records(family_dir, "gsf")
+    thin = [(z, y) for z, y, _, few in recs if not few and thin_margin(z)]
+    return len(recs), len(thin), sum(y for _, y in thin), sum(fc.probability(m, z) for z, _ in thin)
 
 
 def main():

@@ -3,8 +3,9 @@
 # "Measured: one-shot vs N = 3 on the stretches"): per seed and zone type a suite world with six
 # stretches of 20 scans (sequence 02), its map, then `gsf evaluate --sequence-window N` for N = 1
 # (one-shot) and 3 (--window N: another), with the default labels and with --label-noise 0.15.
-# Prints one table row per world and a total: success / answered / confident wrong of all scans, and answered of the scans in the
-# repetitive zone. Two worlds at a time.
+# Prints one table row per world and a total (from the evaluations' JSON summaries): success /
+# answered / confident wrong of all scans, and answered of the scans in the repetitive zone. Two
+# worlds at a time.
 #
 #   bash bench/window_zones.sh OUT [--seeds "11 12 13 14"] [--zones "row lattice hall avenue"] [--window N]
 #                                  [--gsf BIN]
@@ -42,7 +43,7 @@ one_world() {  # seed zone
   for n in 1 "$window"; do
     for noise in 0 0.15; do
       "$gsf" evaluate --map "$d/m.map" --dataset "$d/ds" --sequence-window "$n" --label-noise "$noise" \
-        --json "$d/w$n-$noise.json" --quiet >"$d/w$n-$noise.txt"
+        --json "$d/w$n-$noise.json" --quiet >/dev/null
     done
   done
   rm -rf "$d/ds" "$d/m.map"
@@ -59,22 +60,11 @@ done
 wait
 
 python3 - "$out" "$seeds" "$zones" "$window" <<'EOF'
+import json
 import sys
 out, seeds, zones, window = sys.argv[1], sys.argv[2].split(), sys.argv[3].split(), sys.argv[4]
 runs = [("1", "0"), (window, "0"), ("1", "0.15"), (window, "0.15")]
 total = {r: [0, 0, 0, 0, 0, 0] for r in runs}  # scans, success, answered, wrong, zone scans, zone answered
-
-
-def read(path):
-    rows = {}
-    for line in open(path):
-        f = line.split()
-        if f and f[0] in ("all", "zone"):
-            n = int(f[1])
-            rows[f[0]] = (n, round(n * float(f[2].rstrip("%")) / 100), round(n * float(f[3].rstrip("%")) / 100),
-                          int(f[4]))
-    return rows
-
 
 print(f"| seed, zone | one-shot | N = {window} | label noise 0.15: one-shot | N = {window} |")
 print("| --- | --- | --- | --- | --- |")
@@ -82,14 +72,15 @@ for s in seeds:
     for z in zones:
         cells = []
         for n, noise in runs:
-            r = read(f"{out}/{s}-{z}/w{n}-{noise}.txt")
-            a = r["all"]
+            summary = json.load(open(f"{out}/{s}-{z}/w{n}-{noise}.json"))["summary"]
+            a, zone = summary["all"], summary["zone"]
             t = total[(n, noise)]
-            t[0] += a[0]; t[1] += a[1]; t[2] += a[2]; t[3] += a[3]
-            cell = f"{a[1]} / {a[2]} / {a[3]}"
-            if "zone" in r and r["zone"][0] > 0:
-                t[4] += r["zone"][0]; t[5] += r["zone"][2]
-                cell += f" ({r['zone'][2]} of {r['zone'][0]})"
+            for i, v in enumerate((a["scans"], a["success"], a["answered"], a["confident_wrong"],
+                                   zone["scans"], zone["answered"])):
+                t[i] += v
+            cell = f"{a['success']} / {a['answered']} / {a['confident_wrong']}"
+            if zone["scans"] > 0:
+                cell += f" ({zone['answered']} of {zone['scans']})"
             cells.append(cell)
         print(f"| {s} {z} | " + " | ".join(cells) + " |")
 cells = []
