@@ -69,6 +69,8 @@ cmp -s "$tmp/map.gsfmap" "$tmp/map1.gsfmap" || fail "the one-pass map differs fr
   --label-noise 0.1 --object-confusion 0.15 --noise-seed 7 --quiet >/dev/null || fail "evaluate --label-noise"
 "$gsf" evaluate --map "$tmp/map.gsfmap" --dataset "$tmp/ds" --mode track --json "$tmp/track.json" --quiet \
   >/dev/null || fail "evaluate --mode track"
+"$gsf" evaluate --map "$tmp/map.gsfmap" --dataset "$tmp/ds" --mode drive --json "$tmp/drive.json" --quiet \
+  >/dev/null || fail "evaluate --mode drive"
 "$gsf" evaluate --map "$tmp/map.gsfmap" --dataset "$tmp/ds" --sequence-window 3 --json "$tmp/window.json" --quiet \
   >/dev/null || fail "evaluate --sequence-window"
 "$gsf" evaluate --map "$tmp/map.gsfmap" --dataset "$tmp/ds" --sequence 01 --json "$tmp/prior.json" --mode gsf --limit 6 \
@@ -159,6 +161,10 @@ ts = tr["summary"]
 assert tr["mode"] == "track" and ts["scans"] == 20 == len(tr["scans"]), ts
 assert ts["tracked"] > 0 and ts["confident_wrong"] == 0 and ts["tracked_precise"] >= ts["tracked"] - 1, ts
 assert all(s["how"] in ("one-shot", "track", "recovery") for s in tr["scans"])
+dr = json.load(open(f"{t}/drive.json"))
+ds = dr["summary"]
+assert dr["mode"] == "drive" and ds["scans"] == 20 == len(dr["scans"]), ds
+assert ds["tracked"] > 0 and ds["confident_wrong"] == 0, ds
 # The error along the true scan's axes is the translation error, split (the same vector, another frame);
 # scans without a pose carry none.
 for s in tr["scans"]:

@@ -459,6 +459,45 @@ static void test_vehicle_modes(const void* blob, size_t bytes) {
     CHECK_STATUS(gsf_localize_sequence(NULL, q.xyzi, 4, q.count, q.labels, q.logits, GSF_NUM_CLASSES, still, &r, &info),
                  GSF_STATUS_INVALID_ARGUMENT);
   }
+  {
+    // The vehicle loop: a start-up (NULL odometry), then the same scan again without motion: tracked.
+    const double still[12] = {1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0};
+    gsf_drive_info drive;
+    CHECK_STATUS(
+        gsf_localize_next(loc, q.xyzi, 4, q.count, q.labels, q.logits, GSF_NUM_CLASSES, NULL, NULL, &r, &drive),
+        GSF_STATUS_OK);
+    CHECK(drive.tracked == 0 && drive.track_lost == 0 && drive.prior_used == 0 && drive.window.sequence_index == 0);
+    CHECK(r.confident == 1);
+    CHECK_STATUS(
+        gsf_localize_next(loc, q.xyzi, 4, q.count, q.labels, q.logits, GSF_NUM_CLASSES, still, NULL, &r, &drive),
+        GSF_STATUS_OK);
+    CHECK(drive.tracked == 1 && drive.track_lost == 0);
+    pose_error(r.map_frame_T_scan, q.truth, &m, &deg);
+    CHECK(m < 5.0 && deg < 10.0);
+    // A start-up with a GNSS prior at the truth.
+    gsf_position_prior gnss;
+    memset(&gnss, 0, sizeof(gnss));
+    gnss.x = q.truth[3];
+    gnss.y = q.truth[7];
+    gnss.radius_m = 20.0f;
+    CHECK_STATUS(gsf_localize_next(loc, q.xyzi, 4, q.count, q.labels, q.logits, GSF_NUM_CLASSES, NULL, &gnss, &r, NULL),
+                 GSF_STATUS_OK);
+    CHECK_STATUS(
+        gsf_localize_next(loc, q.xyzi, 4, q.count, q.labels, q.logits, GSF_NUM_CLASSES, NULL, &gnss, &r, &drive),
+        GSF_STATUS_OK);
+    CHECK(drive.prior_used == 1 && drive.tracked == 0);
+    // Bad input: a NaN odometry, an invalid prior, no localizer.
+    double bad[12];
+    memcpy(bad, still, sizeof(bad));
+    bad[3] = NAN;
+    CHECK_STATUS(gsf_localize_next(loc, q.xyzi, 4, q.count, q.labels, q.logits, GSF_NUM_CLASSES, bad, NULL, &r, &drive),
+                 GSF_STATUS_INVALID_ARGUMENT);
+    gnss.has_heading = 7;
+    CHECK_STATUS(gsf_localize_next(loc, q.xyzi, 4, q.count, q.labels, q.logits, GSF_NUM_CLASSES, NULL, &gnss, &r, NULL),
+                 GSF_STATUS_INVALID_ARGUMENT);
+    CHECK_STATUS(gsf_localize_next(NULL, q.xyzi, 4, q.count, q.labels, q.logits, GSF_NUM_CLASSES, NULL, NULL, &r, NULL),
+                 GSF_STATUS_INVALID_ARGUMENT);
+  }
   CHECK(gsf_test_allocations() == before);
   free(copy);
   free(ws);

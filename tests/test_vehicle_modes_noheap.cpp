@@ -68,3 +68,29 @@ TEST_CASE("localize_sequence (several scans) never allocates after init") {
   CHECK(r.sequence_index > 0);
   INFO("window answers " << combined);
 }
+
+TEST_CASE("localize_next (the vehicle loop) never allocates after init") {
+  const auto& w = gsf_test::tiny_world();
+  std::vector<uint64_t> ws(Localizer::required_bytes(w.config) / 8 + 2);
+  Localizer loc;
+  REQUIRE(loc.init(w.config, w.map, ws.data(), ws.size() * 8) == Status::Ok);
+  LocalizeResult r;
+  uint32_t tracked = 0, lost = 0;
+  gsf_test::AllocationScope scope;
+  for (uint32_t k = 0; k < w.queries.size(); ++k) {
+    Eigen::Isometry3d odo =
+        k == 0 ? Eigen::Isometry3d::Identity() : w.queries[k - 1].truth.inverse() * w.queries[k].truth;
+    if (k == w.queries.size() / 2) odo.translation().x() += 30.0;  // a loss
+    PositionPrior gnss;
+    gnss.x = w.queries[k].truth.translation().x();
+    gnss.y = w.queries[k].truth.translation().y();
+    gnss.radius_m = 20.0f;
+    loc.localize_next(w.queries[k].view(), odo, k % 3 == 0 ? &gnss : nullptr, &r);
+    tracked += r.tracked;
+    lost += r.track_lost;
+  }
+  const uint64_t allocations = scope.allocations();
+  CHECK(allocations == 0);
+  CHECK(tracked > 0);  // the calls did real work: tracked scans and a loss
+  CHECK(lost > 0);
+}

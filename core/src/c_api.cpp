@@ -215,6 +215,30 @@ Eigen::Isometry3d pose_from_rows(const double rows[12]) {
   return pose;
 }
 
+// The C prior as the C++ one; false for a NULL prior or a has_heading other than 0 or 1.
+bool position_prior(const gsf_position_prior* prior, gsf::PositionPrior* p) {
+  if (prior == nullptr || prior->has_heading > 1) return false;
+  p->x = prior->x;
+  p->y = prior->y;
+  p->radius_m = prior->radius_m;
+  p->has_heading = prior->has_heading != 0;
+  p->heading_deg = prior->heading_deg;
+  p->heading_tolerance_deg = prior->heading_tolerance_deg;
+  return true;
+}
+
+gsf_window_info window_info(const gsf::LocalizeResult& r) {
+  gsf_window_info w{};
+  w.sequence_index = r.sequence_index;
+  w.combined = r.window_combined ? 1u : 0u;
+  w.checked = r.window_checked ? 1u : 0u;
+  w.contradicted = r.window_contradicted ? 1u : 0u;
+  w.scans = r.window_scans;
+  for (uint32_t k = 0; k < GSF_MAX_WINDOW_SCANS; ++k) w.ids[k] = r.window_ids[k];
+  w.single_confidence = r.single_confidence;
+  return w;
+}
+
 }  // namespace
 
 extern "C" {
@@ -310,16 +334,8 @@ static_assert(GSF_MAX_WINDOW_SCANS == gsf::kMaxWindowScans, "gsf_window_info.ids
 int gsf_localize_with_prior(gsf_localizer* localizer, const float* xyz_stride, uint32_t stride, uint32_t count,
                             const uint32_t* labels, const float* logits, uint32_t logit_dim,
                             const gsf_position_prior* prior, gsf_result* out) noexcept {
-  const bool valid = prior != nullptr && prior->has_heading <= 1;
   gsf::PositionPrior p;
-  if (valid) {
-    p.x = prior->x;
-    p.y = prior->y;
-    p.radius_m = prior->radius_m;
-    p.has_heading = prior->has_heading != 0;
-    p.heading_deg = prior->heading_deg;
-    p.heading_tolerance_deg = prior->heading_tolerance_deg;
-  }
+  const bool valid = position_prior(prior, &p);
   const gsf::ScanView scan = scan_view(xyz_stride, stride, count, labels, logits, logit_dim);
   const gsf::LocalizeResult r = run_on_localizer(
       localizer, valid, [&](gsf::Localizer& l, gsf::LocalizeResult* res) { l.localize(scan, p, res); });
@@ -350,15 +366,29 @@ int gsf_localize_sequence(gsf_localizer* localizer, const float* xyz_stride, uin
     l.localize_sequence(scan, odometry, res);
   });
   if (out != nullptr) fill(r, out);
-  if (window != nullptr) {
-    *window = gsf_window_info{};
-    window->sequence_index = r.sequence_index;
-    window->combined = r.window_combined ? 1u : 0u;
-    window->checked = r.window_checked ? 1u : 0u;
-    window->contradicted = r.window_contradicted ? 1u : 0u;
-    window->scans = r.window_scans;
-    for (uint32_t k = 0; k < GSF_MAX_WINDOW_SCANS; ++k) window->ids[k] = r.window_ids[k];
-    window->single_confidence = r.single_confidence;
+  if (window != nullptr) *window = window_info(r);
+  return code(r.status);
+}
+
+int gsf_localize_next(gsf_localizer* localizer, const float* xyz_stride, uint32_t stride, uint32_t count,
+                      const uint32_t* labels, const float* logits, uint32_t logit_dim, const double previous_T_scan[12],
+                      const gsf_position_prior* gnss, gsf_result* out, gsf_drive_info* info) noexcept {
+  gsf::PositionPrior p;
+  const bool valid = gnss == nullptr || position_prior(gnss, &p);
+  const gsf::ScanView scan = scan_view(xyz_stride, stride, count, labels, logits, logit_dim);
+  const gsf::LocalizeResult r = run_on_localizer(localizer, valid, [&](gsf::Localizer& l, gsf::LocalizeResult* res) {
+    if (previous_T_scan == nullptr) l.reset_drive();  // the first scan of a drive
+    const Eigen::Isometry3d odometry =
+        previous_T_scan == nullptr ? Eigen::Isometry3d::Identity() : pose_from_rows(previous_T_scan);
+    l.localize_next(scan, odometry, gnss != nullptr ? &p : nullptr, res);
+  });
+  if (out != nullptr) fill(r, out);
+  if (info != nullptr) {
+    *info = gsf_drive_info{};
+    info->tracked = r.tracked ? 1u : 0u;
+    info->track_lost = r.track_lost ? 1u : 0u;
+    info->prior_used = r.prior_used ? 1u : 0u;
+    info->window = window_info(r);
   }
   return code(r.status);
 }

@@ -271,6 +271,7 @@ Status Localizer::init(const LocalizerConfig& config, const MapView& map, void* 
   im.semantic = semantic_grid_view(map);
   im.answer.forget();
   impl_ = &im;
+  has_drive_pose_ = false;
   initialized_ = true;
   return Status::Ok;
 }
@@ -921,12 +922,22 @@ Status Localizer::localize_sequence(const ScanView& scan, const Eigen::Isometry3
   }
   localize_in(scan, nullptr, &out);
   const uint64_t t0 = now(clock_);
-  out.single_confidence = out.confidence;
   // This scan's verification sample: verification's copy, or (no hypotheses) made here from its voxels.
   const bool has_scan = out.scan_voxels > 0 && (out.status == Status::Ok || out.status == Status::NoSolution);
   if (has_scan && im.answer.compact_point_count() == 0) im.answer.prepare(im.voxels, im.weights, config_.verify);
   out.sequence_index = im.window.begin_scan(previous_T_scan, has_scan ? im.answer.compact_points() : nullptr,
                                             has_scan ? im.answer.compact_point_count() : 0);
+  settle_with_window(has_scan, out);
+  out.times.window = now(clock_) - t0;
+  out.times.total += out.times.window;
+  return out.status;
+}
+
+// The one-shot answer in `out` (its scan just entered the window) with the window: combined when it is
+// not confident, checked when it is with a thin margin; then what the scan offers its successors.
+void Localizer::settle_with_window(bool has_scan, LocalizeResult& out) {
+  Impl& im = *impl_;
+  out.single_confidence = out.confidence;
   out.window_scans = 1;
   out.window_ids[0] = out.sequence_index;
   WindowCandidate own[ScanWindow::kMaxCandidates];
@@ -952,13 +963,52 @@ Status Localizer::localize_sequence(const ScanView& scan, const Eigen::Isometry3
     offer[n++] = WindowCandidate{out.map_T_scan, out.confidence_evidence.inlier_share, out.confidence_evidence.inliers};
   for (uint32_t k = 0; k < n_own && n < ScanWindow::kMaxCandidates; ++k) offer[n++] = own[k];
   im.window.set_candidates(offer, n);
-  out.times.window = now(clock_) - t0;
-  out.times.total += out.times.window;
-  return out.status;
 }
 
 void Localizer::reset_sequence() {
   if (impl_) impl_->window.reset();
+}
+
+Status Localizer::localize_next(const ScanView& scan, const Eigen::Isometry3d& previous_T_scan,
+                                const PositionPrior* gnss, LocalizeResult* out_ptr) {
+  LocalizeResult scratch_result;
+  LocalizeResult& out = out_ptr ? *out_ptr : scratch_result;
+  out = LocalizeResult();
+  if (!initialized_) return out.status = Status::NotInitialized;
+  if (!is_rigid_pose(previous_T_scan, kMaxOdometryStepM)) {
+    reset_drive();
+    return out.status = Status::InvalidArgument;
+  }
+  uint64_t lost_ns = 0;  // a lost tracking attempt's time counts for the scan
+  // The window holds consecutive scans localized from scratch: a tracked scan or a prior's answer ends the
+  // sequence. (Tracked scans kept in the window, their tracked poses as candidates, answered no more after
+  // a loss and, with a bad odometry, confidently wrong: docs/vehicle-modes.md, *The loop in the library*.)
+  if (has_drive_pose_) {
+    track(scan, drive_pose_ * previous_T_scan, &out);
+    if (out.status == Status::Ok && out.confident) {
+      reset_sequence();
+      drive_pose_ = out.map_frame_T_scan;
+      return out.status;
+    }
+    lost_ns = out.times.total;
+  }
+  const bool lost = has_drive_pose_;
+  if (gnss) {
+    localize(scan, *gnss, &out);
+    reset_sequence();
+  } else {
+    localize_sequence(scan, previous_T_scan, &out);
+  }
+  out.track_lost = lost;
+  out.times.total += lost_ns;
+  has_drive_pose_ = out.status == Status::Ok && out.confident;
+  if (has_drive_pose_) drive_pose_ = out.map_frame_T_scan;
+  return out.status;
+}
+
+void Localizer::reset_drive() {
+  has_drive_pose_ = false;
+  reset_sequence();
 }
 
 PoseVerification Localizer::score_pose(const Eigen::Isometry3d& map_T_scan) const {

@@ -69,7 +69,9 @@ std::vector<OptionSpec> evaluate_option_specs() {
       {"map-sequence", "mapping sequence (Scan Context peer database)", "00"},
       {"mode",
        "comma list of instance (GSF off, Outram), gsf, gsf+refine, scan-context, or all; or track (tracking over the "
-       "10 Hz stretches of sequence 02, gsf simulate --stretches; on real data the whole --sequence is one drive)",
+       "10 Hz stretches of sequence 02, gsf simulate --stretches; on real data the whole --sequence is one drive), or "
+       "drive (the same stretches through Localizer::localize_next, the library's vehicle loop: tracking, and on a "
+       "loss the window of the last scans, tracked ones included, or the prior of --prior-sigma)",
        "all"},
       {"json", "write per-mode summaries and per-query results here", ""},
       {"svg", "directory for the pictures (map + trajectory, correspondences, reliability diagram)", ""},
@@ -129,8 +131,8 @@ bool parse_eval_options(const Args& args, EvalOptions* o, std::string* error) {
   o->overrides = args.get("set");
   o->classes = args.get("classes");
   if (!parse_label_error_options(args, &o->label_errors, error)) return false;
-  if (args.get("mode") == "track") {
-    o->modes = {"track"};
+  if (args.get("mode") == "track" || args.get("mode") == "drive") {
+    o->modes = {args.get("mode")};
   } else if (!parse_modes(args.get("mode"), &o->modes)) {
     *error = "bad --mode '" + args.get("mode") + "'";
     return false;
@@ -180,7 +182,7 @@ int cmd_evaluate(int argc, char** argv) {
     if (!args.has("sequence")) o.sequence = "02";  // the simulator's stretches
     return run_window(o);
   }
-  if (args.get("mode") == "track") {
+  if (args.get("mode") == "track" || args.get("mode") == "drive") {
     if (!args.has("sequence")) o.sequence = "02";  // the simulator's stretches
     return run_tracking(o);
   }

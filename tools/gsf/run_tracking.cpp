@@ -3,6 +3,9 @@
 // --prior-sigma is given); every other scan is tracked from the last answered pose x the odometry between
 // the dataset's poses (with noise). A tracked scan that is not confident is a loss: the same scan is
 // localized one-shot (a recovery when that answers).
+// gsf evaluate --mode drive: the same stretches through Localizer::localize_next, the library's own loop:
+// tracking while the last pose was confident; at a stretch's start and on a loss localize_sequence (the
+// window of the last scans, tracked ones included) or, with --prior-sigma, the prior.
 #include <algorithm>
 #include <cstdio>
 #include <fstream>
@@ -46,6 +49,7 @@ struct TrackSummary {
 // The loop's state within one stretch.
 struct Vehicle {
   bool have_pose = false;
+  bool started = false;  // --mode drive: localize_next has seen this stretch's first scan
   Eigen::Isometry3d last_estimate, last_truth;
 };
 
@@ -70,6 +74,36 @@ void judge_scan(const LocalizeResult& r, const Eigen::Isometry3d& truth, ScanRec
   rec->precise = rec->error.translation_m < kTrackTranslation && rec->error.rotation_deg < kTrackRotationDeg;
 }
 
+void finish_scan(const LocalizeResult& r, const Eigen::Isometry3d& truth, Vehicle* v, ScanRecord* rec) {
+  judge_scan(r, truth, rec);
+  v->have_pose = rec->answered;
+  v->last_estimate = r.map_frame_T_scan;
+  v->last_truth = truth;
+}
+
+// One scan of --mode drive: Localizer::localize_next decides (its own pose; the odometry from the
+// dataset's poses with noise, none at the stretch's first scan).
+ScanRecord drive_scan(const TrackRun& t, uint32_t i, const Eigen::Isometry3d& truth, Vehicle* v, ScanRecord rec,
+                      LocalizeResult& r) {
+  const bool first = !v->started;
+  if (first) t.loc.reset_drive();
+  const Eigen::Isometry3d odometry = first
+                                         ? Eigen::Isometry3d::Identity()
+                                         : noisy_odometry(v->last_truth, truth, t.o.odometry_noise, t.o.prior.seed, i);
+  const PositionPrior prior = draw_prior(t.o.prior, truth, i);
+  t.loc.localize_next(t.buf.view(), odometry, t.o.prior.enabled ? &prior : nullptr, &r);
+  v->started = true;
+  rec.how = r.tracked ? "track" : r.track_lost ? "recovery" : "one-shot";
+  rec.loss = r.track_lost;
+  rec.time_ms = double(r.times.total) / 1e6;
+  if (r.tracked) {
+    rec.track_ms = rec.time_ms;
+    rec.track_stages = stage_ms(r.times);
+  }
+  finish_scan(r, truth, v, &rec);
+  return rec;
+}
+
 // One scan of the loop: track when the vehicle has a pose, one-shot otherwise or after a loss.
 ScanRecord run_scan(const TrackRun& t, uint32_t i, Vehicle* v) {
   ScanRecord rec;
@@ -81,6 +115,7 @@ ScanRecord run_scan(const TrackRun& t, uint32_t i, Vehicle* v) {
   const Status rs =
       read_scan(t.src, i, t.buf, t.o.logits, 2000000u + rec.frame, t.labels.config_table(), &t.label_errors);
   if (rs != Status::Ok) r.status = rs;
+  if (rs == Status::Ok && t.o.modes.front() == "drive") return drive_scan(t, i, truth, v, rec, r);
   if (rs == Status::Ok && v->have_pose) {
     const Eigen::Isometry3d predicted =
         v->last_estimate * noisy_odometry(v->last_truth, truth, t.o.odometry_noise, t.o.prior.seed, i);
@@ -97,10 +132,7 @@ ScanRecord run_scan(const TrackRun& t, uint32_t i, Vehicle* v) {
     rec.how = rec.loss ? "recovery" : "one-shot";
     rec.time_ms += double(r.times.total) / 1e6;
   }
-  judge_scan(r, truth, &rec);
-  v->have_pose = rec.answered;
-  v->last_estimate = r.map_frame_T_scan;
-  v->last_truth = truth;
+  finish_scan(r, truth, v, &rec);
   return rec;
 }
 
@@ -141,8 +173,9 @@ TrackSummary summarize_tracking(const std::vector<ScanRecord>& recs) {
 }
 
 void print_tracking(const TrackSummary& s, uint32_t stretches, const EvalOptions& o) {
-  std::printf("\ntracking: %u stretches, %u scans (sequence %s), odometry noise %.3f", stretches, s.scans,
-              o.sequence.c_str(), o.odometry_noise);
+  std::printf("\n%s: %u stretches, %u scans (sequence %s), odometry noise %.3f",
+              o.modes.front() == "drive" ? "drive (localize_next)" : "tracking", stretches, s.scans, o.sequence.c_str(),
+              o.odometry_noise);
   if (o.prior.enabled)
     std::printf(", one-shot with a prior (sigma %.1f m, radius %.1f m)", o.prior.sigma, o.prior.radius);
   std::printf("\n%8s %8s %8s %15s %9s %15s %13s %7s %10s %11s %10s %10s\n", "scans", "one-shot", "tracked",
@@ -168,7 +201,7 @@ void write_tracking_json(const std::string& path, const EvalOptions& o, const Tr
   j.field("map", o.map_path);
   j.field("dataset", o.dataset);
   j.field("sequence", o.sequence);
-  j.field("mode", "track");
+  j.field("mode", o.modes.front());
   j.field("odometry_noise", o.odometry_noise);
   j.field("prior_sigma_m", o.prior.enabled ? o.prior.sigma : -1.0);
   j.key("summary");

@@ -215,6 +215,27 @@ int gsf_localize_sequence(gsf_localizer* localizer, const float* xyz_stride, uin
                           const uint32_t* labels, const float* logits, uint32_t logit_dim,
                           const double previous_T_scan[12], gsf_result* out, gsf_window_info* window) GSF_NOEXCEPT;
 
+// ---- The vehicle loop (docs/vehicle-modes.md, "The loop") in one call per scan ----
+
+// How gsf_localize_next found the scan's pose.
+typedef struct gsf_drive_info {
+  uint32_t tracked;     // 1: tracked from the last confident pose times the odometry
+  uint32_t track_lost;  // 1: tracking was tried and lost; the pose is from localizing the same scan again
+  uint32_t prior_used;  // 1: ... with the GNSS prior (else from the window of the last scans)
+  gsf_window_info window;
+} gsf_drive_info;
+
+// One scan of a drive: while the last scan's pose was confident, tracking from it times the odometry;
+// at start-up and when tracking is lost, the same scan localized from scratch, with `gnss` as a position
+// prior when given (NULL: none), else with the last scans of the drive (tracked ones included) tied by
+// the odometry. previous_T_scan: this scan's pose in the previous scan's frame (row-major 3x4 [R | t]);
+// NULL starts a new drive (the first scan, or after a gap). info: optional. Act on the pose only when
+// out->confident = 1. GSF_STATUS_INVALID_ARGUMENT for a non-finite odometry or an invalid prior (the drive
+// restarts on a bad odometry).
+int gsf_localize_next(gsf_localizer* localizer, const float* xyz_stride, uint32_t stride, uint32_t count,
+                      const uint32_t* labels, const float* logits, uint32_t logit_dim, const double previous_T_scan[12],
+                      const gsf_position_prior* gnss, gsf_result* out, gsf_drive_info* info) GSF_NOEXCEPT;
+
 #ifdef __cplusplus
 }  // extern "C"
 #endif

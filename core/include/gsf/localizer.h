@@ -119,6 +119,9 @@ struct LocalizeResult {
   uint32_t window_candidates = 0;    // distinct poses the window scored
   bool window_checked = false;       // a confident answer with a thin margin was checked by the window
   bool window_contradicted = false;  // ... which put it elsewhere: replaced, or confidence <= 1 - the window's
+  // The vehicle loop (localize_next): tracking was tried on this scan and lost (not confident), so the
+  // answer is the one-shot's (with the GNSS prior when given, else localize_sequence's) on the same scan.
+  bool track_lost = false;
 };
 
 class Localizer {
@@ -179,6 +182,22 @@ class Localizer {
   // Forgets the window: the next localize_sequence() starts a sequence (after a gap in the odometry).
   void reset_sequence();
 
+  // The vehicle loop of docs/vehicle-modes.md in one call per scan: while the last scan's pose was
+  // confident, track() from it times the odometry; at start-up and on a loss (the tracked pose not
+  // confident: track_lost), the same scan is localized again from scratch, with `gnss` as a position
+  // prior when given (nullptr: none), else by localize_sequence: until the first confident answer the
+  // last scans settle a repetitive place together (the window restarts after a tracked scan and after a
+  // prior's answer: it holds consecutive scans localized from scratch). `previous_T_scan`: this scan's pose in the
+  // previous scan's frame (odometry since the previous call); ignored on the first call after init() or reset_drive().
+  // Act on the pose only when out->confident. InvalidArgument for an odometry that is not a rigid pose or a step over 1
+  // km (the drive restarts). Calls to localize(), track() or localize_sequence() between two calls break the odometry
+  // chain: call reset_drive() after them. The window trusts the odometry: with one 10 deg a metre off it
+  // answered 2 of 480 scans confidently wrong (docs/vehicle-modes.md): reset_drive() on an odometry fault.
+  Status localize_next(const ScanView& scan, const Eigen::Isometry3d& previous_T_scan, const PositionPrior* gnss,
+                       LocalizeResult* out);
+  // Forgets the drive (the pose and the window): the next localize_next() is a start-up.
+  void reset_drive();
+
   // The correspondences the last localize() passed to the max clique (for pictures and debugging):
   // copies up to `max` into `out`, returns how many there were.
   struct Correspondence {
@@ -225,6 +244,10 @@ class Localizer {
   Impl* impl_ = nullptr;
   Clock* clock_ = nullptr;
   bool initialized_ = false;
+  // localize_next's state: the last confident pose (map frame), while there is one.
+  bool has_drive_pose_ = false;
+  Eigen::Isometry3d drive_pose_ = Eigen::Isometry3d::Identity();
+  void settle_with_window(bool has_scan, LocalizeResult& out);
 };
 
 }  // namespace gsf
