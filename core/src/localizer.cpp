@@ -877,10 +877,11 @@ uint32_t offered_candidates(const AnswerSelector& sel, const LocalizeResult& r, 
 
 }  // namespace
 
-// The window's answer into `out` (when it is better than the scan's own): pose, confidence, provenance.
+// The window's answer into `out` (when it is better than the scan's own answer and the scan's own sample
+// lets it stand: WindowOutcome::newest_agrees): pose, confidence, provenance.
 void Localizer::apply_window(const WindowOutcome& w, LocalizeResult& out) const {
   out.window_candidates = w.candidates;
-  if (!w.combined || !(w.confidence > out.confidence)) return;
+  if (!w.combined || !w.newest_agrees || !(w.confidence > out.confidence)) return;
   out.status = Status::Ok;
   out.map_T_scan = w.map_T_scan;
   out.map_frame_T_scan = to_map_frame(map_.georef, w.map_T_scan);
@@ -896,15 +897,16 @@ void Localizer::apply_window(const WindowOutcome& w, LocalizeResult& out) const 
 
 // A confident answer with a thin margin over its rivals (a lattice's flip had z_rival 1.2-1.7 at
 // confidence 0.92-0.98, suite seeds 12 and 13) is checked by the window: an answer the combined scans
-// put elsewhere (beyond 5 m / 10 deg) is replaced by the window's when that is more confident, else keeps
-// at most 1 - the window's confidence (as a prior's answer against the global search).
+// put elsewhere (beyond 5 m / 10 deg) is replaced by the window's when that is more confident and the
+// scan's own sample lets it stand, else keeps at most 1 - the window's confidence (as a prior's answer
+// against the global search).
 void Localizer::check_with_window(const WindowOutcome& w, LocalizeResult& out) const {
   out.window_checked = true;
   out.window_candidates = w.candidates;
   if (!w.combined) return;
   if (same_answer(out.map_T_scan, w.map_T_scan)) return;
   out.window_contradicted = true;
-  if (w.confidence > out.confidence) return apply_window(w, out);
+  if (w.newest_agrees && w.confidence > out.confidence) return apply_window(w, out);
   out.confidence = std::min(out.confidence, 1.0 - w.confidence);
   out.confident = out.confidence >= config_.confidence.min_probability;
 }

@@ -170,9 +170,11 @@ class Localizer {
   // candidate poses and this scan's are moved to this scan through the odometry and scored on all the
   // window's scans together, and the confidence comes from that combined evidence (window_combined,
   // window_scans, window_ids). The window's answer replaces the single scan's when its confidence is
-  // higher. A confident answer with a thin margin over its rivals (z_rival < kWindowCheckZ) is checked
-  // by the window: if the combined scans put the scan elsewhere, the window's answer replaces it when more
-  // confident, else it keeps at most 1 - the window's confidence (window_checked, window_contradicted).
+  // higher and this scan agrees with it about as well as the older ones do (a wrong odometry moves their
+  // poses where this scan is not: ScanWindow, newest_agrees). A confident answer with a thin margin over
+  // its rivals (z_rival < kWindowCheckZ) is checked by the window: if the combined scans put the scan
+  // elsewhere, the window's answer replaces it when more confident (and agreed), else it keeps at most
+  // 1 - the window's confidence (window_checked, window_contradicted).
   // `previous_T_scan`: this scan's pose in the previous scan's frame (odometry between the two calls' scans); ignored
   // on the first call after init() or reset_sequence(). Every call (whatever its status) enters the scan into the
   // window. InvalidArgument for an odometry that is not a rigid pose (non-finite, a rotation off by more
@@ -191,8 +193,8 @@ class Localizer {
   // previous scan's frame (odometry since the previous call); ignored on the first call after init() or reset_drive().
   // Act on the pose only when out->confident. InvalidArgument for an odometry that is not a rigid pose or a step over 1
   // km (the drive restarts). Calls to localize(), track() or localize_sequence() between two calls break the odometry
-  // chain: call reset_drive() after them. The window trusts the odometry: with one 10 deg a metre off it
-  // answered 2 of 480 scans confidently wrong (docs/vehicle-modes.md): reset_drive() on an odometry fault.
+  // chain: call reset_drive() after them, and after an odometry fault (the window reads scans through
+  // the odometry; docs/vehicle-modes.md, *The loop in the library*).
   Status localize_next(const ScanView& scan, const Eigen::Isometry3d& previous_T_scan, const PositionPrior* gnss,
                        LocalizeResult* out);
   // Forgets the drive (the pose and the window): the next localize_next() is a start-up.

@@ -44,7 +44,12 @@ struct WindowOutcome {
   PoseVerification verification;                                 // its score on the combined sample
   ConfidenceEvidence evidence;
   double confidence = 0.0;
-  float inlier_share = 0.0f;     // the answer's candidate's (the largest of the scans that offered it)
+  float inlier_share = 0.0f;  // the answer's candidate's (the largest of the scans that offered it)
+  // Every held scan's own sample agrees with the answer about as well as the others (ScanWindow's
+  // newest_agrees): the newest scan's agreement at most 0.1 below the older scans' lowest. A wrong odometry
+  // (or a gap in it) moves the older scans' poses to a pose they agree on where the newest scan is not;
+  // without this the answer may contradict the scan's own, not replace it (docs/vehicle-modes.md).
+  bool newest_agrees = false;
   uint32_t candidates = 0;       // distinct candidates scored
   uint32_t scans = 0;            // scans whose samples were combined (the newest included)
   uint32_t ids[kMaxScans] = {};  // their sequence numbers, newest first
@@ -99,6 +104,7 @@ class ScanWindow {
   void drop_oldest();
   uint32_t gather(const WindowCandidate* own, uint32_t n_own, float same_m, float same_deg);
   uint32_t pick_rivals(uint32_t n, float same_m, float same_deg, Eigen::Isometry3d* rivals) const;
+  bool newest_agrees(const SemanticGridView& grid, const float* weights, float lambda) const;
 
   VerifyPoint* points_ = nullptr;  // scans x max_points: every held scan's sample, in the newest scan's frame
   Scored* scored_ = nullptr;       // scans x candidates: the candidates of one combine()
