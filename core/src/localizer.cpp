@@ -897,16 +897,18 @@ void Localizer::apply_window(const WindowOutcome& w, LocalizeResult& out) const 
 
 // A confident answer with a thin margin over its rivals (a lattice's flip had z_rival 1.2-1.7 at
 // confidence 0.92-0.98, suite seeds 12 and 13) is checked by the window: an answer the combined scans
-// put elsewhere (beyond 5 m / 10 deg) is replaced by the window's when that is more confident and the
-// scan's own sample lets it stand, else keeps at most 1 - the window's confidence (as a prior's answer
-// against the global search).
+// put elsewhere (beyond 5 m / 10 deg) is replaced by the window's when that is more confident, else keeps
+// at most 1 - the window's confidence (as a prior's answer against the global search). Only a window
+// answer the scan agrees with as well as the older scans (WindowOutcome::newest_agrees) contradicts: under
+// a wrong odometry the others lowered right answers (docs/vehicle-modes.md, *The loop in the library*).
 void Localizer::check_with_window(const WindowOutcome& w, LocalizeResult& out) const {
   out.window_checked = true;
   out.window_candidates = w.candidates;
   if (!w.combined) return;
   if (same_answer(out.map_T_scan, w.map_T_scan)) return;
+  if (!w.newest_agrees) return;  // a pose the scan itself does not bear out cannot contradict it
   out.window_contradicted = true;
-  if (w.newest_agrees && w.confidence > out.confidence) return apply_window(w, out);
+  if (w.confidence > out.confidence) return apply_window(w, out);
   out.confidence = std::min(out.confidence, 1.0 - w.confidence);
   out.confident = out.confidence >= config_.confidence.min_probability;
 }

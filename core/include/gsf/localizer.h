@@ -173,8 +173,8 @@ class Localizer {
   // higher and this scan agrees with it about as well as the older ones do (a wrong odometry moves their
   // poses where this scan is not: ScanWindow, newest_agrees). A confident answer with a thin margin over
   // its rivals (z_rival < kWindowCheckZ) is checked by the window: if the combined scans put the scan
-  // elsewhere, the window's answer replaces it when more confident (and agreed), else it keeps at most
-  // 1 - the window's confidence (window_checked, window_contradicted).
+  // elsewhere (at a pose this scan agrees with as well), the window's answer replaces it when more
+  // confident, else it keeps at most 1 - the window's confidence (window_checked, window_contradicted).
   // `previous_T_scan`: this scan's pose in the previous scan's frame (odometry between the two calls' scans); ignored
   // on the first call after init() or reset_sequence(). Every call (whatever its status) enters the scan into the
   // window. InvalidArgument for an odometry that is not a rigid pose (non-finite, a rotation off by more

@@ -48,7 +48,7 @@ struct WindowOutcome {
   // Every held scan's own sample agrees with the answer about as well as the others (ScanWindow's
   // newest_agrees): the newest scan's agreement at most 0.1 below the older scans' lowest. A wrong odometry
   // (or a gap in it) moves the older scans' poses to a pose they agree on where the newest scan is not;
-  // without this the answer may contradict the scan's own, not replace it (docs/vehicle-modes.md).
+  // without this the answer neither replaces nor contradicts the scan's own (docs/vehicle-modes.md).
   bool newest_agrees = false;
   uint32_t candidates = 0;       // distinct candidates scored
   uint32_t scans = 0;            // scans whose samples were combined (the newest included)
