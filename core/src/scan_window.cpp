@@ -13,7 +13,7 @@ namespace {
 
 // How far the newest scan's agreement with the window's answer may fall below the older scans' (newest_agrees).
 // On seeds 11-12 (hall and lattice, label noise 0.15) 0.05, 0.1 and 0.2 gave the same answers with a good
-// odometry and with one 10 deg a metre off (docs/vehicle-modes.md, *A wrong odometry*).
+// odometry and with one 10 deg a metre off (docs/vehicle-modes.md, *The loop in the library*).
 constexpr float kAgreementSlack = 0.1f;
 
 // Within same_m and same_deg of each other in the bird's-eye view verification sees: one answer.

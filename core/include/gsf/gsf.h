@@ -227,9 +227,9 @@ typedef struct gsf_drive_info {
 
 // One scan of a drive: while the last scan's pose was confident, tracking from it times the odometry;
 // at start-up and when tracking is lost, the same scan localized from scratch, with `gnss` as a position
-// prior when given (NULL: none), else with the last scans of the drive (tracked ones included) tied by
-// the odometry. previous_T_scan: this scan's pose in the previous scan's frame (row-major 3x4 [R | t]);
-// NULL starts a new drive (the first scan, or after a gap). info: optional. Act on the pose only when
+// prior when given (NULL: none), else with the window of the last scans localized from scratch, tied by
+// the odometry (gsf_localize_sequence). previous_T_scan: this scan's pose in the previous scan's frame (row-major 3x4
+// [R | t]); NULL starts a new drive (the first scan, or after a gap). info: optional. Act on the pose only when
 // out->confident = 1. GSF_STATUS_INVALID_ARGUMENT for a non-finite odometry or an invalid prior (the drive
 // restarts on a bad odometry).
 int gsf_localize_next(gsf_localizer* localizer, const float* xyz_stride, uint32_t stride, uint32_t count,
