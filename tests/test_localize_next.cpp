@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "gsf/localizer.h"
+#include "ready_localizer.h"
 #include "tiny_world.h"
 
 namespace test_localize_next {
@@ -17,13 +18,7 @@ using namespace gsf;
 
 namespace {
 
-struct Ready {
-  std::vector<uint64_t> words;
-  Localizer loc;
-  explicit Ready(const gsf_test::TinyWorld& w) : words(Localizer::required_bytes(w.config) / 8 + 2) {
-    REQUIRE(loc.init(w.config, w.map, words.data(), words.size() * 8) == Status::Ok);
-  }
-};
+using Ready = gsf_test::ReadyLocalizer;
 
 // The odometry from query k - 1 to query k (the tiny world's queries are metres apart).
 Eigen::Isometry3d odometry(const gsf_test::TinyWorld& w, uint32_t k) {

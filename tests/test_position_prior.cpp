@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "gsf/localizer.h"
+#include "ready_localizer.h"
 #include "tiny_world.h"
 
 namespace test_position_prior {
@@ -17,13 +18,7 @@ using gsf_test::tiny_world;
 
 namespace {
 
-struct Ready {
-  std::vector<uint64_t> words;
-  Localizer loc;
-  explicit Ready(const gsf_test::TinyWorld& w) : words(Localizer::required_bytes(w.config) / 8 + 2) {
-    REQUIRE(loc.init(w.config, w.map, words.data(), words.size() * 8) == Status::Ok);
-  }
-};
+using Ready = gsf_test::ReadyLocalizer;
 
 // A disc of `radius` whose centre lies `offset` metres from the truth, in a direction that turns with k.
 PositionPrior prior_near(const Eigen::Isometry3d& truth, double offset, float radius, uint32_t k) {

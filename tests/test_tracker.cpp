@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "gsf/localizer.h"
+#include "ready_localizer.h"
 #include "tiny_world.h"
 
 namespace test_tracker {
@@ -18,13 +19,7 @@ using gsf_test::tiny_world;
 
 namespace {
 
-struct Ready {
-  std::vector<uint64_t> words;
-  Localizer loc;
-  Ready(const gsf_test::TinyWorld& w, const LocalizerConfig& c) : words(Localizer::required_bytes(c) / 8 + 2) {
-    REQUIRE(loc.init(c, w.map, words.data(), words.size() * 8) == Status::Ok);
-  }
-};
+using Ready = gsf_test::ReadyLocalizer;
 
 // The truth moved `metres` in a direction that turns with k and turned by +-`deg` (sign alternating).
 Eigen::Isometry3d perturbed(const Eigen::Isometry3d& truth, double metres, double deg, uint32_t k) {

@@ -71,7 +71,8 @@ std::vector<OptionSpec> evaluate_option_specs() {
        "comma list of instance (GSF off, Outram), gsf, gsf+refine, scan-context, or all; or track (tracking over the "
        "10 Hz stretches of sequence 02, gsf simulate --stretches; on real data the whole --sequence is one drive), or "
        "drive (the same stretches through Localizer::localize_next, the library's vehicle loop: tracking, and on a "
-       "loss the window of the last scans, tracked ones included, or the prior of --prior-sigma)",
+       "loss the same scan from scratch: the window of the last scans localized from scratch, or the prior of "
+       "--prior-sigma)",
        "all"},
       {"json", "write per-mode summaries and per-query results here", ""},
       {"svg", "directory for the pictures (map + trajectory, correspondences, reliability diagram)", ""},

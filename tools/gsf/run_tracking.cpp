@@ -5,7 +5,7 @@
 // localized one-shot (a recovery when that answers).
 // gsf evaluate --mode drive: the same stretches through Localizer::localize_next, the library's own loop:
 // tracking while the last pose was confident; at a stretch's start and on a loss localize_sequence (the
-// window of the last scans, tracked ones included) or, with --prior-sigma, the prior.
+// window of the last scans localized from scratch) or, with --prior-sigma, the prior.
 #include <algorithm>
 #include <cstdio>
 #include <fstream>
