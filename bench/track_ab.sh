@@ -5,7 +5,8 @@
 # per binary and noise: tracked / within 0.3 m, 1 deg / answered / confident wrong / losses, recovered,
 # and the median time of a tracked scan (a timing, so run both on an idle machine; the two binaries run
 # together, so they share the load). CALLGRIND=SEED also counts track()'s instructions per call on that
-# seed's world (valgrind; load-independent).
+# seed's world (valgrind; load-independent). LABEL_NOISE=P gives the queries' labels simulated network
+# errors (`evaluate --label-noise P`, both binaries alike; default 0).
 #
 # Usage: bench/track_ab.sh BASE_GSF NEW_GSF OUT [SEEDS] [NOISES]
 #   SEEDS default "6 7 8 9 10 11 12 13 14", NOISES default "0.02 0.3 1.0".
@@ -14,6 +15,8 @@ set -euo pipefail
 base=$(realpath "$1"); new=$(realpath "$2"); out=$3
 seeds=${4:-"6 7 8 9 10 11 12 13 14"}
 noises=${5:-"0.02 0.3 1.0"}
+labels=(--label-noise "${LABEL_NOISE:-0}")
+tag=${LABEL_NOISE:+l$LABEL_NOISE-}  # the runs with label errors are kept beside those without
 mkdir -p "$out"
 for s in $seeds; do
   d=$out/w$s
@@ -22,23 +25,23 @@ for s in $seeds; do
     "$new" build-map --dataset "$d" --out "$d/m.map" --quiet >>"$out/sim$s.log"
   fi
   for n in $noises; do
-    "$base" evaluate --map "$d/m.map" --dataset "$d" --mode track --odometry-noise "$n" \
-      --json "$out/base-$n-$s.json" --quiet >/dev/null &
-    "$new" evaluate --map "$d/m.map" --dataset "$d" --mode track --odometry-noise "$n" \
-      --json "$out/new-$n-$s.json" --quiet >/dev/null
+    "$base" evaluate --map "$d/m.map" --dataset "$d" --mode track --odometry-noise "$n" "${labels[@]}" \
+      --json "$out/${tag}base-$n-$s.json" --quiet >/dev/null &
+    "$new" evaluate --map "$d/m.map" --dataset "$d" --mode track --odometry-noise "$n" "${labels[@]}" \
+      --json "$out/${tag}new-$n-$s.json" --quiet >/dev/null
     wait
   done
 done
-python3 - "$out" "$seeds" "$noises" <<'PY'
+python3 - "$out" "$seeds" "$noises" "$tag" <<'PY'
 import json, statistics, sys
-out, seeds, noises = sys.argv[1], sys.argv[2].split(), sys.argv[3].split()
+out, seeds, noises, tag = sys.argv[1], sys.argv[2].split(), sys.argv[3].split(), sys.argv[4]
 keys = ["tracked", "tracked_precise", "answered", "confident_wrong", "losses", "recoveries"]
 for n in noises:
     for b in ["base", "new"]:
         tot = dict.fromkeys(keys, 0)
         ms = []
         for s in seeds:
-            d = json.load(open(f"{out}/{b}-{n}-{s}.json"))
+            d = json.load(open(f"{out}/{tag}{b}-{n}-{s}.json"))
             for k in keys:
                 tot[k] += d["summary"][k]
             ms += [x["time_ms"] for x in d["scans"] if x["how"] == "track"]

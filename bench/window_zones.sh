@@ -2,8 +2,9 @@
 # Several scans against one-shot on the 10 Hz stretches (issue 27, item 3; docs/vehicle-modes.md,
 # "Measured: one-shot vs N = 3 on the stretches"): per seed and zone type a suite world with six
 # stretches of 20 scans (sequence 02), its map, then `gsf evaluate --sequence-window N` for N = 1
-# (one-shot) and 3 (--window N: another), with the default labels and with --label-noise 0.15.
-# Prints one table row per world and a total (from the evaluations' JSON summaries): success /
+# (one-shot) and 3 (--window N: another), and the library's loop (`--mode drive`: tracking while
+# confident, the window of N = 3 at a start or a loss), with the default labels and with --label-noise
+# 0.15. Prints one table row per world and a total (from the evaluations' JSON summaries): success /
 # answered / confident wrong of all scans, and answered of the scans in the repetitive zone. Two
 # worlds at a time.
 #
@@ -46,6 +47,10 @@ one_world() {  # seed zone
         --json "$d/w$n-$noise.json" --quiet >/dev/null
     done
   done
+  for noise in 0 0.15; do
+    "$gsf" evaluate --map "$d/m.map" --dataset "$d/ds" --mode drive --label-noise "$noise" \
+      --json "$d/drive-$noise.json" --quiet >/dev/null
+  done
   rm -rf "$d/ds" "$d/m.map"
 }
 
@@ -63,17 +68,23 @@ python3 - "$out" "$seeds" "$zones" "$window" <<'EOF'
 import json
 import sys
 out, seeds, zones, window = sys.argv[1], sys.argv[2].split(), sys.argv[3].split(), sys.argv[4]
-runs = [("1", "0"), (window, "0"), ("1", "0.15"), (window, "0.15")]
+runs = [("1", "0"), (window, "0"), ("drive", "0"), ("1", "0.15"), (window, "0.15"), ("drive", "0.15")]
 total = {r: [0, 0, 0, 0, 0, 0] for r in runs}  # scans, success, answered, wrong, zone scans, zone answered
 
-print(f"| seed, zone | one-shot | N = {window} | label noise 0.15: one-shot | N = {window} |")
-print("| --- | --- | --- | --- | --- |")
+print(f"| seed, zone | one-shot | N = {window} | loop | label noise 0.15: one-shot | N = {window} | loop |")
+print("| --- | --- | --- | --- | --- | --- | --- |")
 for s in seeds:
     for z in zones:
         cells = []
         for n, noise in runs:
-            summary = json.load(open(f"{out}/{s}-{z}/w{n}-{noise}.json"))["summary"]
-            a, zone = summary["all"], summary["zone"]
+            if n == "drive":  # --mode drive's summary (run_tracking.cpp)
+                d = json.load(open(f"{out}/{s}-{z}/drive-{noise}.json"))["summary"]
+                a = {"scans": d["scans"], "success": d["success"],
+                     "answered": d["answered"], "confident_wrong": d["confident_wrong"]}
+                zone = {"scans": d["zone_scans"], "answered": d["zone_answered"]}
+            else:
+                summary = json.load(open(f"{out}/{s}-{z}/w{n}-{noise}.json"))["summary"]
+                a, zone = summary["all"], summary["zone"]
             t = total[(n, noise)]
             for i, v in enumerate((a["scans"], a["success"], a["answered"], a["confident_wrong"],
                                    zone["scans"], zone["answered"])):

@@ -87,9 +87,10 @@ Eigen::Isometry3d moved(double x, double y) {
 std::vector<float> unit_weights(float w = 1.0f) { return std::vector<float>(kNumClasses, w); }
 
 ConfidenceEvidence measure(AnswerConfidence& conf, const std::vector<VerifyPoint>& pts, const SemanticGridView& g,
-                           const std::vector<float>& w, float lambda, const Eigen::Isometry3d* rivals, uint32_t nr) {
+                           const std::vector<float>& w, float lambda, const Eigen::Isometry3d* rivals, uint32_t nr,
+                           bool flip_only_if_ahead = false) {
   const Eigen::Isometry3d answer = Eigen::Isometry3d::Identity();
-  const AnswerConfidence::Answer a{answer, rivals, nr, 10, 0.5f};
+  const AnswerConfidence::Answer a{answer, rivals, nr, 10, 0.5f, flip_only_if_ahead};
   return conf.measure(pts.data(), static_cast<uint32_t>(pts.size()), g, w.data(), lambda, a, 4096);
 }
 
@@ -164,6 +165,46 @@ TEST_CASE("Without a rival the closest probe stands in; empty input gives no evi
   CHECK(none.samples == 0);
   CHECK(confidence_probability(none) == 0.0);
   CHECK(measure(conf, scene.points, SemanticGridView(), unit_weights(), 3.0f, nullptr, 0).samples == 0);
+}
+
+// k blocks of building voxels as BuildingBlocks, and the map's buildings also mirrored through the
+// sensor (the scene turned 180 deg, a symmetric hall), except one: missing_mirror drops block 0's mirror
+// (the answer is ahead of its flip by one block), missing_own drops block 0 itself (the flip is ahead).
+namespace {
+struct MirroredBlocks {
+  RoadLayer layer;
+  std::vector<VerifyPoint> points;
+  MirroredBlocks(int k, bool missing_own) {
+    for (int j = 0; j < k; ++j)
+      for (float dx : {0.5f, 1.5f})
+        for (float dy : {0.5f, 1.5f}) {
+          const float x = 4.0f * j + dx;
+          points.push_back(VerifyPoint{x, dy, uint32_t(kBuilding)});
+          if (j != 0 || !missing_own) layer.set(x, dy, class_bit(kBuilding));
+          if (j != 0 || missing_own) layer.set(-x, -dy, class_bit(kBuilding));
+        }
+    layer.finish();
+  }
+};
+}  // namespace
+
+TEST_CASE("The 180-degree probe counts only when it is ahead of the answer if the caller asks (tracking)") {
+  gsf_test::ArenaBuffer buf(AnswerConfidence::required_bytes(4096));
+  AnswerConfidence conf;
+  REQUIRE(conf.bind(buf.arena, 4096) == Status::Ok);
+  // The flip disagrees in block 0 only: one block's D_B, so z = D / |D| = 1, the closest turned probe
+  // (the +-10 deg probes lose in every block beyond the sensor's own).
+  const MirroredBlocks thin(6, false);
+  const ConfidenceEvidence all = measure(conf, thin.points, thin.layer.view, unit_weights(), 3.0f, nullptr, 0);
+  CHECK(all.z_turn == Approx(1.0).epsilon(1e-6));
+  const ConfidenceEvidence ahead = measure(conf, thin.points, thin.layer.view, unit_weights(), 3.0f, nullptr, 0, true);
+  CHECK(ahead.z_turn > 1.5f);  // the +-10 deg probes alone
+  // The flip is ahead (block 0 agrees there and not at the answer): z = -1 whether or not asked.
+  const MirroredBlocks flipped(6, true);
+  const ConfidenceEvidence flip = measure(conf, flipped.points, flipped.layer.view, unit_weights(), 3.0f, nullptr, 0);
+  CHECK(flip.z_turn == Approx(-1.0).epsilon(1e-6));
+  CHECK(measure(conf, flipped.points, flipped.layer.view, unit_weights(), 3.0f, nullptr, 0, true).z_turn ==
+        flip.z_turn);
 }
 
 TEST_CASE("The probability is a product of rising logistic factors, in [0, 1]") {

@@ -126,7 +126,10 @@ ConfidenceEvidence AnswerConfidence::measure(const VerifyPoint* points, uint32_t
     const double moves[4][2] = {{d, 0.0}, {-d, 0.0}, {0.0, d}, {0.0, -d}};
     for (const auto& m : moves) keep_closest(shift, paired(s, shifted_pose(a.pose, m[0], m[1])));
   }
-  for (double deg : {10.0, -10.0, 180.0}) keep_closest(turn, paired(s, turned_pose(a.pose, deg)));
+  for (double deg : {10.0, -10.0, 180.0}) {
+    const Paired p = paired(s, turned_pose(a.pose, deg));
+    if (deg != 180.0 || !a.flip_only_if_ahead || p.z < 0.0f) keep_closest(turn, p);
+  }
   e.z_shift = shift.z;
   e.z_turn = turn.z;
   e.rivals = std::min(a.rival_count, kMaxRivals);

@@ -55,7 +55,7 @@ TrackOutcome track_pose(const TrackScan& scan, const SemanticGridView& grid, con
   const float lambda = vc.disagree_weight;
   const uint32_t probe_points = tc.probe_points > 0 ? std::min(tc.probe_points, vc.max_points) : vc.max_points;
   auto probe = [&](const Eigen::Isometry3d& pose) {
-    const AnswerConfidence::Answer a{pose, nullptr, 0, 0, 0.0f};
+    const AnswerConfidence::Answer a{pose, nullptr, 0, 0, 0.0f, /*flip_only_if_ahead=*/true};
     o.evidence = confidence.measure(scan.points, scan.n, grid, scan.weights, lambda, a, probe_points);
     o.confidence = tracking_probability(o.evidence);
     lap(&o.probe_ns);

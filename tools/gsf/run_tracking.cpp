@@ -33,15 +33,23 @@ struct ScanRecord {
   const char* how = "one-shot";  // one-shot (start or after no answer), track, recovery (one-shot after a loss)
   std::string status;
   bool answered = false, success = false, precise = false, loss = false;
+  bool in_zone = false;  // in the simulated world's repetitive zone (meta.json)
   PoseError error;
   Eigen::Vector3d error_in_scan = Eigen::Vector3d::Zero();  // the position error along the true scan's x, y, z
   double confidence = 0, time_ms = 0, track_ms = 0;
   StageMs track_stages;  // of the track() call (voxel, pose = pattern search, refine = ICP, confidence = probes)
+  // --mode track, a loss: what the tracked pose was and what its confidence read (was the loss right?)
+  bool has_lost_track = false;
+  PoseError lost_error;
+  double lost_confidence = 0;
+  ConfidenceEvidence lost_evidence;
 };
 
 struct TrackSummary {
   uint32_t scans = 0, one_shot = 0, tracked = 0, tracked_precise = 0, answered = 0, precise = 0, wrong = 0;
   uint32_t losses = 0, recoveries = 0, lost_scans = 0;
+  uint32_t success = 0;  // within 5 m / 10 deg, answered or not
+  uint32_t zone_scans = 0, zone_answered = 0, zone_wrong = 0;
   double median_one_shot_ms = 0, median_track_ms = 0, median_scan_ms = 0;
   StageMs median_track_stage;
 };
@@ -124,6 +132,12 @@ ScanRecord run_scan(const TrackRun& t, uint32_t i, Vehicle* v) {
     rec.track_ms = rec.time_ms = double(r.times.total) / 1e6;
     rec.track_stages = stage_ms(r.times);
     rec.loss = !(r.status == Status::Ok && r.confident);
+    if (rec.loss && r.status == Status::Ok) {
+      rec.has_lost_track = true;
+      rec.lost_error = pose_error(r.map_frame_T_scan, truth);
+      rec.lost_confidence = r.confidence;
+      rec.lost_evidence = r.confidence_evidence;
+    }
   }
   if (rs == Status::Ok && (!v->have_pose || rec.loss)) {
     const PositionPrior prior = draw_prior(t.o.prior, truth, i);
@@ -146,11 +160,15 @@ TrackSummary summarize_tracking(const std::vector<ScanRecord>& recs) {
     s.tracked += tracked;
     s.tracked_precise += tracked && r.precise;
     s.answered += r.answered;
+    s.success += r.success;
     s.precise += r.answered && r.precise;
     s.wrong += r.answered && !r.success;
     s.losses += r.loss;
     s.recoveries += r.loss && r.answered;
     s.lost_scans += !r.answered;
+    s.zone_scans += r.in_zone;
+    s.zone_answered += r.in_zone && r.answered;
+    s.zone_wrong += r.in_zone && r.answered && !r.success;
     scan_ms.push_back(r.time_ms);
     if (tracked) {
       track_ms.push_back(r.track_ms);
@@ -186,6 +204,9 @@ void print_tracking(const TrackSummary& s, uint32_t stretches, const EvalOptions
               s.tracked, s.tracked ? 100.0 * s.tracked_precise / s.tracked : 0.0,
               s.scans ? 100.0 * s.answered / s.scans : 0.0, s.scans ? 100.0 * s.precise / s.scans : 0.0, s.wrong,
               s.losses, s.recoveries, s.median_one_shot_ms, s.median_track_ms, ratio);
+  if (s.zone_scans > 0)
+    std::printf("  repetitive zone: %u scans, %u answered (%.1f%%), %u confident wrong\n", s.zone_scans,
+                s.zone_answered, 100.0 * s.zone_answered / s.zone_scans, s.zone_wrong);
   std::printf("  track median stage ms: voxel %.2f  search %.2f  icp %.2f  probes %.2f\n", s.median_track_stage.voxel,
               s.median_track_stage.pose, s.median_track_stage.refine, s.median_track_stage.confidence);
   std::printf(
@@ -210,11 +231,15 @@ void write_tracking_json(const std::string& path, const EvalOptions& o, const Tr
   j.field("one_shot", s.one_shot);
   j.field("tracked", s.tracked);
   j.field("tracked_precise", s.tracked_precise);
+  j.field("success", s.success);
   j.field("answered", s.answered);
   j.field("answered_precise", s.precise);
   j.field("confident_wrong", s.wrong);
   j.field("losses", s.losses);
   j.field("recoveries", s.recoveries);
+  j.field("zone_scans", s.zone_scans);
+  j.field("zone_answered", s.zone_answered);
+  j.field("zone_confident_wrong", s.zone_wrong);
   j.field("median_one_shot_ms", s.median_one_shot_ms);
   j.field("median_track_ms", s.median_track_ms);
   j.field("median_scan_ms", s.median_scan_ms);
@@ -234,6 +259,7 @@ void write_tracking_json(const std::string& path, const EvalOptions& o, const Tr
     j.field("success", r.success);
     j.field("precise", r.precise);
     j.field("loss", r.loss);
+    j.field("in_zone", r.in_zone);
     j.field("translation_error_m", r.status == "Ok" ? r.error.translation_m : -1.0);
     j.field("rotation_error_deg", r.status == "Ok" ? r.error.rotation_deg : -1.0);
     if (r.status == "Ok") {  // forward, left, up of the true scan (a bias shows which way it pulls)
@@ -243,6 +269,19 @@ void write_tracking_json(const std::string& path, const EvalOptions& o, const Tr
       j.end_array();
     }
     j.field("time_ms", r.time_ms);
+    if (r.has_lost_track) {
+      j.key("lost_track");
+      j.begin_object();
+      j.field("confidence", r.lost_confidence);
+      j.field("translation_error_m", r.lost_error.translation_m);
+      j.field("rotation_error_deg", r.lost_error.rotation_deg);
+      j.field("z_shift", double(r.lost_evidence.z_shift));
+      j.field("z_turn", double(r.lost_evidence.z_turn));
+      j.field("z_rival", double(r.lost_evidence.z_rival));
+      j.field("agreement", double(r.lost_evidence.agreement));
+      j.field("samples", r.lost_evidence.samples);
+      j.end_object();
+    }
     j.end_object();
   }
   j.end_array();
@@ -265,6 +304,7 @@ int run_tracking(const EvalOptions& o) {
     for (uint32_t i = first; i < first + length && i < ev.src->size(); ++i) {
       recs.push_back(run_scan(run, i, &v));
       recs.back().stretch = k;
+      recs.back().in_zone = ev.in_zone(i);
     }
     if (o.progress) std::fprintf(stderr, "\r  track: %u / %zu stretches", k + 1, ev.stretches.size());
   }

@@ -78,6 +78,9 @@ class AnswerConfidence {
     uint32_t rival_count;
     uint32_t inliers;
     float inlier_share;
+    // The 180-degree turned probe counts only where it scores above the answer: a tracked pose, whose
+    // prediction rules out the flip unless the scan itself prefers it (tracker.h).
+    bool flip_only_if_ahead = false;
   };
   ConfidenceEvidence measure(const VerifyPoint* points, uint32_t n, const SemanticGridView& grid, const float* weights,
                              DisagreeWeights disagree, const Answer& answer, uint32_t max_points);

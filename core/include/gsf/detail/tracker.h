@@ -15,12 +15,17 @@
 //      icp_start_deg of the prediction (the score is flat within a cell, where the search wanders up to
 //      a metre; ICP from the prediction did better), else ICP from the search's pose;
 //   3. the confidence's probe statistic at the result (confidence.h): the shifted and turned probes,
-//      no rivals (there are no other hypotheses). The inlier factor is left out: tracking forms no
-//      instances; it guards one-shot answers in a map of somewhere else, and a tracked pose follows a
-//      confident one. Its own model (kTrackingConfidenceModel): the one-shot model is fitted on answers
-//      that have rivals, and the rival's margin of a probe 2 m off (tracking's stand-in) is another
-//      quantity; the tracking model is the one-shot model of 2026-11 without the margin, with which
-//      tracking was measured (suite, real drives, lost odometry): TrackingConfidenceModel below.
+//      no rivals (there are no other hypotheses). The 180-degree probe counts only where it scores
+//      above the result: a flip lies far beyond the search's reach of the prediction, so what rules it
+//      out is the prediction (a confident pose and an odometry), unless the scan itself prefers the
+//      flip; at the right pose in a symmetric hall the flip scores only a little lower, and under
+//      label noise that margin had read as a loss (docs/vehicle-modes.md, *Tracking in a symmetric
+//      place*). The inlier factor is left out: tracking forms no instances; it guards one-shot answers
+//      in a map of somewhere else, and a tracked pose follows a confident one. Its own model
+//      (kTrackingConfidenceModel): the one-shot model is fitted on answers that have rivals, and the
+//      rival's margin of a probe 2 m off (tracking's stand-in) is another quantity; the tracking model
+//      is the one-shot model of 2026-11 without the margin, with which tracking was measured (suite,
+//      real drives, lost odometry): TrackingConfidenceModel below.
 // Loss is "not confident": the caller falls back to one-shot localization. A prediction far off ends
 // where the pattern search can reach (a few metres), which the probes judge as any wrong pose: no peak.
 #pragma once
