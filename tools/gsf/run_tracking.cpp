@@ -38,11 +38,11 @@ struct ScanRecord {
   Eigen::Vector3d error_in_scan = Eigen::Vector3d::Zero();  // the position error along the true scan's x, y, z
   double confidence = 0, time_ms = 0, track_ms = 0;
   StageMs track_stages;  // of the track() call (voxel, pose = pattern search, refine = ICP, confidence = probes)
-  // --mode track, a loss: what the tracked pose was and what its confidence read (was the loss right?)
-  bool has_lost_track = false;
-  PoseError lost_error;
-  double lost_confidence = 0;
-  ConfidenceEvidence lost_evidence;
+  // --mode track: the track() call's pose and evidence, kept through a loss's recovery (was the loss right?)
+  bool has_track_attempt = false;
+  PoseError attempt_error;
+  double attempt_confidence = 0;
+  ConfidenceEvidence attempt_evidence;
 };
 
 struct TrackSummary {
@@ -132,11 +132,11 @@ ScanRecord run_scan(const TrackRun& t, uint32_t i, Vehicle* v) {
     rec.track_ms = rec.time_ms = double(r.times.total) / 1e6;
     rec.track_stages = stage_ms(r.times);
     rec.loss = !(r.status == Status::Ok && r.confident);
-    if (rec.loss && r.status == Status::Ok) {
-      rec.has_lost_track = true;
-      rec.lost_error = pose_error(r.map_frame_T_scan, truth);
-      rec.lost_confidence = r.confidence;
-      rec.lost_evidence = r.confidence_evidence;
+    if (r.status == Status::Ok) {
+      rec.has_track_attempt = true;
+      rec.attempt_error = pose_error(r.map_frame_T_scan, truth);
+      rec.attempt_confidence = r.confidence;
+      rec.attempt_evidence = r.confidence_evidence;
     }
   }
   if (rs == Status::Ok && (!v->have_pose || rec.loss)) {
@@ -269,17 +269,17 @@ void write_tracking_json(const std::string& path, const EvalOptions& o, const Tr
       j.end_array();
     }
     j.field("time_ms", r.time_ms);
-    if (r.has_lost_track) {
-      j.key("lost_track");
+    if (r.has_track_attempt) {
+      j.key("track_attempt");
       j.begin_object();
-      j.field("confidence", r.lost_confidence);
-      j.field("translation_error_m", r.lost_error.translation_m);
-      j.field("rotation_error_deg", r.lost_error.rotation_deg);
-      j.field("z_shift", double(r.lost_evidence.z_shift));
-      j.field("z_turn", double(r.lost_evidence.z_turn));
-      j.field("z_rival", double(r.lost_evidence.z_rival));
-      j.field("agreement", double(r.lost_evidence.agreement));
-      j.field("samples", r.lost_evidence.samples);
+      j.field("confidence", r.attempt_confidence);
+      j.field("translation_error_m", r.attempt_error.translation_m);
+      j.field("rotation_error_deg", r.attempt_error.rotation_deg);
+      j.field("z_shift", double(r.attempt_evidence.z_shift));
+      j.field("z_turn", double(r.attempt_evidence.z_turn));
+      j.field("z_rival", double(r.attempt_evidence.z_rival));
+      j.field("agreement", double(r.attempt_evidence.agreement));
+      j.field("samples", r.attempt_evidence.samples);
       j.end_object();
     }
     j.end_object();
