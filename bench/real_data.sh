@@ -143,3 +143,7 @@ for m, q in (("0004", "0002"), ("0002", "0004"), ("0001", "0002")):
     print(f"{m + ' -> ' + q:16} {rw(one):>29} {rw(win):>23} {rw(trk['scans']):>29} "
           f"{str(precise) + ' of ' + str(len(tracked)):>27} {trk['summary']['losses']:>6}")
 PY
+echo
+echo "nuScenes revisit pairs: the answers against the listed pose and against the pose ICP gives the scan"
+echo "(the sweeps are not corrected for motion, so the two drives' poses disagree by 0.15-0.27 m there)"
+python3 bench/revisit_truth.py "$out" "$data/nuscenes-lidarseg-samples"
