@@ -82,8 +82,11 @@ TEST_CASE("Tracking from a prediction 30 m off or turned 180 deg reports a loss:
       const auto& q = w.queries[k];
       LocalizeResult out;
       const Status s = r.loc.track(q.view(), perturbed(q.truth, metres, deg, k), &out);
+      double m, d;
+      errors(out.map_T_scan, q.truth, &m, &d);
       INFO(metres << " m, " << deg << " deg off, query " << k << ": " << to_string(s) << ", confidence "
-                  << out.confidence);
+                  << out.confidence << " (z_shift " << out.confidence_evidence.z_shift << ", z_turn "
+                  << out.confidence_evidence.z_turn << "), " << m << " m / " << d << " deg from the truth");
       CHECK(s == Status::Ok);
       CHECK(!out.confident);
       CHECK(!gsf_test::pose_ok(out.map_T_scan, q.truth));  // bounded: the search stays near the prediction

@@ -40,6 +40,13 @@ bool within_search_reach(const Eigen::Isometry3d& pose, const Eigen::Isometry3d&
   return within_pose(pose, predicted, reach * tc.search_step_m, reach * double(tc.search_step_deg) / kDegPerRad);
 }
 
+// Within the search's reach of the prediction in position alone (a right pose under a poor odometry can
+// end further in heading: ICP turns it on where the search stopped).
+bool within_search_reach_m(const Eigen::Isometry3d& pose, const Eigen::Isometry3d& predicted, const TrackConfig& tc) {
+  const double reach = 2.0 - std::ldexp(1.0, 1 - int(tc.search_rounds));
+  return (pose.translation() - predicted.translation()).norm() <= reach * tc.search_step_m;
+}
+
 }  // namespace
 
 TrackOutcome track_pose(const TrackScan& scan, const SemanticGridView& grid, const Eigen::Isometry3d& predicted,
@@ -91,6 +98,11 @@ TrackOutcome track_pose(const TrackScan& scan, const SemanticGridView& grid, con
   lap(&o.refine_ns);
   // 3. The probes at the result: is it a peak in position and heading?
   if (!(icp_first && reuse_step0)) probe(o.map_T_scan);  // else step 0 probed this very pose
+  // Tracking refines near the prediction: a result beyond the search's reach of it in position (ICP slid
+  // on from the searched pose) says the prediction was not near the truth, whatever the probes there say
+  // (on ARM64 a tiny-world prediction turned 180 deg slid 4.5 m to a pose the flipped scan fits, at
+  // confidence 0.99: tests/test_tracker.cpp). A loss then; one-shot answers instead.
+  if (!within_search_reach_m(o.map_T_scan, predicted, tc)) o.confidence = 0.0;
   return o;
 }
 

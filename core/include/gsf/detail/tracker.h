@@ -28,6 +28,8 @@
 //      real drives, lost odometry): TrackingConfidenceModel below.
 // Loss is "not confident": the caller falls back to one-shot localization. A prediction far off ends
 // where the pattern search can reach (a few metres), which the probes judge as any wrong pose: no peak.
+// A result that ICP took beyond the search's reach of the prediction in position is a loss whatever the
+// probes say: tracking vouches only for a pose near its prediction.
 #pragma once
 #include <cstdint>
 
