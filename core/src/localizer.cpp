@@ -118,6 +118,11 @@ struct Localizer::Impl {
                                         const Elsewhere& best);
   ConfidenceEvidence against_elsewhere(const LocalizerConfig& cfg, const Eigen::Isometry3d& prior_answer,
                                        const Elsewhere& best, ConfidenceEvidence e);
+  // The confidence's evidence for `a` over this scan's verification sample (its points and weights).
+  ConfidenceEvidence evidence_for(const AnswerConfidence::Answer& a, uint32_t max_points) {
+    return confidence.measure(answer.compact_points(), answer.compact_point_count(), semantic, answer.verify_weights(),
+                              answer.disagree_weights(), a, max_points);
+  }
   struct Explained {
     uint32_t inliers;  // recounted at the pose, never below the hypothesis's own
     float share;       // of the scan's instances on the map's observed cells there
@@ -566,9 +571,7 @@ void Localizer::Impl::measure_confidence(const LocalizerConfig& cfg, LocalizeRes
     const Explained x = explained_at(answer.answer_pose(), out.inliers, cfg.hypotheses.tls_threshold);
     const AnswerConfidence::Answer a{answer.answer_pose(), answer.rival_poses(), answer.rival_count(), x.inliers,
                                      x.share};
-    out.confidence_evidence =
-        confidence.measure(answer.compact_points(), answer.compact_point_count(), semantic, answer.verify_weights(),
-                           answer.disagree_weights(), a, cfg.verify.max_points);
+    out.confidence_evidence = evidence_for(a, cfg.verify.max_points);
     out.confidence = capped_for_few_instances(cfg, confidence_probability(out.confidence_evidence));
   }
   out.confident = out.confidence >= cfg.confidence.min_probability;
@@ -670,20 +673,16 @@ ConfidenceEvidence Localizer::Impl::elsewhere_evidence(const LocalizerConfig& cf
     rivals[n++] = answer.rival_poses()[k];
   const Explained x = explained_at(best.pose, best.inliers, cfg.hypotheses.tls_threshold);
   const AnswerConfidence::Answer a{best.pose, rivals, n, x.inliers, x.share};
-  return confidence.measure(answer.compact_points(), answer.compact_point_count(), semantic, answer.verify_weights(),
-                            answer.disagree_weights(), a, cfg.verify.max_points);
+  return evidence_for(a, cfg.verify.max_points);
 }
 
 // The prior's answer's evidence `e` with the best pose elsewhere as one more rival: its z_rival and margin
 // when that comparison is the closer one.
 ConfidenceEvidence Localizer::Impl::against_elsewhere(const LocalizerConfig& cfg, const Eigen::Isometry3d& prior_answer,
                                                       const Elsewhere& best, ConfidenceEvidence e) {
-  if (answer.compact_points() == nullptr || answer.compact_point_count() == 0) return ConfidenceEvidence();
   const AnswerConfidence::Answer a{prior_answer, &best.pose, 1, e.inliers, e.inlier_share};
-  const ConfidenceEvidence pair =
-      confidence.measure(answer.compact_points(), answer.compact_point_count(), semantic, answer.verify_weights(),
-                         answer.disagree_weights(), a, cfg.verify.max_points);
-  if (pair.samples == 0) return ConfidenceEvidence();
+  const ConfidenceEvidence pair = evidence_for(a, cfg.verify.max_points);
+  if (pair.samples == 0) return ConfidenceEvidence();  // no sample (measure() read nothing)
   if (pair.z_rival < e.z_rival) {
     e.z_rival = pair.z_rival;
     e.rival_margin = pair.rival_margin;
@@ -738,8 +737,7 @@ void Localizer::check_outside_prior(LocalizeResult& out) {
     const double c = out.confidence_evidence.samples > 0 ? confidence_probability(out.confidence_evidence) : 0.0;
     out.confidence = std::min(out.confidence, im.capped_for_few_instances(config_, c));
     out.confident = out.confidence >= config_.confidence.min_probability;
-  }
-  if (found && best.score > answer_score) {
+  } else if (found) {  // best.score > answer_score
     const ConfidenceEvidence e = im.elsewhere_evidence(config_, answer, best);
     const double c = e.samples > 0 ? confidence_probability(e) : 0.0;
     out.prior_contradicted = true;

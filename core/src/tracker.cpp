@@ -33,18 +33,19 @@ bool within_icp_start(const Eigen::Isometry3d& a, const Eigen::Isometry3d& b, co
   return within_pose(a, b, tc.icp_start_m, double(tc.icp_start_deg) / kDegPerRad);
 }
 
-// Within what the pattern search can reach from the prediction: its steps halve each round, so it moves
-// at most step x (2 - 2^(1 - rounds)) in position and heading.
+// What the pattern search can reach from the prediction, in steps: its steps halve each round, so it
+// moves at most step x (2 - 2^(1 - rounds)) in position and heading.
+double search_reach(const TrackConfig& tc) { return 2.0 - std::ldexp(1.0, 1 - int(tc.search_rounds)); }
+
 bool within_search_reach(const Eigen::Isometry3d& pose, const Eigen::Isometry3d& predicted, const TrackConfig& tc) {
-  const double reach = 2.0 - std::ldexp(1.0, 1 - int(tc.search_rounds));
+  const double reach = search_reach(tc);
   return within_pose(pose, predicted, reach * tc.search_step_m, reach * double(tc.search_step_deg) / kDegPerRad);
 }
 
 // Within the search's reach of the prediction in position alone (a right pose under a poor odometry can
 // end further in heading: ICP turns it on where the search stopped).
 bool within_search_reach_m(const Eigen::Isometry3d& pose, const Eigen::Isometry3d& predicted, const TrackConfig& tc) {
-  const double reach = 2.0 - std::ldexp(1.0, 1 - int(tc.search_rounds));
-  return (pose.translation() - predicted.translation()).norm() <= reach * tc.search_step_m;
+  return (pose.translation() - predicted.translation()).norm() <= search_reach(tc) * tc.search_step_m;
 }
 
 }  // namespace
