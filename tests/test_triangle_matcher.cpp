@@ -9,6 +9,8 @@
 #include "gsf/detail/triangle.h"
 #include "gsf/detail/triangle_index.h"
 #include "gsf/detail/triangle_matcher.h"
+#include "gsf/map_format.h"
+#include "gsf/position_prior.h"
 #include "gsf/semantic_classes.h"
 
 namespace test_triangle_matcher {
@@ -183,6 +185,46 @@ TEST_CASE("A mirror image has the same sides but the other sense: the matcher re
   REQUIRE(matcher.size() == 1);
   const uint8_t o = matcher.match_at(0).order;
   CHECK((o >= 1 && o <= 3));
+}
+
+// The sparse rematch (localizer.cpp match_scan) compares accepted + outside with a threshold, so that a
+// prior does not change whether it happens: a mirror twin outside the region must count as mirrored,
+// as it does without a region, not as outside.
+TEST_CASE(
+    "With a prior's region, accepted + outside is what the scan finds without one; mirror twins count as mirrored") {
+  // Map: triangle A and its mirror image B, 50 m apart.
+  std::vector<float> xyz = {0, 0, 0, 4, 0, 0, 1, 6, 0, 50, 0, 0, 54, 0, 0, 51, -6, 0};
+  const std::vector<uint8_t> labels(16, kPole);
+  std::vector<Triangle> map = {make_triangle(0, 1, 2, &xyz[0], &xyz[3], &xyz[6], labels.data()),
+                               make_triangle(3, 4, 5, &xyz[9], &xyz[12], &xyz[15], labels.data())};
+  REQUIRE(map[0].orientation != map[1].orientation);
+  Index idx(map, 1.0f);
+  std::vector<MapInstance> instances(6);
+  for (int i = 0; i < 6; ++i)
+    for (int k = 0; k < 3; ++k) instances[i].centroid[k] = xyz[3 * i + k];
+  const float query[9] = {0, 0, 0, 4, 0, 0, 1, 6, 0};  // A as the scan sees it, sensor at the origin
+  const Triangle qt = make_triangle(0, 1, 2, query, query + 3, query + 6, labels.data());
+  TriangleConfig tc;
+  ArenaBuffer buf(TriangleMatcher::required_bytes(16));
+  TriangleMatcher matcher;
+  REQUIRE(matcher.bind(buf.arena, 16) == Status::Ok);
+  const TriangleMatchStats free = matcher.match(qt, idx.view, idx.tris.data(), tc, 0.0f);
+  REQUIRE(free.accepted == 1);
+  REQUIRE(free.mirrored == 1);
+  PriorRegion far_away;  // reaches neither triangle
+  far_away.cx = 1000.0f;
+  far_away.radius = 5.0f;
+  PriorRegion near_b;  // reaches the mirror twin B only
+  near_b.cx = 52.0f;
+  near_b.radius = 1.0f;
+  for (const PriorRegion* region : {&far_away, &near_b}) {
+    matcher.set_region(region, instances.data(), query);
+    const TriangleMatchStats st = matcher.match(qt, idx.view, idx.tris.data(), tc, 0.0f);
+    CHECK(st.accepted + st.outside == free.accepted);
+    CHECK(st.mirrored == free.mirrored);
+    CHECK(matcher.outside_region() == st.outside);
+  }
+  matcher.set_region(nullptr, nullptr, nullptr);
 }
 
 }  // namespace test_triangle_matcher

@@ -142,13 +142,15 @@ void TriangleMatcher::offer_range(const Triangle& q, uint8_t o, const float side
       residual = rel > residual ? rel : residual;
     }
     if (!ok) continue;
+    if (mirror_check_ && orientations_contradict(q.orientation, m.orientation, flip)) {
+      ++st->mirrored;
+      continue;
+    }
+    // After the mirror check: outside + accepted is then what the scan finds without a region, which
+    // decides the sparse rematch (localizer.cpp match_scan), so a prior does not change whether it happens.
     if (region_ && !in_region(m)) {
       ++outside_;
       ++st->outside;
-      continue;
-    }
-    if (mirror_check_ && orientations_contradict(q.orientation, m.orientation, flip)) {
-      ++st->mirrored;
       continue;
     }
     ++st->accepted;

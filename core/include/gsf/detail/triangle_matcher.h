@@ -24,8 +24,9 @@
 //
 // Position prior (position_prior.h): with a region set, a candidate whose map vertices do not all lie
 // within the prior's disc + the range of the query vertex each would match is no candidate (counted in
-// outside_region()), before the cap, so the cap ranks the candidates near the prior only. Three loads
-// and compares per candidate that passed labels and sides; no memory.
+// outside_region()), before the cap, so the cap ranks the candidates near the prior only. It is checked
+// after the mirror check, so accepted + outside is what the scan finds without a region. Three loads and
+// compares per candidate that passed labels, sides and senses; no memory.
 #pragma once
 #include <cstdint>
 
