@@ -268,10 +268,6 @@ struct RefineConfig {
 struct ConfidenceConfig {
   // The default decision rule: LocalizeResult::confident = confidence >= min_probability.
   float min_probability = 0.9f;
-  // With a position prior, a confident answer with a thin margin (z_rival below
-  // Localizer::kPriorGlobalCheckZ) is checked by a global search, which pattern-refines at most this many
-  // of the global hypotheses away from the answer.
-  uint32_t prior_check_refine = 2;
 };
 
 // Tracking after a fix: Localizer::track (detail/tracker.h, docs/vehicle-modes.md).
