@@ -143,6 +143,33 @@ for m, q in (("0004", "0002"), ("0002", "0004"), ("0001", "0002")):
     print(f"{m + ' -> ' + q:16} {rw(one):>29} {rw(win):>23} {rw(trk['scans']):>29} "
           f"{str(precise) + ' of ' + str(len(tracked)):>27} {trk['summary']['losses']:>6}")
 PY
+# A position prior on the same drives (docs/vehicle-modes.md): a 20 m disc drawn around each query's
+# listed pose (5 m sigma), and the same prior 50 m and 100 m off (a wrong prior must never be confident).
+for pair in 0004:0002 0002:0004 0001:0002; do
+  m=${pair%%:*} q=${pair##*:}
+  for off in 0 50 100; do
+    # shellcheck disable=SC2086
+    $gsf evaluate --map "$out/nuscenes-$m.gsfmap" --dataset "$N" --sequence $q --classes "$classes" --quiet \
+      --mode gsf --prior-sigma 5 --prior-radius 20 --prior-bias $off --json "$out/nuscenes-$m-$q-prior$off.json" \
+      $noise >/dev/null
+  done
+done
+python3 - "$out" <<'PY'
+import json, sys
+out = sys.argv[1]
+print("\nnuScenes-lidarseg drives with a position prior (of 40 scans; answered = confident)")
+print(f"{'map -> queries':16} {'one-shot right/wrong':>20} {'20 m prior right/wrong':>22} "
+      f"{'50 m off: with a pose / answered':>32} {'100 m off: with a pose / answered':>33}")
+for m, q in (("0004", "0002"), ("0002", "0004"), ("0001", "0002")):
+    def load(tag):
+        return json.load(open(f"{out}/nuscenes-{m}-{q}{tag}.json"))["modes"]["gsf"]["queries"]
+    def rw(xs):
+        return f"{sum(x['answered'] and x['success'] for x in xs)} / {sum(x['answered'] and not x['success'] for x in xs)}"
+    def off(xs):
+        return f"{sum(x['status'] == 'Ok' for x in xs)} / {sum(x['answered'] for x in xs)}"
+    print(f"{m + ' -> ' + q:16} {rw(load('')):>20} {rw(load('-prior0')):>22} {off(load('-prior50')):>32} "
+          f"{off(load('-prior100')):>33}")
+PY
 echo
 echo "nuScenes revisit pairs: the answers against the listed pose and against the pose ICP gives the scan"
 echo "(the sweeps are not corrected for motion, so the two drives' poses disagree by 0.15-0.27 m there)"
