@@ -40,12 +40,16 @@ for s in $seeds; do
   done
 done
 line() { python3 "$here/prior_summary.py" "$@" | tail -1 | sed 's/^all | //'; }
-files() { for s in $seeds; do echo "$out/$tag-$1-$s.json"; done; }
+pooled() {  # the pooled line of one run over every seed's world
+  local runs=()
+  for s in $seeds; do runs+=("$out/$tag-$1-$s.json"); done
+  line "${runs[@]}"
+}
 echo "labels: ${LABELS:-default}; seeds: $seeds"
-echo "one-shot: $(line $(files oneshot))"
+echo "one-shot: $(pooled oneshot)"
 for b in base new; do
-  echo "$b, 20 m prior: $(line $(files $b-p20))"
-  for off in $biases; do echo "$b, prior $off m off: $(line $(files $b-off$off))"; done
+  echo "$b, 20 m prior: $(pooled "$b-p20")"
+  for off in $biases; do echo "$b, prior $off m off: $(pooled "$b-off$off")"; done
 done
 echo "answered right per world: one-shot / base / new (20 m prior)"
 for s in $seeds; do
