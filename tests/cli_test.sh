@@ -40,6 +40,9 @@ expect 1 "cannot open map file" -- "$gsf" evaluate --map "$tmp/none.gsfmap" --da
 expect 2 "prior must be x,y,radius" -- "$gsf" localize --map m --dataset d --prior 1,2
 expect 2 "prior: invalid" -- "$gsf" localize --map m --dataset d --prior 1,2,-5
 expect 2 "need --prior-sigma" -- "$gsf" evaluate --map m --dataset d --prior-bias 100
+expect 2 "need --prior-sigma" -- "$gsf" evaluate --map m --dataset d --prior-heading-tolerance 30
+expect 2 "prior-heading-tolerance in" -- "$gsf" evaluate --map m --dataset d --prior-sigma 5 \
+  --prior-heading-tolerance 200
 expect 2 "odometry-noise must be in" -- "$gsf" evaluate --map m --dataset d --mode track --odometry-noise 2
 expect 2 "sequence-window must be 1..4" -- "$gsf" evaluate --map m --dataset d --sequence-window 5
 expect 1 "cannot open sequence" -- "$gsf" build-map --dataset "$tmp/nothing" --out "$tmp/m.gsfmap"
@@ -75,6 +78,9 @@ cmp -s "$tmp/map.gsfmap" "$tmp/map1.gsfmap" || fail "the one-pass map differs fr
   >/dev/null || fail "evaluate --sequence-window"
 "$gsf" evaluate --map "$tmp/map.gsfmap" --dataset "$tmp/ds" --sequence 01 --json "$tmp/prior.json" --mode gsf --limit 6 \
   --prior-sigma 5 --prior-radius 20 --quiet >/dev/null || fail "evaluate --prior-sigma"
+"$gsf" evaluate --map "$tmp/map.gsfmap" --dataset "$tmp/ds" --sequence 01 --json "$tmp/prior_heading.json" --mode gsf \
+  --limit 6 --prior-sigma 5 --prior-radius 20 --prior-heading-tolerance 30 --quiet >/dev/null ||
+  fail "evaluate --prior-heading-tolerance"
 xy=$(python3 -c "import json,sys; p=json.loads(open(sys.argv[1]).readline())['pose']; print(f'{p[3]+3},{p[7]-4}')" \
   "$tmp/one.json") || fail "one.json"
 "$gsf" localize --map "$tmp/map.gsfmap" --dataset "$tmp/ds" --sequence 01 --frame 3 --prior "$xy,20" \
@@ -176,6 +182,9 @@ for s in tr["scans"]:
         1.0, s["translation_error_m"]), s
 pr = json.load(open(f"{t}/prior.json"))
 assert pr["prior"]["radius_m"] == 20 and pr["modes"]["gsf"]["summary"]["successes"] >= 5, pr["prior"]
+ph = json.load(open(f"{t}/prior_heading.json"))  # a heading 30 deg wide keeps the true poses
+assert ph["prior"]["heading_tolerance_deg"] == 30 and pr["prior"]["heading_tolerance_deg"] == 0, ph["prior"]
+assert ph["modes"]["gsf"]["summary"]["successes"] >= 5, ph["modes"]["gsf"]["summary"]
 assert all(q["diagnostics"]["prior_outside_matches"] > 0 for q in pr["modes"]["gsf"]["queries"])
 one_prior = json.loads(open(f"{t}/one_prior.json").read().splitlines()[0])
 assert one_prior["status"] == "Ok" and one_prior["diagnostics"]["prior_outside_matches"] > 0, one_prior["status"]

@@ -43,12 +43,16 @@ bool parse_vehicle_mode_options(const Args& args, EvalOptions* o, std::string* e
     p.seed = static_cast<uint64_t>(seed);
     p.radius = std::max(5.0, 3.0 * p.sigma);
     if (args.has("prior-radius") && !args.get_double("prior-radius", &p.radius, error)) return false;
-    if (!(p.sigma >= 0) || !(p.bias >= 0) || !(p.radius > 0) || !std::isfinite(p.radius)) {
-      *error = "--prior-sigma and --prior-bias must be >= 0, --prior-radius > 0";
+    if (args.has("prior-heading-tolerance") &&
+        !args.get_double("prior-heading-tolerance", &p.heading_tolerance_deg, error))
+      return false;
+    if (!(p.sigma >= 0) || !(p.bias >= 0) || !(p.radius > 0) || !std::isfinite(p.radius) ||
+        !(p.heading_tolerance_deg >= 0 && p.heading_tolerance_deg <= 180)) {
+      *error = "--prior-sigma and --prior-bias must be >= 0, --prior-radius > 0, --prior-heading-tolerance in [0, 180]";
       return false;
     }
-  } else if (args.has("prior-bias") || args.has("prior-radius")) {
-    *error = "--prior-bias and --prior-radius need --prior-sigma";
+  } else if (args.has("prior-bias") || args.has("prior-radius") || args.has("prior-heading-tolerance")) {
+    *error = "--prior-bias, --prior-radius and --prior-heading-tolerance need --prior-sigma";
     return false;
   }
   if (!args.get_double("odometry-noise", &o->odometry_noise, error)) return false;
@@ -98,6 +102,10 @@ std::vector<OptionSpec> evaluate_option_specs() {
        "0"},
       {"prior-radius", "with --prior-sigma: the prior's radius in m (default 3 x sigma, at least 5)", ""},
       {"prior-seed", "with --prior-sigma: seed of the priors' draws", "1"},
+      {"prior-heading-tolerance",
+       "with --prior-sigma: the prior also carries a heading (a GNSS course), the truth's yaw with N(0, (T/3)^2) "
+       "deg of error, tolerance T deg (0: none)",
+       "0"},
       {"odometry-noise",
        "--mode track, --sequence-window: odometry error as a share of the distance travelled (and 10 deg/m x it of "
        "yaw)",

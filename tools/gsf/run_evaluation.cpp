@@ -171,6 +171,7 @@ void write_json(const std::string& path, const EvalOptions& o, const MapView& ma
     j.field("sigma_m", o.prior.sigma);
     j.field("bias_m", o.prior.bias);
     j.field("radius_m", o.prior.radius);
+    j.field("heading_tolerance_deg", o.prior.heading_tolerance_deg);
     j.field("seed", static_cast<unsigned long long>(o.prior.seed));
     j.end_object();
   }
@@ -900,8 +901,10 @@ int run_evaluation(const EvalOptions& o) {
   print_header(map, meta, sums, nq, label_errors);
   if (o.prior.enabled)
     std::printf(
-        "position prior: drawn around each query's truth, sigma %.1f m, bias %.1f m, radius %.1f m, seed %llu\n\n",
-        o.prior.sigma, o.prior.bias, o.prior.radius, static_cast<unsigned long long>(o.prior.seed));
+        "position prior: drawn around each query's truth, sigma %.1f m, bias %.1f m, radius %.1f m, heading "
+        "tolerance %.0f deg (0: none), seed %llu\n\n",
+        o.prior.sigma, o.prior.bias, o.prior.radius, o.prior.heading_tolerance_deg,
+        static_cast<unsigned long long>(o.prior.seed));
   print_table(sums, runs);
   if (!sums.empty()) {
     print_calibration(sums);

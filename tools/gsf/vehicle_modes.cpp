@@ -72,6 +72,13 @@ PositionPrior draw_prior(const PriorDraw& d, const Eigen::Isometry3d& truth, uin
   p.x = truth.translation().x() + d.bias * std::cos(direction) + d.sigma * r.normal();
   p.y = truth.translation().y() + d.bias * std::sin(direction) + d.sigma * r.normal();
   p.radius_m = static_cast<float>(d.radius);
+  if (d.heading_tolerance_deg > 0) {  // drawn after the position, so the positions do not change with it
+    const Eigen::Matrix3d R = truth.linear();
+    const double yaw = std::atan2(R(1, 0), R(0, 0)) * 180.0 / kPi + d.heading_tolerance_deg / 3.0 * r.normal();
+    p.has_heading = true;
+    p.heading_deg = static_cast<float>(std::remainder(yaw, 360.0));
+    p.heading_tolerance_deg = static_cast<float>(d.heading_tolerance_deg);
+  }
   return p;
 }
 

@@ -22,6 +22,9 @@ bool parse_prior(const std::string& text, PositionPrior* out, std::string* error
 struct PriorDraw {
   bool enabled = false;
   double sigma = 0, bias = 0, radius = 0;
+  // > 0: the prior also carries a heading (a GNSS course over ground), the truth's yaw with
+  // N(0, (tolerance / 3)^2) deg of error, this tolerance; a --prior-bias moves the position only.
+  double heading_tolerance_deg = 0;
   uint64_t seed = 1;
 };
 PositionPrior draw_prior(const PriorDraw& draw, const Eigen::Isometry3d& truth, uint32_t query);
