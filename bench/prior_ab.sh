@@ -6,7 +6,8 @@
 # LABELS gives the queries' labels simulated network errors (e.g. LABELS="--label-noise 0.15";
 # both binaries alike; the runs are kept under a tag of it). Prints bench/prior_summary.py's pooled
 # line per run (queries | success | answered right | confident wrong | with a pose | checked |
-# contradicted | pooled median ms), then per world answered right: one-shot, base, new. The binaries
+# contradicted | pooled median ms), then per world answered right: one-shot, base, new. HEADING=T gives
+# the priors a heading T deg wide (`evaluate --prior-heading-tolerance T`, a GNSS course). The binaries
 # run one after the other, so the medians compare on an idle machine; a time target is the ratio of
 # the prior's pooled median to one-shot's.
 #
@@ -22,6 +23,10 @@ tag=$(echo "${LABELS:-default}" | tr -c 'a-zA-Z0-9.\n' '_' | sed 's/^_*//')
 here=$(dirname "$0")
 mkdir -p "$out"
 prior=(--mode gsf --prior-sigma 5 --prior-radius 20 --quiet)
+if [ -n "${HEADING:-}" ]; then
+  prior+=(--prior-heading-tolerance "$HEADING")
+  tag=$tag-heading$HEADING
+fi
 for s in $seeds; do
   d=$out/w$s
   if [ ! -f "$d/m.map" ]; then
@@ -45,7 +50,7 @@ pooled() {  # the pooled line of one run over every seed's world
   for s in $seeds; do runs+=("$out/$tag-$1-$s.json"); done
   line "${runs[@]}"
 }
-echo "labels: ${LABELS:-default}; seeds: $seeds"
+echo "labels: ${LABELS:-default}; prior heading: ${HEADING:-none}; seeds: $seeds"
 echo "one-shot: $(pooled oneshot)"
 for b in base new; do
   echo "$b, 20 m prior: $(pooled "$b-p20")"
