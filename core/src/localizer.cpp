@@ -720,8 +720,8 @@ Status Localizer::localize(const ScanView& scan, const PositionPrior& prior, Loc
 // z_rival 0.95, passed a gate at 0.9 agreement confidently). It asks only what the
 // check needs: is there a pose elsewhere (beyond 5 m / 10 deg of the answer) that verification scores
 // as well? It starts from this scan's triangles (voxels, instances, fields and triangles are not
-// rebuilt) and verifies only the global hypotheses elsewhere (as verification picks an answer: coarse,
-// full, pattern search). When the best of them beats the answer's score, its confidence is measured
+// rebuilt) and verifies only the global hypotheses elsewhere (coarse, then full; no pattern search, see
+// search_elsewhere). When the best of them beats the answer's score, its confidence is measured
 // (against the prior's answer and its own rivals) and the answer keeps at most 1 - that; when that pose
 // lies in the prior's disc (the restricted search missed its clique), it replaces the answer, with its
 // own confidence. When it scores lower, it is one more rival of the answer (a near tie is a copy all
