@@ -153,8 +153,8 @@ class Localizer {
   // down to at most 1 - its own, or replaces the answer when it lies in the prior's disc (prior_contradicted);
   // one that scores a little lower is one more rival in the answer's confidence (a near tie). Not caught:
   // a disc holding a turned copy of a repetitive scene whose rivals there are weak (position_prior.h);
-  // a heading in the prior rules it out. The query (and its check) runs on the scan's labels without the GSF filter: the disc narrows the
-  // candidates as the filter would, so the logits are not read (docs/vehicle-modes.md).
+  // a heading in the prior rules it out. The query (and its check) runs on the scan's labels without the GSF filter:
+  // the disc narrows the candidates as the filter would, so the logits are not read (docs/vehicle-modes.md).
   Status localize(const ScanView& scan, const PositionPrior& prior, LocalizeResult* out);
 
   // Tracking (detail/tracker.h): the pose of `scan` near `predicted_map_frame_T_scan` (the map's frame,
