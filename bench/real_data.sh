@@ -125,28 +125,8 @@ for pair in 0004:0002 0002:0004 0001:0002; do
   # shellcheck disable=SC2086
   $gsf evaluate --map "$out/nuscenes-$m.gsfmap" --dataset "$N" --sequence $q --classes "$classes" --quiet \
     --mode track --json "$out/nuscenes-$m-$q-track.json" $noise >/dev/null
-done
-python3 - "$out" <<'PY'
-import json, sys
-out = sys.argv[1]
-print("\nnuScenes-lidarseg drives, vehicle modes (of 40 scans; answered = confident)")
-print(f"{'map -> queries':16} {'one-shot answered right/wrong':>29} {'window of 3 right/wrong':>23} "
-      f"{'tracking answered right/wrong':>29} {'tracked within 0.3 m, 1 deg':>27} {'losses':>6}")
-for m, q in (("0004", "0002"), ("0002", "0004"), ("0001", "0002")):
-    one = json.load(open(f"{out}/nuscenes-{m}-{q}.json"))["modes"]["gsf"]["queries"]
-    win = json.load(open(f"{out}/nuscenes-{m}-{q}-window3.json"))["scans"]
-    trk = json.load(open(f"{out}/nuscenes-{m}-{q}-track.json"))
-    def rw(xs):
-        return f"{sum(x['answered'] and x['success'] for x in xs)} / {sum(x['answered'] and not x['success'] for x in xs)}"
-    tracked = [x for x in trk["scans"] if x["how"] == "track"]
-    precise = sum(x["precise"] for x in tracked)
-    print(f"{m + ' -> ' + q:16} {rw(one):>29} {rw(win):>23} {rw(trk['scans']):>29} "
-          f"{str(precise) + ' of ' + str(len(tracked)):>27} {trk['summary']['losses']:>6}")
-PY
-# A position prior on the same drives (docs/vehicle-modes.md): a 20 m disc drawn around each query's
-# listed pose (5 m sigma), and the same prior 50 m and 100 m off (a wrong prior must never be confident).
-for pair in 0004:0002 0002:0004 0001:0002; do
-  m=${pair%%:*} q=${pair##*:}
+  # A position prior: a 20 m disc drawn around each query's listed pose (5 m sigma), and the same prior
+  # 50 m and 100 m off (a wrong prior must never be confident).
   for off in 0 50 100; do
     # shellcheck disable=SC2086
     $gsf evaluate --map "$out/nuscenes-$m.gsfmap" --dataset "$N" --sequence $q --classes "$classes" --quiet \
@@ -157,16 +137,28 @@ done
 python3 - "$out" <<'PY'
 import json, sys
 out = sys.argv[1]
+PAIRS = (("0004", "0002"), ("0002", "0004"), ("0001", "0002"))
+def rw(xs):  # answered right / answered wrong
+    return f"{sum(x['answered'] and x['success'] for x in xs)} / {sum(x['answered'] and not x['success'] for x in xs)}"
+print("\nnuScenes-lidarseg drives, vehicle modes (of 40 scans; answered = confident)")
+print(f"{'map -> queries':16} {'one-shot answered right/wrong':>29} {'window of 3 right/wrong':>23} "
+      f"{'tracking answered right/wrong':>29} {'tracked within 0.3 m, 1 deg':>27} {'losses':>6}")
+for m, q in PAIRS:
+    one = json.load(open(f"{out}/nuscenes-{m}-{q}.json"))["modes"]["gsf"]["queries"]
+    win = json.load(open(f"{out}/nuscenes-{m}-{q}-window3.json"))["scans"]
+    trk = json.load(open(f"{out}/nuscenes-{m}-{q}-track.json"))
+    tracked = [x for x in trk["scans"] if x["how"] == "track"]
+    precise = sum(x["precise"] for x in tracked)
+    print(f"{m + ' -> ' + q:16} {rw(one):>29} {rw(win):>23} {rw(trk['scans']):>29} "
+          f"{str(precise) + ' of ' + str(len(tracked)):>27} {trk['summary']['losses']:>6}")
 print("\nnuScenes-lidarseg drives with a position prior (of 40 scans; answered = confident)")
 print(f"{'map -> queries':16} {'one-shot right/wrong':>20} {'20 m prior right/wrong':>22} "
       f"{'50 m off: with a pose / answered':>32} {'100 m off: with a pose / answered':>33}")
-for m, q in (("0004", "0002"), ("0002", "0004"), ("0001", "0002")):
+def off(xs):  # with a pose / answered
+    return f"{sum(x['status'] == 'Ok' for x in xs)} / {sum(x['answered'] for x in xs)}"
+for m, q in PAIRS:
     def load(tag):
         return json.load(open(f"{out}/nuscenes-{m}-{q}{tag}.json"))["modes"]["gsf"]["queries"]
-    def rw(xs):
-        return f"{sum(x['answered'] and x['success'] for x in xs)} / {sum(x['answered'] and not x['success'] for x in xs)}"
-    def off(xs):
-        return f"{sum(x['status'] == 'Ok' for x in xs)} / {sum(x['answered'] for x in xs)}"
     print(f"{m + ' -> ' + q:16} {rw(load('')):>20} {rw(load('-prior0')):>22} {off(load('-prior50')):>32} "
           f"{off(load('-prior100')):>33}")
 PY
