@@ -44,6 +44,7 @@ expect 2 "need --prior-sigma" -- "$gsf" evaluate --map m --dataset d --prior-hea
 expect 2 "prior-heading-tolerance in" -- "$gsf" evaluate --map m --dataset d --prior-sigma 5 \
   --prior-heading-tolerance 200
 expect 2 "odometry-noise must be in" -- "$gsf" evaluate --map m --dataset d --mode track --odometry-noise 2
+expect 2 "prediction-offset must be in" -- "$gsf" evaluate --map m --dataset d --mode track --prediction-offset -1
 expect 2 "sequence-window must be 1..4" -- "$gsf" evaluate --map m --dataset d --sequence-window 5
 expect 1 "cannot open sequence" -- "$gsf" build-map --dataset "$tmp/nothing" --out "$tmp/m.gsfmap"
 expect 2 "block-tiles must be a count" -- "$gsf" build-map --dataset d --out m --block-tiles -1
@@ -72,6 +73,8 @@ cmp -s "$tmp/map.gsfmap" "$tmp/map1.gsfmap" || fail "the one-pass map differs fr
   --label-noise 0.1 --object-confusion 0.15 --noise-seed 7 --quiet >/dev/null || fail "evaluate --label-noise"
 "$gsf" evaluate --map "$tmp/map.gsfmap" --dataset "$tmp/ds" --mode track --json "$tmp/track.json" --quiet \
   >/dev/null || fail "evaluate --mode track"
+"$gsf" evaluate --map "$tmp/map.gsfmap" --dataset "$tmp/ds" --mode track --prediction-offset 8 \
+  --json "$tmp/track_off.json" --quiet >/dev/null || fail "evaluate --mode track --prediction-offset"
 "$gsf" evaluate --map "$tmp/map.gsfmap" --dataset "$tmp/ds" --mode drive --json "$tmp/drive.json" --quiet \
   >/dev/null || fail "evaluate --mode drive"
 "$gsf" evaluate --map "$tmp/map.gsfmap" --dataset "$tmp/ds" --sequence-window 3 --json "$tmp/window.json" --quiet \
@@ -167,6 +170,14 @@ ts = tr["summary"]
 assert tr["mode"] == "track" and ts["scans"] == 20 == len(tr["scans"]), ts
 assert ts["tracked"] > 0 and ts["confident_wrong"] == 0 and ts["tracked_precise"] >= ts["tracked"] - 1, ts
 assert all(s["how"] in ("one-shot", "track", "recovery") for s in tr["scans"])
+# Predictions knocked up to 8 m / 8 deg off: the offset is recorded, each attempt says how far its result
+# moved from its prediction, and a result beyond the search's reach (3.75 m) is never vouched for.
+off = json.load(open(f"{t}/track_off.json"))
+assert off["prediction_offset"] == 8 and off["summary"]["confident_wrong"] == 0, off["summary"]
+att = [s["track_attempt"] for s in off["scans"] if "track_attempt" in s]
+assert att and all(a["from_prediction_m"] >= 0 for a in att), att
+assert all(a["confidence"] == 0 for a in att if a["from_prediction_m"] > 3.75 + 1e-6), att
+assert any(a["from_prediction_m"] > 0.5 for a in att), att
 dr = json.load(open(f"{t}/drive.json"))
 ds = dr["summary"]
 assert dr["mode"] == "drive" and ds["scans"] == 20 == len(dr["scans"]), ds

@@ -1,6 +1,7 @@
 // gsf evaluate --map MAP --dataset DIR --sequence 01 --json OUT.json [--mode gsf|instance|scan-context|all]
 // [--min-confidence P] [--svg DIR [--png]] [--label-noise P] [--object-confusion P] [--thin-miss P] [--noise-seed N]
 // [--prior-sigma S [--prior-bias B] [--prior-radius R] [--prior-seed N]] | --mode track [--odometry-noise F]
+// [--prediction-offset D]
 // | --sequence-window N [--odometry-noise F]
 #include <algorithm>
 #include <cmath>
@@ -60,6 +61,11 @@ bool parse_vehicle_mode_options(const Args& args, EvalOptions* o, std::string* e
     *error = "--odometry-noise must be in [0, 1]";
     return false;
   }
+  if (!args.get_double("prediction-offset", &o->prediction_offset, error)) return false;
+  if (!(o->prediction_offset >= 0 && o->prediction_offset <= 50)) {
+    *error = "--prediction-offset must be in [0, 50]";
+    return false;
+  }
   return true;
 }
 
@@ -110,6 +116,10 @@ std::vector<OptionSpec> evaluate_option_specs() {
        "--mode track, --sequence-window: odometry error as a share of the distance travelled (and 10 deg/m x it of "
        "yaw)",
        "0.02"},
+      {"prediction-offset",
+       "--mode track: each tracked scan's prediction also moved D x U(0,1) m in a random direction and turned D x "
+       "U(-1,1) deg (seeded by --prior-seed): wrong predictions, to measure the tracking confidence",
+       "0"},
       {"sequence-window",
        "N in 1..4: every scan of the 10 Hz stretches of sequence 02 (real data: of --sequence, one drive) through "
        "localize_sequence, combining the last N scans when one is not confident (1: one-shot; docs/vehicle-modes.md)",

@@ -29,6 +29,7 @@ struct EvalOptions {
   LabelErrorOptions label_errors;  // simulated network errors on the query scans' labels (none by default)
   PriorDraw prior;                 // a position prior around each query's truth (--prior-sigma)
   double odometry_noise = 0.02;    // --mode track, --sequence-window: odometry noise (vehicle_modes.h noisy_odometry)
+  double prediction_offset = 0;    // --mode track: predictions knocked off (vehicle_modes.h offset_prediction)
   uint32_t sequence_window = 0;    // --sequence-window N (1..4): localize_sequence over the stretches; 0: off
 };
 

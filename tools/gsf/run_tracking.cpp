@@ -42,6 +42,7 @@ struct ScanRecord {
   bool has_track_attempt = false;
   PoseError attempt_error;
   double attempt_confidence = 0;
+  double attempt_from_prediction_m = 0;  // how far the result moved from the prediction (the reach rule's distance)
   ConfidenceEvidence attempt_evidence;
 };
 
@@ -125,8 +126,9 @@ ScanRecord run_scan(const TrackRun& t, uint32_t i, Vehicle* v) {
   if (rs != Status::Ok) r.status = rs;
   if (rs == Status::Ok && t.o.modes.front() == "drive") return drive_scan(t, i, truth, v, rec, r);
   if (rs == Status::Ok && v->have_pose) {
-    const Eigen::Isometry3d predicted =
-        v->last_estimate * noisy_odometry(v->last_truth, truth, t.o.odometry_noise, t.o.prior.seed, i);
+    const Eigen::Isometry3d predicted = offset_prediction(
+        v->last_estimate * noisy_odometry(v->last_truth, truth, t.o.odometry_noise, t.o.prior.seed, i),
+        t.o.prediction_offset, t.o.prior.seed, i);
     t.loc.track(t.buf.view(), predicted, &r);
     rec.how = "track";
     rec.track_ms = rec.time_ms = double(r.times.total) / 1e6;
@@ -136,6 +138,7 @@ ScanRecord run_scan(const TrackRun& t, uint32_t i, Vehicle* v) {
       rec.has_track_attempt = true;
       rec.attempt_error = pose_error(r.map_frame_T_scan, truth);
       rec.attempt_confidence = r.confidence;
+      rec.attempt_from_prediction_m = (r.map_frame_T_scan.translation() - predicted.translation()).norm();
       rec.attempt_evidence = r.confidence_evidence;
     }
   }
@@ -224,6 +227,7 @@ void write_tracking_json(const std::string& path, const EvalOptions& o, const Tr
   j.field("sequence", o.sequence);
   j.field("mode", o.modes.front());
   j.field("odometry_noise", o.odometry_noise);
+  j.field("prediction_offset", o.prediction_offset);
   j.field("prior_sigma_m", o.prior.enabled ? o.prior.sigma : -1.0);
   j.key("summary");
   j.begin_object();
@@ -275,6 +279,7 @@ void write_tracking_json(const std::string& path, const EvalOptions& o, const Tr
       j.field("confidence", r.attempt_confidence);
       j.field("translation_error_m", r.attempt_error.translation_m);
       j.field("rotation_error_deg", r.attempt_error.rotation_deg);
+      j.field("from_prediction_m", r.attempt_from_prediction_m);
       j.field("z_shift", double(r.attempt_evidence.z_shift));
       j.field("z_turn", double(r.attempt_evidence.z_turn));
       j.field("z_rival", double(r.attempt_evidence.z_rival));

@@ -95,4 +95,17 @@ Eigen::Isometry3d noisy_odometry(const Eigen::Isometry3d& from, const Eigen::Iso
   return odo;
 }
 
+Eigen::Isometry3d offset_prediction(const Eigen::Isometry3d& predicted, double offset, uint64_t seed, uint32_t scan) {
+  if (offset <= 0) return predicted;
+  Draws r = draws_for(seed, 0x4B4E, scan);
+  const double direction = 2.0 * kPi * r.uniform();
+  const double distance = offset * r.uniform();
+  const double yaw = offset * (2.0 * r.uniform() - 1.0) * kPi / 180.0;
+  Eigen::Isometry3d p = predicted;
+  p.translation().x() += distance * std::cos(direction);
+  p.translation().y() += distance * std::sin(direction);
+  p.linear() = Eigen::AngleAxisd(yaw, Eigen::Vector3d::UnitZ()).toRotationMatrix() * p.linear();
+  return p;
+}
+
 }  // namespace gsf::cli

@@ -35,6 +35,12 @@ PositionPrior draw_prior(const PriorDraw& draw, const Eigen::Isometry3d& truth, 
 Eigen::Isometry3d noisy_odometry(const Eigen::Isometry3d& from, const Eigen::Isometry3d& to, double noise,
                                  uint64_t seed, uint32_t scan);
 
+// A tracking prediction knocked off by a seeded amount (gsf evaluate --mode track --prediction-offset D):
+// moved D x U(0, 1) m in a uniform direction and turned D x U(-1, 1) deg. Wrong predictions of every size
+// up to D, for measuring (and fitting) the tracking confidence near and beyond the search's reach; a
+// broken odometry alone mostly gives poses far from any peak. D = 0 returns `predicted`.
+Eigen::Isometry3d offset_prediction(const Eigen::Isometry3d& predicted, double offset, uint64_t seed, uint32_t scan);
+
 // gsf evaluate --mode track: over every stretch of o.sequence (meta.json "stretches"), the first scan
 // one-shot (with a prior when o.prior is enabled), then track from the last pose x odometry; a loss (not
 // confident) falls back to one-shot on the same scan. Prints the table, writes o.json_out. Returns the
