@@ -1,6 +1,7 @@
 // Tracking (detail/tracker.h) on the simulator's tiny world, against the simulator's truth: from a
-// prediction 1 m / 3 deg off, the pose within 0.3 m / 1 deg and confident; from one 30 m off or turned
-// 180 deg, a loss (not confident); bad predictions refused; the same call gives the same bits.
+// prediction 1 m / 3 deg off, the pose within 0.3 m / 1 deg and confident, and from one 2.5 m off too
+// (within the search's reach); from one 30 m off or turned 180 deg, a loss (not confident); bad
+// predictions refused; the same call gives the same bits.
 #include <catch2/catch.hpp>
 
 #include <algorithm>
@@ -69,6 +70,28 @@ TEST_CASE(
   CHECK(within * 10 >= w.queries.size() * 9);
   CHECK(confident * 10 >= w.queries.size() * 9);
   CHECK(refined == w.queries.size());
+}
+
+TEST_CASE("Tracking from a prediction 2.5 m off, within the search's reach of 3.75 m, finds the pose and vouches") {
+  // The reach rule (tracker.cpp) makes a result farther than the pattern search can reach from the
+  // prediction a loss. The search moves up to two steps a round along each axis (3.75 m by default);
+  // the rule once counted one (1.875 m), so every right pose from a prediction 2.5 m off was a loss.
+  const auto& w = tiny_world();
+  Ready r(w, w.config);
+  uint32_t confident = 0, confident_wrong = 0;
+  for (uint32_t k = 0; k < w.queries.size(); ++k) {
+    const auto& q = w.queries[k];
+    LocalizeResult out;
+    REQUIRE(r.loc.track(q.view(), perturbed(q.truth, 2.5, 3.0, k), &out) == Status::Ok);
+    double m, deg;
+    errors(out.map_T_scan, q.truth, &m, &deg);
+    INFO("query " << k << ": " << m << " m, " << deg << " deg, confidence " << out.confidence);
+    confident += out.confident && m < 0.5 && deg < 1.0;
+    confident_wrong += out.confident && !gsf_test::pose_ok(out.map_T_scan, q.truth);
+  }
+  INFO(confident << " of " << w.queries.size() << " confident within 0.5 m / 1 deg");
+  CHECK(confident * 10 >= w.queries.size() * 8);
+  CHECK(confident_wrong == 0);
 }
 
 TEST_CASE("Tracking from a prediction 30 m off or turned 180 deg reports a loss: never a confident pose") {

@@ -315,7 +315,7 @@ PoseVerification search_pose(const Source& src, const SemanticGridView& grid, co
     }
     bool moved = true;
     int last_move = -1;  // the probe opposite the last move returns to the pose it left, known worse
-    for (int pass = 0; pass < 2 && moved; ++pass) {
+    for (uint32_t pass = 0; pass < kPatternSearchPassesPerRound && moved; ++pass) {
       moved = false;
       for (int k = 0; k < 6; ++k) {
         if (last_move >= 0 && k == (last_move ^ 1)) continue;

@@ -33,12 +33,21 @@ bool within_icp_start(const Eigen::Isometry3d& a, const Eigen::Isometry3d& b, co
   return within_pose(a, b, tc.icp_start_m, double(tc.icp_start_deg) / kDegPerRad);
 }
 
-// What the pattern search can reach from the prediction, in steps: its steps halve each round, so it
-// moves at most step x (2 - 2^(1 - rounds)) in position and heading.
-double search_reach(const TrackConfig& tc) { return 2.0 - std::ldexp(1.0, 1 - int(tc.search_rounds)); }
+// What the pattern search can reach from the prediction, in first steps: its steps halve each round and
+// a round moves at most kPatternSearchPassesPerRound steps along each axis and in heading, so it moves at
+// most passes x step x (2 - 2^(1 - rounds)) along each: 3.75 m and 7.5 deg by default. (Before
+// 2026-12-06 this left out the passes and bounded a tracked pose at half the search's reach, 1.875 m.)
+double search_reach(const TrackConfig& tc) {
+  return double(kPatternSearchPassesPerRound) * (2.0 - std::ldexp(1.0, 1 - int(tc.search_rounds)));
+}
 
-bool within_search_reach(const Eigen::Isometry3d& pose, const Eigen::Isometry3d& predicted, const TrackConfig& tc) {
-  const double reach = search_reach(tc);
+// Step 0's bound: ICP from the prediction is taken without a search when it ends within one pass of the
+// search's reach of the prediction (1.875 m / 3.75 deg), where ICP alone converges well. Farther (up
+// to the whole reach), ICP from the prediction ended 0.3-0.8 m and 1-2.5 deg off on 5 of 1,023 scans
+// at odometry noise 0.3 (bench/track_ab.sh), and the search then starts ICP nearer the truth.
+bool within_one_pass_of_prediction(const Eigen::Isometry3d& pose, const Eigen::Isometry3d& predicted,
+                                   const TrackConfig& tc) {
+  const double reach = search_reach(tc) / double(kPatternSearchPassesPerRound);
   return within_pose(pose, predicted, reach * tc.search_step_m, reach * double(tc.search_step_deg) / kDegPerRad);
 }
 
@@ -72,7 +81,7 @@ TrackOutcome track_pose(const TrackScan& scan, const SemanticGridView& grid, con
   // (where step 1 would have looked) and the probes vouch for the result, that is the answer.
   Eigen::Isometry3d refined;
   const bool icp_ok = icp_from(refiner, scan, predicted, tc, &refined);
-  const bool icp_first = icp_ok && within_search_reach(refined, predicted, tc);
+  const bool icp_first = icp_ok && within_one_pass_of_prediction(refined, predicted, tc);
   lap(&o.refine_ns);
   if (icp_first) {
     probe(refined);

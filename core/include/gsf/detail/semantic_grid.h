@@ -126,6 +126,11 @@ PoseVerification verify_pose(const VoxelLayer& voxels, const SemanticGridView& g
                              const Eigen::Isometry3d& map_T_scan, uint32_t max_points, const float* weights,
                              DisagreeWeights disagree = DisagreeWeights());
 
+// The pattern search below makes at most this many passes a round; each pass can move once along x, once
+// along y and once in heading, so a round moves at most this many steps along each (what a caller that
+// bounds the search's reach needs: tracker.cpp).
+constexpr uint32_t kPatternSearchPassesPerRound = 2;
+
 // verify_pose after a small bird's-eye pattern search around map_T_scan (moves of step_m along x and y
 // and step_deg of heading, halved each round, 6 probes a pass, a second pass when the first moved), so
 // a hypothesis whose clique pose is a fraction of a metre off is compared at its best alignment; the

@@ -4,9 +4,9 @@
 // Tracking: the pose of a scan near a predicted pose (the last pose and odometry), without the global
 // search (docs/vehicle-modes.md). Each step bounded:
 //   0. point-to-plane ICP from the prediction against the map's refinement layer (refine.h); when it is
-//      accepted, ends within the pattern search's reach of the prediction (where step 1 would have
-//      looked) and the probes of step 3 vouch for it (confidence >= min_probability), that is the
-//      answer: a good prediction needs no search. Otherwise:
+//      accepted, ends within one pass of the pattern search's reach of the prediction (1.875 m / 3.75
+//      deg, where ICP alone converges well) and the probes of step 3 vouch for it (confidence >=
+//      min_probability), that is the answer: a good prediction needs no search. Otherwise:
 //   1. a bird's-eye pattern search of whole-scan verification around the prediction (semantic_grid.h:
 //      verify_pose_refined, steps of search_step_m / search_step_deg halved each round), which takes a
 //      prediction a few metres and degrees off to within about a cell of the map's semantic layer;
@@ -28,8 +28,9 @@
 //      real drives, lost odometry): TrackingConfidenceModel below.
 // Loss is "not confident": the caller falls back to one-shot localization. A prediction far off ends
 // where the pattern search can reach (a few metres), which the probes judge as any wrong pose: no peak.
-// A result that ICP took beyond the search's reach of the prediction in position is a loss whatever the
-// probes say: tracking vouches only for a pose near its prediction.
+// A result that ICP took beyond the search's reach of the prediction in position (3.75 m by default: two
+// passes a round, semantic_grid.h) is a loss whatever the probes say: tracking vouches only for a pose
+// near its prediction.
 #pragma once
 #include <cstdint>
 
