@@ -47,7 +47,9 @@ sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 import fit_confidence as fc  # noqa: E402
 
 fc.FACTORS = [["z_rival"], ["z_shift"], ["z_turn"]]  # kTrackingConfidenceModel's order
-CURRENT = [-4.025, 3.430, 5.234, 2.657, -6.575, 3.439]  # core/src/tracker.cpp as of 2026-12-06
+CURRENT = [-1.817, 3.540, 3.391, 1.827, -9.125, 3.790]  # core/src/tracker.cpp as of 2026-12-06
+ONE_SHOT_2026_11 = [-1.817, 3.540, 3.391, 1.827, -10.350, 3.164]  # the model tracking read before
+FACTOR_NAMES = ["rival", "shift", "turn"]
 SUCCESS = (5.0, 10.0)  # m, deg: the library's success criterion
 
 
@@ -71,6 +73,30 @@ def attempts(path, reach):
             z = tuple((min(10.0, max(-3.0, float(t[n[0]]))),) for n in fc.FACTORS)
             out.append((z, float(t["translation_error_m"]), float(t["rotation_error_deg"])))
     return out
+
+
+def fit_held(data, held, l2):
+    """fit_confidence.fit's iRprop- with the factors named in `held` kept at ONE_SHOT_2026_11's numbers
+    and the others fitted from there."""
+    m = list(ONE_SHOT_2026_11)
+    free = [FACTOR_NAMES[i // 2] not in held for i in range(len(m))]
+    step, last = [0.1] * len(m), [0.0] * len(m)
+    loss = 0.0
+    for _ in range(400):
+        loss, grad = fc.loss_and_gradient(m, data, l2)
+        for i in range(len(m)):
+            if not free[i]:
+                continue
+            if grad[i] * last[i] > 0:
+                step[i] = min(step[i] * 1.2, 1.0)
+            elif grad[i] * last[i] < 0:
+                step[i] = max(step[i] * 0.5, 1e-6)
+                grad[i] = 0.0
+            m[i] += -step[i] if grad[i] > 0 else step[i] if grad[i] < 0 else 0.0
+            last[i] = grad[i]
+        if max(st for st, f in zip(step, free) if f) < 1e-5:
+            break
+    return m, loss
 
 
 def within(rec, limits):
@@ -98,6 +124,9 @@ def main():
     ap.add_argument("--reach", type=float, default=3.75, help="the reach rule's distance, m (default 3.75)")
     ap.add_argument("--l2", type=float, default=1e-3)
     ap.add_argument("--groups", default="", help="pool the files whose name contains -GROUP, per group")
+    ap.add_argument("--hold", default="rival,shift",
+                    help="factors (rival, shift, turn) kept at the one-shot model of 2026-11; the rest is "
+                         "fitted (default rival,shift; 'none' fits all six numbers)")
     a = ap.parse_args()
     fit_within = tuple(float(x) for x in a.fit_within.split(","))
     if a.model:
@@ -106,7 +135,8 @@ def main():
         data = [(r[0], within(r, fit_within), 1.0) for p in a.train for r in attempts(p, a.reach)]
         if not data:
             sys.exit("fit_tracking.py: no tracking attempts in --train")
-        m, loss = fc.fit(data, a.l2)
+        held = [] if a.hold == "none" else a.hold.split(",")
+        m, loss = fit_held(data, held, a.l2) if held else fc.fit(data, a.l2)
         print(f"fitted on {len(data)} attempts (loss {loss:.2f}):")
         print("const TrackingConfidenceModel kTrackingConfidenceModel = {" +
               ", ".join(f"{v:.3f}f" for v in m) + "};")

@@ -8,8 +8,9 @@
 
 namespace gsf {
 
-// The one-shot model fitted 2026-11 (rival factor on the closest probe's z alone; see tracker.h).
-const TrackingConfidenceModel kTrackingConfidenceModel = {-1.817f, 3.540f, 3.391f, 1.827f, -10.350f, 3.164f};
+// The one-shot model of 2026-11's rival and shift factors, and a turn factor fitted on tracking attempts
+// (2026-12-06, bench/fit_tracking.py; see tracker.h).
+const TrackingConfidenceModel kTrackingConfidenceModel = {-1.817f, 3.540f, 3.391f, 1.827f, -9.125f, 3.790f};
 
 double tracking_probability(const ConfidenceEvidence& e) {
   if (e.samples == 0) return 0.0;

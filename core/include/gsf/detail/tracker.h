@@ -23,9 +23,8 @@
 //      place*). The inlier factor is left out: tracking forms no instances; it guards one-shot answers
 //      in a map of somewhere else, and a tracked pose follows a confident one. Its own model
 //      (kTrackingConfidenceModel): the one-shot model is fitted on answers that have rivals, and the
-//      rival's margin of a probe 2 m off (tracking's stand-in) is another quantity; the tracking model
-//      is the one-shot model of 2026-11 without the margin, with which tracking was measured (suite,
-//      real drives, lost odometry): TrackingConfidenceModel below.
+//      rival's margin of a probe 2 m off (tracking's stand-in) is another quantity: TrackingConfidenceModel
+//      below, its turn factor fitted on tracking attempts.
 // Loss is "not confident": the caller falls back to one-shot localization. A prediction far off ends
 // where the pattern search can reach (a few metres), which the probes judge as any wrong pose: no peak.
 // A result that ICP took beyond the search's reach of the prediction in position (3.75 m by default: two
@@ -69,9 +68,17 @@ TrackOutcome track_pose(const TrackScan& scan, const SemanticGridView& grid, con
                         AnswerConfidence& confidence, Clock* clock = nullptr);
 
 // P of a tracked pose (see above): s(a_r + b_r z_rival) s(a_s + b_s z_shift) s(a_t + b_t z_turn), each z
-// clipped to [-3, 10] as in confidence.h; the one-shot model of 2026-11 without its margin and inlier
-// factors, kept when the one-shot model's shift and turn became one factor (2026-12-04), so tracking
-// reads as it was measured.
+// clipped to [-3, 10] as in confidence.h; z_rival is the closest probe's (a tracked pose has no rivals).
+// The rival and shift factors are the one-shot model of 2026-11's, with which tracking was measured on
+// the real drives: their right tracked poses have z_shift 1.2-1.8, and a refit of all six numbers on
+// the simulator's attempts asked 1.8 (the simulator's scans hold more structure), declining a third
+// more of them. The turn factor is fitted (bench/fit_tracking.py, 2026-12-06) on the attempts of the
+// suite's tracking worlds, seeds 6-10, with and without label noise 0.15: from a good odometry, from
+// poor ones (noise 0.3 and 1.0) and from predictions knocked up to 3, 4 and 8 m / deg off (gsf evaluate
+// --prediction-offset), as a pose within 1 m / 5 deg (stricter than the library's 5 m / 10 deg, so
+// P under-states that criterion, never over-states it). It asks z_turn of about 3 for 0.9 where the
+// old one asked 4, which under label noise declined right poses at z_turn 3.5-3.9 (docs/vehicle-
+// modes.md, *The search's whole reach, and a tracking model fitted on tracking*).
 struct TrackingConfidenceModel {
   float rival_offset, rival_slope;
   float shift_offset, shift_slope;
