@@ -78,8 +78,8 @@ TrackOutcome track_pose(const TrackScan& scan, const SemanticGridView& grid, con
     o.confidence = tracking_probability(o.evidence);
     lap(&o.probe_ns);
   };
-  // 0. A good prediction needs no search: ICP from it, and when ICP ends within the search's reach of it
-  // (where step 1 would have looked) and the probes vouch for the result, that is the answer.
+  // 0. A good prediction needs no search: ICP from it, and when ICP ends within one pass of the search's
+  // reach of it and the probes vouch for the result, that is the answer.
   Eigen::Isometry3d refined;
   const bool icp_ok = icp_from(refiner, scan, predicted, tc, &refined);
   const bool icp_first = icp_ok && within_one_pass_of_prediction(refined, predicted, tc);
