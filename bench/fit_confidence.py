@@ -165,20 +165,27 @@ def loss_and_gradient(m, data, l2):
     return loss, grad
 
 
-def fit(data, l2=1e-3, iterations=400):
+def fit(data, l2=1e-3, iterations=400, start=None, free=None):
     """iRprop-: a per-parameter step that grows while the gradient keeps its sign and shrinks when it
-    flips (a smooth loss of a few parameters; converges in a few hundred passes)."""
+    flips (a smooth loss of a few parameters; converges in a few hundred passes). start: the numbers to
+    begin from (default below); free: per number, whether it is fitted (default all; the others keep
+    start's value)."""
     n = parameter_count()
     # z factors start at s(2 + z); a factor of a share (range 0..1) alone at s(10 (share - 0.5)).
     m = []
     for f in FACTORS:
         share = f[0] == "inlier_share"
         m += [-5.0 if share else 2.0] + [10.0 if share and j == 0 else 1.0 for j in range(len(f))]
-    step, last = [0.1] * n, [0.0] * n
+    if start is not None:
+        m = list(start)
+    free = free or [True] * n
+    step, last = [0.1 if free[i] else 0.0 for i in range(n)], [0.0] * n
     loss = 0.0
     for _ in range(iterations):
         loss, grad = loss_and_gradient(m, data, l2)
         for i in range(n):
+            if not free[i]:
+                continue
             if grad[i] * last[i] > 0:
                 step[i] = min(step[i] * 1.2, 1.0)
             elif grad[i] * last[i] < 0:

@@ -15,9 +15,8 @@ prediction knocked off, the search stopping short) teach the fit that a pose tha
 So the fit's positives are the attempts within --fit-within (default 1 m / 5 deg), a stricter event:
 the model's P under-states the probability of the 5 m / 10 deg criterion, never over-states it. (5 deg,
 not less: under a poor odometry ICP leaves right poses 2-4 deg off at their peak; with 2 deg as the
-event the fit asked more of every pose.) The
-report counts confident wrong attempts by the library's criterion, and confident attempts beyond the
-fit's too.
+event the fit asked more of every pose.) The report counts confident wrong attempts by the library's
+criterion, and confident attempts beyond the fit's too.
 
 Which attempts a model decides. The tracker's reach rule makes a result farther than the pattern
 search's reach from its prediction (--reach, 3.75 m by default) a loss whatever the probes say; those
@@ -75,30 +74,6 @@ def attempts(path, reach):
     return out
 
 
-def fit_held(data, held, l2):
-    """fit_confidence.fit's iRprop- with the factors named in `held` kept at ONE_SHOT_2026_11's numbers
-    and the others fitted from there."""
-    m = list(ONE_SHOT_2026_11)
-    free = [FACTOR_NAMES[i // 2] not in held for i in range(len(m))]
-    step, last = [0.1] * len(m), [0.0] * len(m)
-    loss = 0.0
-    for _ in range(400):
-        loss, grad = fc.loss_and_gradient(m, data, l2)
-        for i in range(len(m)):
-            if not free[i]:
-                continue
-            if grad[i] * last[i] > 0:
-                step[i] = min(step[i] * 1.2, 1.0)
-            elif grad[i] * last[i] < 0:
-                step[i] = max(step[i] * 0.5, 1e-6)
-                grad[i] = 0.0
-            m[i] += -step[i] if grad[i] > 0 else step[i] if grad[i] < 0 else 0.0
-            last[i] = grad[i]
-        if max(st for st, f in zip(step, free) if f) < 1e-5:
-            break
-    return m, loss
-
-
 def within(rec, limits):
     return rec[1] < limits[0] and rec[2] < limits[1]
 
@@ -135,8 +110,10 @@ def main():
         data = [(r[0], within(r, fit_within), 1.0) for p in a.train for r in attempts(p, a.reach)]
         if not data:
             sys.exit("fit_tracking.py: no tracking attempts in --train")
+        # Held factors keep the one-shot model of 2026-11's numbers; the others are fitted from there.
         held = [] if a.hold == "none" else a.hold.split(",")
-        m, loss = fit_held(data, held, a.l2) if held else fc.fit(data, a.l2)
+        free = [FACTOR_NAMES[i // 2] not in held for i in range(len(ONE_SHOT_2026_11))]
+        m, loss = fc.fit(data, a.l2, start=ONE_SHOT_2026_11 if held else None, free=free)
         print(f"fitted on {len(data)} attempts (loss {loss:.2f}):")
         print("const TrackingConfidenceModel kTrackingConfidenceModel = {" +
               ", ".join(f"{v:.3f}f" for v in m) + "};")
