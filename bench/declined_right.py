@@ -28,7 +28,7 @@ import fit_confidence as fc
 
 FACTOR_NAMES = ["rival", "peak", "inlier"]  # kConfidenceModel's factors, in fit_confidence.FACTORS order
 PLACES = ["open", "near", "zone"]  # open road, near the repetitive zone, in it
-FAMILY_ORDER = "p0 p3 p8 p15 o10 o20 thin b16 b64 b128 cross cheap edge ns".split()  # bench/families.sh's
+FAMILY_ORDER = "p0 p3 p8 p15 o10 o20 thin b16 b64 b128 cross cheap edge ns spur".split()  # bench/families.sh's
 
 
 def library_model():

@@ -36,7 +36,9 @@ import os
 # A factor may read several fields (s(offset + slope_1 x_1 + slope_2 x_2)); --factors joins them with '+'.
 FEATURES = {"z_rival": (-3.0, 10.0), "rival_margin": (0.0, 1.0), "z_shift": (-3.0, 10.0), "z_turn": (-3.0, 10.0),
             "inlier_share": (0.0, 1.0), "inliers": (3.0, 12.0), "known_share": (0.0, 1.0),
-            "excess_inliers": (0.0, 9.0), "excess_share": (0.0, 1.0), "beyond_clique": (0.0, 60.0)}
+            "excess_inliers": (0.0, 9.0), "excess_share": (0.0, 1.0), "beyond_clique": (0.0, 60.0),
+            "explained_share": (0.0, 1.0), "explained_excess": (0.0, 20.0),
+            "layer_share": (0.0, 1.0), "layer_excess": (0.0, 20.0)}
 FACTORS = [["z_rival", "rival_margin"], ["z_shift", "z_turn"], ["inlier_share"]]
 
 
@@ -102,7 +104,9 @@ def records(path, mode):
 
 def features(e, q):
     """The model's inputs from a query's confidence evidence, clipped, per factor."""
-    e = dict(e, inliers=e.get("inliers", q.get("inliers", 0)))
+    e = dict(e, inliers=e.get("inliers", q.get("inliers", 0)),
+             explained=q.get("diagnostics", {}).get("answer_repeatable_instances", 0),
+             layer=q.get("diagnostics", {}).get("answer_layer_instances", 0))
     return tuple(tuple(min(FEATURES[n][1], max(FEATURES[n][0], evidence(e, n))) for n in f) for f in FACTORS)
 
 
@@ -113,6 +117,16 @@ def evidence(e, name):
         return float(e["inliers"]) - 3.0
     if name == "beyond_clique":
         return max(0.0, instances_on_map(e) - 3.0)
+    if name == "explained_share":  # the instances the answer puts on a same-label map instance (< 2 m)
+        on_map = max(instances_on_map(e), e["explained"], e["inliers"])
+        return max(e["explained"], e["inliers"]) / on_map if on_map > 0 else 0.0
+    if name == "layer_share":  # the instances the answer puts on a layer cell holding their class
+        on_map = max(instances_on_map(e), e["layer"], e["inliers"])
+        return max(e["layer"], e["inliers"]) / on_map if on_map > 0 else 0.0
+    if name == "layer_excess":
+        return max(e["layer"], e["inliers"]) - 3.0
+    if name == "explained_excess":
+        return max(e["explained"], e["inliers"]) - 3.0
     if name == "excess_share":
         on_map = instances_on_map(e)
         return (e["inliers"] - 3.0) / (on_map - 3.0) if on_map > 3.0 else 0.0

@@ -21,7 +21,7 @@ import glob
 import json
 import os
 
-FAMILY_ORDER = "p0 p3 p8 p15 o10 o20 thin b16 b64 b128 cross cheap edge ns".split()  # bench/families.sh's
+FAMILY_ORDER = "p0 p3 p8 p15 o10 o20 thin b16 b64 b128 cross cheap edge ns spur".split()  # bench/families.sh's
 KINDS = ["outside the map", "flip", "truth outscored", "truth not found"]
 
 

@@ -54,10 +54,12 @@ struct QueryRecord {
   // The truth in the map-local frame (relative to the map origin), where the map's own coordinates are:
   // for the diagnostics that compare with map instances, hypotheses and the pictures.
   Eigen::Isometry3d truth_local = Eigen::Isometry3d::Identity();
-  LocalizeResult result;              // the library's own counts for this query (diagnostics)
-  uint32_t repeatable_instances = 0;  // query instances with a same-label map instance < 2 m under the truth
-  uint32_t true_correspondences = 0;  // selected correspondences the ground truth agrees with (< 2 m)
-  double truth_verified_score = 0;    // the ground-truth pose's whole-scan verification score
+  LocalizeResult result;                     // the library's own counts for this query (diagnostics)
+  uint32_t repeatable_instances = 0;         // query instances with a same-label map instance < 2 m under the truth
+  uint32_t answer_repeatable_instances = 0;  // the same under the answer's pose (0 without a pose)
+  uint32_t answer_layer_instances = 0;       // under the answer, on (or beside) a layer cell holding their class
+  uint32_t true_correspondences = 0;         // selected correspondences the ground truth agrees with (< 2 m)
+  double truth_verified_score = 0;           // the ground-truth pose's whole-scan verification score
   // Of the sampled voxels at the ground-truth pose, the share on cells the map's semantic layer holds:
   // near 0 when the vehicle is outside the map (every answer is then wrong, however good it looks).
   double truth_known_share = 0;

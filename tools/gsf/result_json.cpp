@@ -105,6 +105,8 @@ void write_confidence_evidence(JsonWriter& j, const ConfidenceEvidence& e) {
 void write_truth(JsonWriter& j, const QueryTruth& truth) {
   j.field("true_correspondences", truth.true_correspondences);
   j.field("repeatable_instances", truth.repeatable_instances);
+  j.field("answer_repeatable_instances", truth.answer_repeatable_instances);
+  j.field("answer_layer_instances", truth.answer_layer_instances);
   j.field("truth_verified_score", truth.truth_verified_score);
   j.field("truth_known_share", truth.truth_known_share);
   if (truth.true_pairs) {

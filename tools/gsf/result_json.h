@@ -21,8 +21,10 @@ struct QueryTruth {
   // Query instances that have a map instance of the same label within 2 m under the true pose (what
   // any matcher could find at best), of query_instances.
   uint32_t repeatable_instances = 0;
-  double truth_verified_score = 0;  // the truth's own whole-scan verification score
-  double truth_known_share = 0;     // the truth's sampled voxels on cells the map holds, of all sampled
+  uint32_t answer_repeatable_instances = 0;  // the same under the answer's pose: what a right answer explains
+  uint32_t answer_layer_instances = 0;       // under the answer, on (or beside) a semantic cell of their class
+  double truth_verified_score = 0;           // the truth's own whole-scan verification score
+  double truth_known_share = 0;              // the truth's sampled voxels on cells the map holds, of all sampled
   const std::vector<std::array<float, 2>>* true_pairs = nullptr;  // (GSF weight, range m) of each true one
 };
 

@@ -12,6 +12,7 @@
 #include "baselines/scan_context.h"
 #include "commands.h"
 #include "evaluation.h"
+#include "gsf/detail/semantic_grid.h"
 #include "gsf/localizer.h"
 #include "gsf/map_format.h"
 #include "gsf/port/clock.h"
@@ -46,6 +47,8 @@ void write_diagnostics(JsonWriter& j, const QueryRecord& r) {
   t.truth = r.truth_local;
   t.true_correspondences = r.true_correspondences;
   t.repeatable_instances = r.repeatable_instances;
+  t.answer_repeatable_instances = r.answer_repeatable_instances;
+  t.answer_layer_instances = r.answer_layer_instances;
   t.truth_verified_score = r.truth_verified_score;
   t.truth_known_share = r.truth_known_share;
   t.true_pairs = &r.true_pairs;
@@ -638,7 +641,40 @@ void judge(QueryRecord* r) {
   r->success = is_success(r->error);
 }
 
-// Counts the selected correspondences and query instances the ground truth agrees with (< 2 m).
+// The query instances with a map instance of the same label within 2 m under map_T_scan (map-local).
+uint32_t repeatable_under(const MapView& map, const float* qxyz, const uint8_t* qlab, uint32_t n,
+                          const Eigen::Isometry3d& map_T_scan) {
+  uint32_t count = 0;
+  for (uint32_t i = 0; i < n; ++i) {
+    const Eigen::Vector3d qw = map_T_scan * Eigen::Vector3d(qxyz[3 * i], qxyz[3 * i + 1], qxyz[3 * i + 2]);
+    for (uint32_t m = 0; m < map.counts.instances; ++m) {  // host tool: a linear scan is fine
+      const float* c = map.instances[m].centroid;
+      if (map.instances[m].label == qlab[i] && (qw - Eigen::Vector3d(c[0], c[1], c[2])).norm() < 2.0) {
+        ++count;
+        break;
+      }
+    }
+  }
+  return count;
+}
+
+// The query instances that land on (or beside) a cell of the map's semantic layer holding their class.
+uint32_t on_own_class_cells(const MapView& map, const float* qxyz, const uint8_t* qlab, uint32_t n,
+                            const Eigen::Isometry3d& map_T_scan) {
+  const SemanticGridView grid = semantic_grid_view(map);
+  if (grid.empty()) return 0;
+  uint32_t count = 0, hint = 0;
+  for (uint32_t i = 0; i < n; ++i) {
+    const Eigen::Vector3d p = map_T_scan * Eigen::Vector3d(qxyz[3 * i], qxyz[3 * i + 1], qxyz[3 * i + 2]);
+    const uint32_t near =
+        grid.cell_at(float(p.x()), float(p.y()), &hint) | grid.neighbours_at(float(p.x()), float(p.y()));
+    if (near & class_bit(qlab[i])) ++count;
+  }
+  return count;
+}
+
+// Counts the selected correspondences and query instances the ground truth agrees with (< 2 m), and the
+// query instances the answer puts on a map instance the same way.
 void add_truth_diagnostics(const Localizer& loc, const MapView& map, const std::vector<Localizer::Correspondence>& corr,
                            QueryRecord* r) {
   for (const auto& k : corr) {
@@ -651,15 +687,11 @@ void add_truth_diagnostics(const Localizer& loc, const MapView& map, const std::
   float qxyz[3 * 1024];
   uint8_t qlab[1024];
   const uint32_t ni = std::min<uint32_t>(loc.last_instances(qxyz, qlab, 1024), 1024);
-  for (uint32_t i = 0; i < ni; ++i) {
-    const Eigen::Vector3d qw = r->truth_local * Eigen::Vector3d(qxyz[3 * i], qxyz[3 * i + 1], qxyz[3 * i + 2]);
-    for (uint32_t m = 0; m < map.counts.instances; ++m) {  // host tool: a linear scan is fine
-      const float* c = map.instances[m].centroid;
-      if (map.instances[m].label == qlab[i] && (qw - Eigen::Vector3d(c[0], c[1], c[2])).norm() < 2.0) {
-        ++r->repeatable_instances;
-        break;
-      }
-    }
+  r->repeatable_instances = repeatable_under(map, qxyz, qlab, ni, r->truth_local);
+  if (r->has_pose) {
+    const Eigen::Isometry3d answer = to_map_local(map.georef, r->estimate);
+    r->answer_repeatable_instances = repeatable_under(map, qxyz, qlab, ni, answer);
+    r->answer_layer_instances = on_own_class_cells(map, qxyz, qlab, ni, answer);
   }
 }
 
