@@ -244,6 +244,8 @@ def main():
     ap.add_argument("--min-confidence", type=float, default=0.9)
     ap.add_argument("--distractor-share", type=float, default=0.15)
     ap.add_argument("--l2", type=float, default=1e-3)
+    ap.add_argument("--start", help="offset,slope per factor: start the fit here (default: the fit's own start)")
+    ap.add_argument("--free", help="1 or 0 per number of --start: which the fit may move (default: all)")
     ap.add_argument("--results", default="results.json", help="per-world results file name in suite dirs")
     ap.add_argument("--distractor-dir", default="distractor", help="distractor directory name in suite dirs")
     ap.add_argument("--factors", default=",".join("+".join(f) for f in FACTORS),
@@ -266,7 +268,11 @@ def main():
         n_m = len(pooled) - n_d
         w_d = a.distractor_share / (1.0 - a.distractor_share) * n_m / n_d if n_d else 0.0
         data = [(z, y, w_d if d else 1.0) for z, y, d, _ in pooled]
-        m, loss = fit(data, a.l2)
+        start = [float(v) for v in a.start.split(",")] if a.start else None
+        free = [v.strip() == "1" for v in a.free.split(",")] if a.free else None
+        if free is not None and (start is None or len(free) != len(start)):
+            raise SystemExit("fit_confidence.py: --free needs --start with as many numbers")
+        m, loss = fit(data, a.l2, start=start, free=free)
         print(f"fitted on {n_m} in-map and {n_d} distractor queries (weight {w_d:.3f} each), loss {loss:.1f}")
         print("factors:", ", ".join("+".join(f) for f in FACTORS))
         print("const ConfidenceModel kConfidenceModel = {" + ", ".join(f"{v:.3f}f" for v in m) + "};")

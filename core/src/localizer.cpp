@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <new>
 
 #include "gsf/detail/angles.h"
@@ -73,6 +74,8 @@ struct Localizer::Impl {
   ScanWindow window;  // several scans (localize_sequence); bound when window.scans > 1
   TriangleIndexView index;
   SemanticGridView semantic;
+  const MapInstance* map_instances = nullptr;  // the map's (inliers_at)
+  uint32_t map_instance_count = 0;
 
   // Query instances and their fields.
   float* centroids = nullptr;  // I x 3
@@ -88,6 +91,7 @@ struct Localizer::Impl {
   uint8_t* gather_labels = nullptr;
   HeightSample* height_samples = nullptr;    // C: the answer height's scratch
   uint8_t* instance_marks = nullptr;         // I: inliers_at's (all 0 between calls)
+  float* moved_xy = nullptr;                 // I x 2: inliers_at's query centroids at the pose
   float weights[kNumClasses];                // stability weights of the label set
   uint32_t instance_count = 0;               // query instances of the last call
   uint32_t vote_pairs = 0, graph_pairs = 0;  // selected pairs: for the shift votes, of them for the graph
@@ -193,6 +197,7 @@ Status Localizer::bind_workspace(Arena& ar, const LocalizerConfig& config, Impl&
     return Status::InvalidArgument;
   im.height_samples = ar.allocate<HeightSample>(C);
   im.instance_marks = ar.allocate<uint8_t>(I, true);
+  im.moved_xy = ar.allocate<float>(size_t(I) * 2);
   record(&b.clique);
   if ((config.refine.enabled || config.track.refine) && im.refiner.bind(ar, config.refine) != Status::Ok)
     return Status::InvalidArgument;
@@ -276,6 +281,8 @@ Status Localizer::init(const LocalizerConfig& config, const MapView& map, void* 
   im.index.key_count = map.counts.index_keys;
   im.index.triangle_count = map.counts.triangles;
   im.semantic = semantic_grid_view(map);
+  im.map_instances = map.instances;
+  im.map_instance_count = map.counts.instances;
   im.answer.forget();
   impl_ = &im;
   has_drive_pose_ = false;
@@ -598,29 +605,42 @@ Localizer::Impl::Explained Localizer::Impl::explained_at(const Eigen::Isometry3d
   return Explained{inliers, float(inliers) / float(std::max({seen, inliers, 1u}))};
 }
 
-// The scan's instances that some vote pair puts within `radius` of its map instance at map_T_scan: a
-// pose's inliers counted one way whichever source found it. A clique hypothesis counts only among the
-// graph's C pairs, a translation vote among all vote pairs, and in a lattice (the C pairs crowded by
-// ambiguous matches) the same right pose read 12 inliers from its clique and 64 from its vote.
+// The scan's instances that land within `radius` (bird's-eye) of a map instance of their own label at
+// map_T_scan: a pose's inliers counted one way whichever source found it, and whether or not a triangle
+// match paired them. Counting only the pairs the clique and the votes saw read a right answer as
+// explaining about two thirds of the instances it puts on the map's (1,728 of 2,840 on a spur-family
+// world: a scan with many instances no map has, an unstable segmentation's poles, gets few triangle
+// matches for its real ones). Bird's-eye, as verification: a centroid's height moves with how much of
+// the object a scan sees. Work: one pass over the map's instances with a box test (the scan's
+// instances at the pose, padded by the radius), the full test only for those inside.
 uint32_t Localizer::Impl::inliers_at(const Eigen::Isometry3d& map_T_scan, double radius) const {
-  const uint32_t n = std::min(vote_pairs, correspondences.selected());
-  const float* a = correspondences.query_xyz();
-  const float* b = correspondences.map_xyz();
+  const uint32_t n = instance_count;
+  if (n == 0 || map_instances == nullptr) return 0;
+  const Eigen::Matrix3f R = map_T_scan.linear().cast<float>();
+  const Eigen::Vector3f t = map_T_scan.translation().cast<float>();
+  const float r = float(radius);
+  float x0 = std::numeric_limits<float>::max(), y0 = x0, x1 = -x0, y1 = -x0;
+  for (uint32_t q = 0; q < n; ++q) {
+    const Eigen::Vector3f p = R * Eigen::Vector3f(centroids[3 * q], centroids[3 * q + 1], centroids[3 * q + 2]) + t;
+    moved_xy[2 * q] = p.x();
+    moved_xy[2 * q + 1] = p.y();
+    x0 = std::min(x0, p.x() - r), x1 = std::max(x1, p.x() + r);
+    y0 = std::min(y0, p.y() - r), y1 = std::max(y1, p.y() + r);
+  }
   uint32_t count = 0;
-  for (uint32_t k = 0; k < n; ++k) {
-    const uint32_t q = correspondences.selected_pair(k).query;
-    if (q >= instance_count || instance_marks[q]) continue;
-    const Eigen::Vector3d d = Eigen::Vector3d(b[3 * k], b[3 * k + 1], b[3 * k + 2]) -
-                              map_T_scan * Eigen::Vector3d(a[3 * k], a[3 * k + 1], a[3 * k + 2]);
-    if (d.squaredNorm() <= radius * radius) {
-      instance_marks[q] = 1;
-      ++count;
+  for (uint32_t m = 0; m < map_instance_count && count < n; ++m) {
+    const float* c = map_instances[m].centroid;
+    if (c[0] < x0 || c[0] > x1 || c[1] < y0 || c[1] > y1) continue;
+    for (uint32_t q = 0; q < n; ++q) {
+      if (instance_marks[q] || labels[q] != map_instances[m].label) continue;
+      const float dx = c[0] - moved_xy[2 * q], dy = c[1] - moved_xy[2 * q + 1];
+      if (dx * dx + dy * dy <= r * r) {
+        instance_marks[q] = 1;
+        ++count;
+      }
     }
   }
-  for (uint32_t k = 0; k < n; ++k) {
-    const uint32_t q = correspondences.selected_pair(k).query;
-    if (q < instance_count) instance_marks[q] = 0;
-  }
+  std::fill(instance_marks, instance_marks + n, uint8_t(0));
   return count;
 }
 
