@@ -148,7 +148,8 @@ class Localizer {
   // only hypotheses inside it are answers. InvalidArgument for an invalid prior (validate()); NoSolution
   // when no hypothesis lies inside it. A wrong prior gives a wrong answer at low confidence or none: a
   // confident answer with a thin margin over its rivals (z_rival below kPriorGlobalCheckZ), however well
-  // it agrees with the map, is checked by a global search from the scan's own triangles
+  // it agrees with the map, or one no triangle match confirms beyond its own clique (inliers <=
+  // hypotheses.min_inliers), is checked by a global search from the scan's own triangles
   // (prior_global_check): a pose elsewhere that verification scores higher takes the answer's confidence
   // down to at most 1 - its own, or replaces the answer when it lies in the prior's disc (prior_contradicted);
   // one that scores a little lower is one more rival in the answer's confidence (a near tie). Not caught:
