@@ -336,7 +336,7 @@ TEST_CASE("A right answer's inliers are the instances it puts on their map insta
   // An unstable segmentation writes patches of wall or hedge as poles and trunks, as many as the scan's
   // real instances (label_errors.h). Counting inliers among the triangle matches' pairs alone read a
   // right answer as explaining about half of what it puts on the map's instances (8 of 17 on the spur
-  // family's open roads; 397 of 456 here).
+  // family's open roads; 397 of 470 here, before).
   const gsf_test::TinyWorld& w = gsf_test::tiny_world();
   std::vector<uint64_t> ws(Localizer::required_bytes(w.config) / 8 + 2);
   Localizer loc;
