@@ -16,6 +16,7 @@
 #include "gsf/detail/voxel_layer.h"
 #include "gsf/map_format.h"
 #include "gsf/pipeline.h"
+#include "gsf/port/mapped_file.h"
 #include "gsf/port/scan_buffer.h"
 
 using namespace gsf;
@@ -79,18 +80,9 @@ int main(int argc, char** argv) {
     std::fprintf(stderr, "usage: bench_verdicts --map M --dataset D --query Q --pose x,y,yaw_deg [--pose ...]\n");
     return 2;
   }
-  std::vector<uint64_t> blob;
-  size_t blob_bytes = 0;
-  if (FILE* fp = std::fopen(map_path.c_str(), "rb")) {
-    std::fseek(fp, 0, SEEK_END);
-    blob_bytes = static_cast<size_t>(std::ftell(fp));
-    std::fseek(fp, 0, SEEK_SET);
-    blob.assign(blob_bytes / 8 + 1, 0);
-    if (std::fread(blob.data(), 1, blob_bytes, fp) != blob_bytes) blob_bytes = 0;
-    std::fclose(fp);
-  }
+  port::MappedFile file;  // aligned for load_map (mapped, or read into words)
   MapView map;
-  if (blob_bytes == 0 || load_map(blob.data(), blob_bytes, &map) != Status::Ok)
+  if (file.open(map_path) != Status::Ok || load_map(file.data(), file.size(), &map) != Status::Ok)
     return std::fprintf(stderr, "cannot load map %s\n", map_path.c_str()), 1;
   Status s;
   auto src = cli::open_source(dataset, sequence, &s);
