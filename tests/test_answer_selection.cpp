@@ -88,9 +88,9 @@ struct Selection {
   AnswerSelector selector;
   HypothesisConfig hc;
   VerifyConfig vc;
-  Selection() : buf(PoseHypotheses::required_bytes(64, 8) + AnswerSelector::required_bytes(4, 100000) + 64) {
+  Selection() : buf(PoseHypotheses::required_bytes(64, 8) + AnswerSelector::required_bytes(4, 100000, 1024) + 64) {
     REQUIRE(hyps.bind(buf.arena, 64, 8) == Status::Ok);
-    REQUIRE(selector.bind(buf.arena, 4, fixture.config.max_voxels) == Status::Ok);
+    REQUIRE(selector.bind(buf.arena, 4, fixture.config.max_voxels, search_sample_points(vc)) == Status::Ok);
     fixture.build(gsf_test::lattice_scan(24.0f, true));
   }
   void set(const std::vector<Eigen::Isometry3d>& poses) {

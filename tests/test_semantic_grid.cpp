@@ -377,4 +377,45 @@ TEST_CASE("Each palette entry's neighbour mask is the union of its cell's four e
   CHECK(std::equal(scells.begin(), scells.end(), sv.semantic_cells));
 }
 
+TEST_CASE("The pattern search's cell memo changes no result, bit for bit, and falls back when too small") {
+  LatticeVerification fixture;
+  fixture.build(lattice_scan(24.0f, true));
+  const uint32_t n = fixture.voxels.size();
+  std::vector<VerifyPoint> points(n);
+  fill_verify_points(fixture.voxels, points.data());
+  const uint32_t capacity = 4096;
+  std::vector<SearchMemo::Sample> records(2 * capacity);
+  SearchMemo memo;
+  memo.slot[0] = records.data();
+  memo.slot[1] = records.data() + capacity;
+  std::mt19937 rng(13);
+  std::uniform_real_distribution<double> metres(-1.5, 1.5), radians(-0.04, 0.04);
+  const DisagreeWeights disagree(2.0f, 0.5f);
+  int moved = 0;
+  for (int trial = 0; trial < 30; ++trial) {
+    const Eigen::Vector3d off(metres(rng), metres(rng), radians(rng));
+    Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
+    T.linear() = Eigen::AngleAxisd(off.z(), Eigen::Vector3d::UnitZ()).toRotationMatrix();
+    T.translation() = Eigen::Vector3d(24.0 + off.x(), off.y(), 0.0);
+    // Coarse and polish samples of different sizes (the last round records its own), and (search
+    // divisor 1: 2,587 samples of the 5,173 voxels) a memo that holds the polish sample but not the
+    // coarse one: no memo then.
+    for (uint32_t search_divisor : {4u, 1u}) {
+      memo.capacity = search_divisor == 1 ? 2048 : capacity;
+      Eigen::Isometry3d plain, remembered;
+      const PoseVerification a = verify_pose_refined(points.data(), n, fixture.layer.view, T, 4096, fixture.weights, 3,
+                                                     0.4f, 0.8f, &plain, search_divisor, 2, nullptr, disagree);
+      const PoseVerification b =
+          verify_pose_refined(points.data(), n, fixture.layer.view, T, 4096, fixture.weights, 3, 0.4f, 0.8f,
+                              &remembered, search_divisor, 2, nullptr, disagree, &memo);
+      INFO("trial " << trial << " search divisor " << search_divisor);
+      CHECK(same_bits(a, b));
+      CHECK(plain.isApprox(remembered, 0.0));
+      moved += !plain.isApprox(T, 1e-12);
+    }
+  }
+  CHECK(n == 5173);    // the sample sizes above
+  CHECK(moved >= 40);  // the searches moved: probes read the memo and its slots swapped
+}
+
 }  // namespace test_semantic_grid

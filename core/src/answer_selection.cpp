@@ -47,16 +47,24 @@ void rarity_weights(const VoxelLayer& voxels, const float* base, float exponent,
     for (int c = 0; c < kNumClasses; ++c) out[c] = static_cast<float>(out[c] * (mass / scaled));
 }
 
-size_t AnswerSelector::required_bytes(uint32_t refine_slots, uint32_t max_voxels) {
-  return counted_bytes<AnswerSelector>(refine_slots, max_voxels);
+uint32_t search_sample_points(const VerifyConfig& vc) {
+  const uint32_t divisor = std::max(1u, std::min(vc.search_divisor, vc.polish_divisor));
+  return std::max(1u, vc.max_points / divisor);
 }
 
-Status AnswerSelector::bind(Arena& arena, uint32_t refine_slots, uint32_t max_voxels) {
+size_t AnswerSelector::required_bytes(uint32_t refine_slots, uint32_t max_voxels, uint32_t search_points) {
+  return counted_bytes<AnswerSelector>(refine_slots, max_voxels, search_points);
+}
+
+Status AnswerSelector::bind(Arena& arena, uint32_t refine_slots, uint32_t max_voxels, uint32_t search_points) {
   refine_slots_ = refine_slots;
   refined_pose_ = arena.allocate<Eigen::Isometry3d>(refine_slots);
   refined_id_ = arena.allocate<uint32_t>(refine_slots);
   points_ = arena.allocate<VerifyPoint>(max_voxels);
   point_capacity_ = max_voxels;
+  // A search samples at most search_points of at most max_voxels voxels.
+  memo_.capacity = std::min(search_points, max_voxels);
+  for (int m = 0; m < 2; ++m) memo_.slot[m] = arena.allocate<SearchMemo::Sample>(memo_.capacity);
   chosen_ = UINT32_MAX;
   return arena.overflowed() ? Status::BufferTooSmall : Status::Ok;
 }
@@ -79,6 +87,7 @@ struct AnswerSelector::PoseScorer {
   const SemanticGridView& semantic;
   const VerifyConfig& vc;
   const float* verify_weights;
+  SearchMemo* memo;  // the pattern search's record (the compact copy's searches only)
 
   PoseVerification score(const Eigen::Isometry3d& T, uint32_t max_points, DisagreeWeights lambda) const {
     const uint32_t nv = voxels.size();
@@ -90,7 +99,7 @@ struct AnswerSelector::PoseScorer {
     const uint32_t nv = voxels.size();
     return points ? verify_pose_refined(points, nv, semantic, T, vc.max_points, verify_weights, vc.refine_rounds,
                                         vc.refine_step_m, vc.refine_step_deg, refined, vc.search_divisor,
-                                        vc.polish_divisor, at_start, lambda)
+                                        vc.polish_divisor, at_start, lambda, memo)
                   : verify_pose_refined(voxels, semantic, T, vc.max_points, verify_weights, vc.refine_rounds,
                                         vc.refine_step_m, vc.refine_step_deg, refined, vc.search_divisor,
                                         vc.polish_divisor, at_start, lambda);
@@ -107,7 +116,7 @@ AnswerChoice AnswerSelector::choose(PoseHypotheses& hyps, const VoxelLayer& voxe
   rival_count_ = 0;
   const bool compact = prepare_scoring(voxels, weights, vc, verify);
   if (verify) {
-    const PoseScorer scorer{compact ? points_ : nullptr, voxels, semantic, vc, verify_weights_};
+    const PoseScorer scorer{compact ? points_ : nullptr, voxels, semantic, vc, verify_weights_, &memo_};
     refined_count = verify_hypotheses(hyps, scorer, vc, hc, full_scored);
     best = pick_answer_and_rivals(hyps, full_scored, hc, refined_count);
   }

@@ -187,8 +187,8 @@ Status Localizer::bind_workspace(Arena& ar, const LocalizerConfig& config, Impl&
     return Status::InvalidArgument;
   record(&b.correspondence);
   if (im.hypotheses.bind(ar, C, config.hypotheses.max_hypotheses, V) != Status::Ok) return Status::InvalidArgument;
-  if (im.answer.bind(ar, config.verify.refine_top + config.verify.refine_turned, config.voxel.max_voxels) !=
-          Status::Ok &&
+  if (im.answer.bind(ar, config.verify.refine_top + config.verify.refine_turned, config.voxel.max_voxels,
+                     search_sample_points(config.verify)) != Status::Ok &&
       !ar.counting())
     return Status::InvalidArgument;
   // The confidence's per-sample arrays hold the window's combined sample (one scan's without a window).
@@ -893,8 +893,8 @@ Status Localizer::track(const ScanView& scan, const Eigen::Isometry3d& predicted
   t = now(clock_);
   if (s != Status::Ok) return finish(s);
   im.answer.prepare(im.voxels, im.weights, cfg.verify);
-  const TrackScan ts{im.answer.compact_points(), im.answer.compact_point_count(), im.voxels,
-                     im.answer.verify_weights()};
+  const TrackScan ts{im.answer.compact_points(), im.answer.compact_point_count(), im.voxels, im.answer.verify_weights(),
+                     im.answer.search_memo()};
   const TrackOutcome o =
       track_pose(ts, im.semantic, to_map_local(map_.georef, predicted), cfg.track, cfg.verify,
                  cfg.confidence.min_probability, im.track_refine ? &im.refiner : nullptr, im.confidence, clock_);

@@ -1,5 +1,6 @@
 #include "gsf/detail/semantic_grid.h"
 
+#include <algorithm>
 #include <cmath>
 #include <cstdint>
 
@@ -32,7 +33,7 @@ uint32_t tile_lower_bound(const uint32_t* keys, uint32_t n, uint32_t key) {
 // Per-call cache of tile lookups for verify_pose: a hypothesis' voxels fall into a few dozen tiles, so
 // most lookups skip the binary search. Entry value 0: empty, 1: tile absent, t + 2: tile t.
 struct TileCache {
-  static constexpr uint32_t kEntries = 64;
+  static constexpr uint32_t kEntries = 256;
   uint32_t key[kEntries];
   uint32_t value[kEntries] = {};
 };
@@ -101,7 +102,7 @@ inline uint32_t palette_index_at_axes(const SemanticGridView& g, const GridConst
                                       TileCache& cache) {
   if (!k.usable || ax.tile == kOutsideTiles || ay.tile == kOutsideTiles) return kNoCell;
   const uint32_t key = (uint32_t(ax.tile + 32768) << 16) | uint32_t(ay.tile + 32768);
-  const uint32_t e = static_cast<uint32_t>((key * 0x9E3779B1u) >> 26);  // 64 entries
+  const uint32_t e = static_cast<uint32_t>((key * 0x9E3779B1u) >> 24);  // 256 entries
   uint32_t t;
   if (cache.value[e] != 0 && cache.key[e] == key) {
     if (cache.value[e] == 1) return kNoCell;
@@ -191,6 +192,7 @@ namespace {
 
 // The two sources verification reads: the voxel layer itself, or its compact bird's-eye copy.
 struct VoxelSource {
+  static constexpr bool kRecords = false;  // the pattern search keeps no SearchMemo over it
   const VoxelLayer& voxels;
   uint32_t size() const { return voxels.size(); }
   // Bird's-eye position under the upright rotation R (its third column is exactly zero: a z rotation,
@@ -204,6 +206,7 @@ struct VoxelSource {
 };
 
 struct PointSource {
+  static constexpr bool kRecords = true;
   const VerifyPoint* points;
   uint32_t n;
   uint32_t size() const { return n; }
@@ -233,12 +236,33 @@ inline Verdict verdict_of(const SemanticGridView& grid, uint32_t at, uint32_t bi
   return !ground && (near & kAboveGroundClasses) ? Verdict::kOtherClass : Verdict::kContradicted;
 }
 
+// A pose's score, summed sample by sample in sample order (every scoring path the same sums, bit for bit).
+struct Tally {
+  PoseVerification v;
+  float contradicted = 0.0f, other_class = 0.0f;
+  // Adds one sample (class weight w); returns its signed evidence (verify_pose_evidence).
+  float add(Verdict verdict, float w, DisagreeWeights disagree) {
+    switch (verdict) {
+      case Verdict::kUnknown: ++v.unknown; return 0.0f;
+      case Verdict::kAgree: v.agree += w; return w;
+      case Verdict::kOtherClass: other_class += w; return -disagree.other_class * w;
+      case Verdict::kContradicted: contradicted += w; return -disagree.contradicted * w;
+    }
+    return 0.0f;
+  }
+  PoseVerification result(uint32_t samples, DisagreeWeights disagree) {
+    v.scored = samples - v.unknown;
+    v.disagree = contradicted + other_class;
+    v.score = v.agree - disagree.contradicted * contradicted - disagree.other_class * other_class;
+    return v;
+  }
+};
+
 // The scoring loop, with the grid's reciprocal test hoisted out of it (kExactInverse: k.exact_inverse).
 template <bool kExactInverse, class Source>
 PoseVerification score_samples(const Source& src, const SemanticGridView& grid, const GridConstants& k,
                                const Eigen::Isometry3d& T, uint32_t stride, const float* weights,
                                DisagreeWeights disagree, float* evidence = nullptr) {
-  PoseVerification v;
   const uint32_t n = src.size();
   // Bird's-eye comparison under the upright prior: only the hypothesis' heading and position matter. A
   // clique of mid-height centroids constrains roll and pitch poorly, and a few degrees of tilt would
@@ -247,26 +271,16 @@ PoseVerification score_samples(const Source& src, const SemanticGridView& grid, 
   const Eigen::Matrix3f R = Eigen::AngleAxisf(yaw, Eigen::Vector3f::UnitZ()).toRotationMatrix();
   const Eigen::Vector3f t = T.translation().cast<float>();
   TileCache cache;
-  float contradicted = 0.0f, other_class = 0.0f;
+  Tally tally;
   for (uint32_t i = 0; i < n; i += stride) {
     uint8_t label;
     const Eigen::Vector2f p = src.at(i, R, t, &label);
     const GridAxis ax = grid_axis<kExactInverse>(k, p.x()), ay = grid_axis<kExactInverse>(k, p.y());
     const Verdict verdict = verdict_of(grid, palette_index_at_axes(grid, k, ax, ay, cache), class_bit(label));
-    const float w = weights[label];
-    float e = 0.0f;
-    switch (verdict) {
-      case Verdict::kUnknown: ++v.unknown; break;
-      case Verdict::kAgree: v.agree += w, e = w; break;
-      case Verdict::kOtherClass: other_class += w, e = -disagree.other_class * w; break;
-      case Verdict::kContradicted: contradicted += w, e = -disagree.contradicted * w; break;
-    }
+    const float e = tally.add(verdict, weights[label], disagree);
     if (evidence) *evidence++ = e;
   }
-  v.scored = (n + stride - 1) / stride - v.unknown;
-  v.disagree = contradicted + other_class;
-  v.score = v.agree - disagree.contradicted * contradicted - disagree.other_class * other_class;
-  return v;
+  return tally.result((n + stride - 1) / stride, disagree);
 }
 
 template <class Source>
@@ -293,25 +307,145 @@ PoseVerification score_pose_evidence(const Source& src, const SemanticGridView& 
                          : score_samples<false>(src, grid, k, T, stride, weights, disagree, evidence);
 }
 
+// SearchMemo's cell encoding: a GridAxis as one integer, unique per cell, and back.
+static_assert(kMaxSemanticTileCells == 16, "packed cells hold the cell in their low 4 bits");
+inline int32_t packed_cell(GridAxis a) { return a.tile == kOutsideTiles ? INT32_MIN : a.tile * 16 + a.cell; }
+inline GridAxis unpacked_cell(int32_t c) {
+  if (c == INT32_MIN) return {kOutsideTiles, 0};
+  const int32_t cell = c & 15;  // two's complement: tile * 16 has its low 4 bits clear
+  return {(c - cell) / 16, cell};
+}
+
+// Scores T on the sample and records it into `to` (rotated positions, cells, verdicts): score_samples'
+// sums, bit for bit (rotated + t is PointSource::at's sum in its order).
+template <bool kExactInverse>
+PoseVerification record_pose(const PointSource& src, const SemanticGridView& grid, const GridConstants& k,
+                             const Eigen::Isometry3d& T, uint32_t stride, const float* weights,
+                             DisagreeWeights disagree, SearchMemo::Sample* __restrict to) {
+  const float yaw = static_cast<float>(std::atan2(T.linear()(1, 0), T.linear()(0, 0)));
+  const Eigen::Matrix3f R = Eigen::AngleAxisf(yaw, Eigen::Vector3f::UnitZ()).toRotationMatrix();
+  const float r00 = R(0, 0), r01 = R(0, 1), r10 = R(1, 0), r11 = R(1, 1);
+  const float tx = static_cast<float>(T.translation().x()), ty = static_cast<float>(T.translation().y());
+  // Local copies: the stores below could alias the originals, which would be reloaded every sample.
+  const GridConstants kc = k;
+  const SemanticGridView g = grid;
+  const VerifyPoint* const points = src.points;
+  const uint32_t n = src.n;
+  TileCache cache;
+  Tally tally;
+  uint32_t s = 0;
+  for (uint32_t i = 0; i < n; i += stride, ++s) {
+    const VerifyPoint q = points[i];
+    const uint8_t label = static_cast<uint8_t>(q.label);
+    SearchMemo::Sample r;
+    r.rotated[0] = r00 * q.x + r01 * q.y;
+    r.rotated[1] = r10 * q.x + r11 * q.y;
+    const GridAxis ax = grid_axis<kExactInverse>(kc, r.rotated[0] + tx);
+    const GridAxis ay = grid_axis<kExactInverse>(kc, r.rotated[1] + ty);
+    const Verdict verdict = verdict_of(g, palette_index_at_axes(g, kc, ax, ay, cache), class_bit(label));
+    r.cell[0] = packed_cell(ax);
+    r.cell[1] = packed_cell(ay);
+    r.verdict = static_cast<uint32_t>(verdict);
+    to[s] = r;
+    tally.add(verdict, weights[label], disagree);
+  }
+  return tally.result(s, disagree);
+}
+
+// Scores T, the pose recorded in `from` moved along kAxis (0: x, 1: y) and not turned, recording it into
+// `to`: a sample whose cell along kAxis did not change keeps its verdict without a map lookup.
+template <bool kExactInverse, int kAxis>
+PoseVerification probe_shift(const PointSource& src, const SemanticGridView& grid, const GridConstants& k,
+                             const Eigen::Isometry3d& T, uint32_t stride, const float* weights,
+                             DisagreeWeights disagree, const SearchMemo::Sample* __restrict from,
+                             SearchMemo::Sample* __restrict to) {
+  const float shift = static_cast<float>(T.translation()(kAxis));
+  const GridConstants kc = k;  // local copies, as in record_pose
+  const SemanticGridView g = grid;
+  const VerifyPoint* const points = src.points;
+  const uint32_t n = src.n;
+  TileCache cache;
+  Tally tally;
+  uint32_t s = 0;
+  for (uint32_t i = 0; i < n; i += stride, ++s) {
+    SearchMemo::Sample r = from[s];
+    const uint8_t label = static_cast<uint8_t>(points[i].label);
+    const GridAxis moved = grid_axis<kExactInverse>(kc, r.rotated[kAxis] + shift);
+    const int32_t cell = packed_cell(moved);
+    if (cell != r.cell[kAxis]) {
+      const GridAxis kept = unpacked_cell(r.cell[1 - kAxis]);
+      const uint32_t at = kAxis == 0 ? palette_index_at_axes(g, kc, moved, kept, cache)
+                                     : palette_index_at_axes(g, kc, kept, moved, cache);
+      r.cell[kAxis] = cell;
+      r.verdict = static_cast<uint32_t>(verdict_of(g, at, class_bit(label)));
+    }
+    to[s] = r;
+    tally.add(static_cast<Verdict>(r.verdict), weights[label], disagree);
+  }
+  return tally.result(s, disagree);
+}
+
+// The pattern search's score of T on max_points through the memo: from the record in `from` when T moves
+// it along shift_axis (0: x, 1: y), else (shift_axis -1) from scratch; recorded into `to`.
+PoseVerification memo_score(const PointSource& src, const SemanticGridView& grid, const Eigen::Isometry3d& T,
+                            uint32_t max_points, const float* weights, DisagreeWeights disagree,
+                            const SearchMemo::Sample* from, SearchMemo::Sample* to, int shift_axis) {
+  const uint32_t n = src.size();
+  if (n == 0 || max_points == 0 || grid.empty() || grid.neighbours == nullptr) return PoseVerification();
+  const uint32_t stride = (n + max_points - 1) / max_points;
+  const GridConstants k = grid_constants(grid);
+  const bool e = k.exact_inverse;
+  if (shift_axis == 0)
+    return e ? probe_shift<true, 0>(src, grid, k, T, stride, weights, disagree, from, to)
+             : probe_shift<false, 0>(src, grid, k, T, stride, weights, disagree, from, to);
+  if (shift_axis == 1)
+    return e ? probe_shift<true, 1>(src, grid, k, T, stride, weights, disagree, from, to)
+             : probe_shift<false, 1>(src, grid, k, T, stride, weights, disagree, from, to);
+  return e ? record_pose<true>(src, grid, k, T, stride, weights, disagree, to)
+           : record_pose<false>(src, grid, k, T, stride, weights, disagree, to);
+}
+
+// Samples score_pose takes of n on max_points.
+uint32_t sample_count(uint32_t n, uint32_t max_points) {
+  if (n == 0 || max_points == 0) return 0;
+  const uint32_t stride = (n + max_points - 1) / max_points;
+  return (n + stride - 1) / stride;
+}
+
 template <class Source>
 PoseVerification search_pose(const Source& src, const SemanticGridView& grid, const Eigen::Isometry3d& T,
                              uint32_t max_points, const float* weights, uint32_t rounds, float step_m, float step_deg,
                              Eigen::Isometry3d* refined, uint32_t search_divisor, uint32_t polish_divisor,
-                             const PoseVerification* at_start, DisagreeWeights disagree) {
+                             const PoseVerification* at_start, DisagreeWeights disagree, SearchMemo* memo) {
   Eigen::Isometry3d best = T;
   auto sample = [max_points](uint32_t divisor) {
     const uint32_t d = divisor > 0 ? divisor : 1;
     return max_points / d > 0 ? max_points / d : 1;
   };
   const uint32_t coarse = sample(search_divisor), polish = sample(polish_divisor);
+  const bool memo_fits = Source::kRecords && memo != nullptr &&
+                         memo->capacity >= std::max(sample_count(src.size(), coarse), sample_count(src.size(), polish));
+  int best_slot = 0;  // the memo slot holding the best pose's record (the other: the probe's)
+  // Probe k of a pass (-1: the best pose itself, recorded again), scored through the memo when it fits.
+  auto score_probe = [&](const Eigen::Isometry3d& c, uint32_t points, int k) -> float {
+    if constexpr (Source::kRecords) {
+      if (memo_fits) {
+        SearchMemo::Sample* to = memo->slot[k < 0 ? best_slot : best_slot ^ 1];
+        return memo_score(src, grid, c, points, weights, disagree, memo->slot[best_slot], to,
+                          k >= 0 && k < 4 ? k / 2 : -1)
+            .score;
+      }
+    }
+    return score_pose(src, grid, c, points, weights, disagree).score;
+  };
   bool any_move = false;
   uint32_t points = rounds > 1 ? coarse : polish;
-  float best_score = score_pose(src, grid, best, points, weights, disagree).score;
+  float best_score = score_probe(best, points, -1);
   double step = step_m, turn = deg_to_rad(double(step_deg));
   for (uint32_t r = 0; r < rounds; ++r, step *= 0.5, turn *= 0.5) {
     if (r + 1 == rounds && points != polish) {  // the last, finest round on its own sample
       points = polish;
-      best_score = score_pose(src, grid, best, points, weights, disagree).score;
+      best_score = score_probe(best, points, -1);
     }
     bool moved = true;
     int last_move = -1;  // the probe opposite the last move returns to the pose it left, known worse
@@ -328,10 +462,11 @@ PoseVerification search_pose(const Source& src, const SemanticGridView& grid, co
           c.linear() =
               c.linear() * Eigen::AngleAxisd(k == 4 ? turn : -turn, Eigen::Vector3d::UnitZ()).toRotationMatrix();
         }
-        const float sc = score_pose(src, grid, c, points, weights, disagree).score;
+        const float sc = score_probe(c, points, k);
         if (sc > best_score) {
           best_score = sc;
           best = c;
+          best_slot ^= 1;  // the probe's record is the best's now (unused without the memo)
           moved = any_move = true;
           last_move = k;
         }
@@ -376,16 +511,16 @@ PoseVerification verify_pose_refined(const VoxelLayer& voxels, const SemanticGri
                                      uint32_t polish_divisor, const PoseVerification* at_start,
                                      DisagreeWeights disagree) {
   return search_pose(VoxelSource{voxels}, grid, T, max_points, weights, rounds, step_m, step_deg, refined,
-                     search_divisor, polish_divisor, at_start, disagree);
+                     search_divisor, polish_divisor, at_start, disagree, nullptr);
 }
 
 PoseVerification verify_pose_refined(const VerifyPoint* points, uint32_t n, const SemanticGridView& grid,
                                      const Eigen::Isometry3d& T, uint32_t max_points, const float* weights,
                                      uint32_t rounds, float step_m, float step_deg, Eigen::Isometry3d* refined,
                                      uint32_t search_divisor, uint32_t polish_divisor, const PoseVerification* at_start,
-                                     DisagreeWeights disagree) {
+                                     DisagreeWeights disagree, SearchMemo* memo) {
   return search_pose(PointSource{points, n}, grid, T, max_points, weights, rounds, step_m, step_deg, refined,
-                     search_divisor, polish_divisor, at_start, disagree);
+                     search_divisor, polish_divisor, at_start, disagree, memo);
 }
 
 VerdictCounts count_verdicts(const VerifyPoint* points, uint32_t n, const SemanticGridView& grid,

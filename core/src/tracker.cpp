@@ -96,7 +96,7 @@ TrackOutcome track_pose(const TrackScan& scan, const SemanticGridView& grid, con
   Eigen::Isometry3d searched = predicted;
   verify_pose_refined(scan.points, scan.n, grid, predicted, vc.max_points, scan.weights, tc.search_rounds,
                       tc.search_step_m, tc.search_step_deg, &searched, vc.search_divisor, vc.polish_divisor, nullptr,
-                      lambda);
+                      lambda, scan.memo);
   o.map_T_scan = searched;
   lap(&o.search_ns);
   // 2. ICP for the last decimetres. The score is flat within a semantic cell, so the search wanders in

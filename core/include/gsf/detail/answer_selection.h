@@ -38,12 +38,16 @@ struct AnswerChoice {
 // rows that agree at every lattice shift. exponent 0: out = base.
 void rarity_weights(const VoxelLayer& voxels, const float* base, float exponent, uint32_t max_points, float* out);
 
+// The pattern search's largest sample: max_points / the smaller of its two divisors (at least 1).
+uint32_t search_sample_points(const VerifyConfig& vc);
+
 class AnswerSelector {
  public:
   // refine_slots: pattern searches at most (VerifyConfig refine_top + refine_turned); max_voxels: the
-  // voxel layer's capacity (the compact copy verification reads holds that many).
-  static size_t required_bytes(uint32_t refine_slots, uint32_t max_voxels);
-  Status bind(Arena& arena, uint32_t refine_slots, uint32_t max_voxels);
+  // voxel layer's capacity (the compact copy verification reads holds that many); search_points: the
+  // pattern search's largest sample, search_sample_points(VerifyConfig) (its SearchMemo holds that many).
+  static size_t required_bytes(uint32_t refine_slots, uint32_t max_voxels, uint32_t search_points);
+  Status bind(Arena& arena, uint32_t refine_slots, uint32_t max_voxels, uint32_t search_points);
 
   // Verifies `hyps` (when verification is on and the map has a semantic layer) and chooses the answer.
   // `weights`: the stability weights.
@@ -72,6 +76,8 @@ class AnswerSelector {
   // choose(), the configured weight for every disagreement after prepare().
   const DisagreeWeights& disagree_weights() const { return disagree_; }
   const VerifyPoint* compact_points() const { return points_; }
+  // The pattern search's record (semantic_grid.h), for searches outside choose() (tracking).
+  SearchMemo* search_memo() { return &memo_; }
   uint32_t compact_point_count() const { return compact_points_; }
 
  private:
@@ -93,6 +99,7 @@ class AnswerSelector {
   uint32_t* refined_id_ = nullptr;             // refine_slots: their hypotheses
   VerifyPoint* points_ = nullptr;              // max_voxels: the query voxels' bird's-eye copy (fill_verify_points)
   uint32_t point_capacity_ = 0;                // max_voxels
+  SearchMemo memo_;                            // min(search_points, max_voxels) samples a slot
   uint32_t refine_slots_ = 0;
   uint32_t chosen_ = UINT32_MAX;
   float verify_weights_[kNumClasses] = {};

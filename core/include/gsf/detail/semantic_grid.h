@@ -131,6 +131,22 @@ PoseVerification verify_pose(const VoxelLayer& voxels, const SemanticGridView& g
 // bounds the search's reach needs: tracker.cpp).
 constexpr uint32_t kPatternSearchPassesPerRound = 2;
 
+// The pattern search's record of the best pose so far, sample by sample, and a second slot for the
+// probe's. A translation probe reuses the rotated positions and looks a sample up in the map only when
+// the step moved it into another cell (a verdict is a function of the cell and the class): a 0.1 m step
+// moves the few samples near a cell edge. Optional: without it, or when a round samples more than
+// `capacity`, every probe scores every sample from scratch, with the same results bit for bit. The
+// caller owns the storage (20 B a sample a slot).
+struct SearchMemo {
+  struct Sample {
+    float rotated[2];  // x, y rotated into the map, before the translation
+    int32_t cell[2];   // along x, y: tile x kMaxSemanticTileCells + cell within it (INT32_MIN: outside the tiles)
+    uint32_t verdict;
+  };
+  Sample* slot[2] = {};
+  uint32_t capacity = 0;  // samples a slot
+};
+
 // verify_pose after a small bird's-eye pattern search around map_T_scan (moves of step_m along x and y
 // and step_deg of heading, halved each round, 6 probes a pass, a second pass when the first moved), so
 // a hypothesis whose clique pose is a fraction of a metre off is compared at its best alignment; the
@@ -169,11 +185,12 @@ uint32_t count_observed(const SemanticGridView& grid, const Eigen::Isometry3d& m
 PoseVerification verify_pose(const VerifyPoint* points, uint32_t n, const SemanticGridView& grid,
                              const Eigen::Isometry3d& map_T_scan, uint32_t max_points, const float* weights,
                              DisagreeWeights disagree = DisagreeWeights());
+// memo (optional, SearchMemo): the search's record of its samples' cells.
 PoseVerification verify_pose_refined(const VerifyPoint* points, uint32_t n, const SemanticGridView& grid,
                                      const Eigen::Isometry3d& map_T_scan, uint32_t max_points, const float* weights,
                                      uint32_t rounds, float step_m, float step_deg, Eigen::Isometry3d* refined,
                                      uint32_t search_divisor = 4, uint32_t polish_divisor = 4,
                                      const PoseVerification* at_start = nullptr,
-                                     DisagreeWeights disagree = DisagreeWeights());
+                                     DisagreeWeights disagree = DisagreeWeights(), SearchMemo* memo = nullptr);
 
 }  // namespace gsf

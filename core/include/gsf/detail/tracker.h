@@ -60,6 +60,7 @@ struct TrackScan {
   uint32_t n;
   const VoxelLayer& voxels;
   const float* weights;  // this scan's verification weights
+  SearchMemo* memo;      // the pattern search's record (semantic_grid.h; nullptr: none)
 };
 
 // The steps above. refiner: nullptr (or without a map layer) skips steps 0 and 2. clock: optional.
