@@ -227,9 +227,11 @@ TEST_CASE("Under heavy label noise, priors 30-100 m off never give a confident a
 
 // The restricted search's rivals all lie in the disc, so a thin margin over them says nothing about a
 // copy of the scene outside it: every confident answer with a prior either beats its rivals by
-// Localizer::kPriorGlobalCheckZ or went through the global check, however well it agrees with the map
-// (a gate on the agreement share let a confident answer 110 m off through on a suite world: CHANGELOG).
-TEST_CASE("A confident answer with a prior and a thin margin has always been checked globally") {
+// Localizer::kPriorGlobalCheckZ, with no hypothesis outside the disc near its inlier count
+// (Localizer::kPriorCopyInlierShare), or went through the global check, however well it agrees with the
+// map (a gate on the agreement share let a confident answer 110 m off through on a suite world: CHANGELOG).
+TEST_CASE("A confident answer with a prior and a thin margin or a copy outside has always been checked globally") {
+  uint32_t unchecked = 0, copies_seen = 0;
   for (const gsf_test::TinyWorld* w : {&tiny_world(), &gsf_test::tiny_lattice_world()}) {
     Ready r(*w);
     for (uint32_t k = 0; k < w->queries.size(); ++k)
@@ -241,8 +243,18 @@ TEST_CASE("A confident answer with a prior and a thin margin has always been che
         INFO("query " << k << ", prior " << off << " m off: z_rival " << out.confidence_evidence.z_rival
                       << ", agreement " << out.confidence_evidence.agreement);
         CHECK(out.confidence_evidence.z_rival >= Localizer::kPriorGlobalCheckZ);
+        uint32_t answer_inliers = 0;  // the first report of the answer's hypothesis (unused reports read index 0)
+        for (uint32_t j = kMaxReportedHypotheses; j-- > 0;)
+          if (out.hypothesis[j].index == out.chosen_hypothesis) answer_inliers = out.hypothesis[j].inliers;
+        CHECK(answer_inliers > 0);
+        CHECK(out.prior_dropped_best_inliers < Localizer::kPriorCopyInlierShare * answer_inliers);
+        unchecked += 1;
+        copies_seen += out.prior_dropped_best_inliers > 0;
       }
   }
+  INFO(unchecked << " confident answers not checked, " << copies_seen << " with a hypothesis outside the disc");
+  CHECK(unchecked > 0);
+  CHECK(copies_seen > 0);  // the dropped hypotheses' inliers were counted
 }
 
 TEST_CASE("A heading in the prior keeps the right answer; the opposite heading gives no confident one") {

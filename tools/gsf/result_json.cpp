@@ -77,6 +77,7 @@ void write_stage_counts(JsonWriter& j, const LocalizeResult& x) {
   if (x.prior_used) {  // a position prior (docs/vehicle-modes.md)
     j.field("prior_outside_matches", x.prior_outside_matches);
     j.field("prior_dropped_hypotheses", x.prior_dropped_hypotheses);
+    j.field("prior_dropped_best_inliers", x.prior_dropped_best_inliers);
     j.field("prior_global_check", x.prior_global_check);
     j.field("prior_contradicted", x.prior_contradicted);
   }

@@ -102,12 +102,13 @@ struct LocalizeResult {
   bool capacity_truncated = false;  // some stage hit a Config capacity and kept a deterministic subset
   StageTimes times;
   // Vehicle modes (docs/vehicle-modes.md).
-  bool prior_used = false;                // localize() was given a position prior
-  uint32_t prior_outside_matches = 0;     // map triangle candidates refused as outside the prior
-  uint32_t prior_dropped_hypotheses = 0;  // hypotheses outside the prior's disc or heading
-  bool tracked = false;                   // the result of track(): no instances, triangles or hypotheses
-  bool prior_global_check = false;        // a global search checked the prior's answer (thin margin)
-  bool prior_contradicted = false;        // ... and gave another pose: confidence <= 1 - its confidence
+  bool prior_used = false;                  // localize() was given a position prior
+  uint32_t prior_outside_matches = 0;       // map triangle candidates refused as outside the prior
+  uint32_t prior_dropped_hypotheses = 0;    // hypotheses outside the prior's disc or heading
+  uint32_t prior_dropped_best_inliers = 0;  // the most TLS inliers of one of them
+  bool tracked = false;                     // the result of track(): no instances, triangles or hypotheses
+  bool prior_global_check = false;          // a global search checked the prior's answer (thin margin)
+  bool prior_contradicted = false;          // ... and gave another pose: confidence <= 1 - its confidence
   // Several scans (localize_sequence): this scan's number in the sequence (calls since reset_sequence,
   // from 0), its own one-shot confidence, and the scans whose evidence made the answer: window_scans of
   // them (1: this scan alone), their numbers in window_ids, newest (this one) first.
@@ -227,6 +228,9 @@ class Localizer {
 
   // A prior's confident answer whose z_rival is below this is checked by a global search (localizer.cpp).
   static constexpr float kPriorGlobalCheckZ = 4.0f;
+  // ... and so is one when a hypothesis outside the prior's disc has at least this share of the answer's
+  // TLS inliers: the scene repeats beyond the disc (localizer.cpp, copy_outside_prior).
+  static constexpr double kPriorCopyInlierShare = 0.8;
   // The confidence of a one-shot or prior answer from a scan of fewer than hypotheses.min_inliers + 2
   // instances is at most this (localizer.cpp, capped_for_few_instances): such answers are right about
   // half the time, so the default rule (confidence.min_probability 0.9) never vouches for one. A window
@@ -239,6 +243,7 @@ class Localizer {
   // scan_ready: the last call built this scan's voxels, instances, fields and triangles; start at matching.
   Status localize_in(const ScanView& scan, const PositionPrior* prior, LocalizeResult* out, bool scan_ready = false);
   void check_outside_prior(LocalizeResult& out);
+  bool copy_outside_prior(const LocalizeResult& out) const;
   void apply_window(const WindowOutcome& window, LocalizeResult& out) const;
   void check_with_window(const WindowOutcome& window, LocalizeResult& out) const;
   // A sequence scan's confident answer whose z_rival is below this is checked by the window (localizer.cpp).
