@@ -215,16 +215,23 @@ TEST_CASE("Verification's fast paths (compact points, exact reciprocals) give th
   // 1 m cells in 16 m tiles (powers of two: the multiply path) and 0.85 m cells (the division path).
   SemanticGridView odd = layer.view;
   odd.cell = 0.85f;
+  // The 1 m layer again 6 tiles west and 3 south (96 m, 48 m): tiles -6..-3 and -4..-3, negative tiles,
+  // where the floor of the tile quotient and the remainder take their other branches.
+  std::vector<uint32_t> shifted_keys(layer.keys);
+  for (uint32_t& key : shifted_keys) key = (((key >> 16) - 6) << 16) | ((key & 0xFFFFu) - 3);
+  SemanticGridView shifted = layer.view;
+  shifted.tile_keys = shifted_keys.data();
   std::mt19937 rng(7);
   std::uniform_real_distribution<double> pos(-10.0, 70.0), yaw(-3.2, 3.2), frac(0.0, 1.0);
   uint32_t compared = 0, with_disagreement = 0;
-  const SemanticGridView* grids[] = {&layer.view, &odd};
+  const SemanticGridView* grids[] = {&layer.view, &odd, &shifted};
   for (const SemanticGridView* g : grids) {
+    const Eigen::Vector3d offset = g == &shifted ? Eigen::Vector3d(-96.0, -48.0, 0.0) : Eigen::Vector3d::Zero();
     for (int k = 0; k < 60; ++k) {
       Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
       // Half the poses on whole or half metres, where a voxel can sit exactly on a cell or tile edge.
       const double x = k % 2 ? pos(rng) : std::round(pos(rng) * 2.0) / 2.0, y = frac(rng) * 6.0 - 3.0;
-      T.translation() = Eigen::Vector3d(x, y, 0.0);
+      T.translation() = Eigen::Vector3d(x, y, 0.0) + offset;
       T.linear() = Eigen::AngleAxisd(k % 3 ? yaw(rng) : 0.0, Eigen::Vector3d::UnitZ()).toRotationMatrix();
       for (uint32_t max_points : {4096u, 512u}) {
         const PoseVerification ref = plain_verify(voxels, *g, T, max_points, weights);
@@ -246,8 +253,8 @@ TEST_CASE("Verification's fast paths (compact points, exact reciprocals) give th
     CHECK(same_bits(r1, r2));
     CHECK(a.isApprox(b, 0.0));
   }
-  CHECK(compared == 240);
-  CHECK(with_disagreement > 20);  // the neighbour lookups ran too
+  CHECK(compared == 360);
+  CHECK(with_disagreement > 30);  // the neighbour lookups ran too
   // Where x / tile and x * (1 / tile) floor to different tiles (0.85 m cells: 13.6 m tiles, so 1 / tile
   // is inexact), the scorer must follow the division: a one-voxel scan at the layer's far edge (tile 3
   // stored, tile 4 not) is scored or unknown exactly as the plain rule says.
@@ -264,6 +271,48 @@ TEST_CASE("Verification's fast paths (compact points, exact reciprocals) give th
     ++edges;
   }
   CHECK(edges > 0);
+}
+
+// In tile -1 the plain rule's x - f tile rounds for a small |x|: x = -3.00000024 gives 12.99999976 ->
+// 13.0, cell 13 of tile -1 (global cell -3), where floor(x) is -4. A fast path must follow the rule
+// there (one that split floor(x / cell) into tile and cell would not: tried 2026-12-06, and it was not
+// cheaper either): vegetation at global cell -2 agrees with a vegetation voxel in cell -3 (a neighbour)
+// and not in cell -4.
+TEST_CASE("Verification's multiply path follows the plain rule's rounding in tile -1") {
+  std::vector<uint32_t> keys(1), cells(256, kCellObserved | class_bit(kRoad)), offsets, palette, neighbours;
+  std::vector<uint8_t> indices;
+  REQUIRE(semantic_tile_key(-1, 0, &keys[0]));
+  for (int cy = 0; cy < 16; ++cy) cells[cy * 16 + 14] |= class_bit(kVegetation);  // global x cell -2
+  REQUIRE(mapping::palette_semantic_layer(cells, 1, 16, &offsets, &palette, &indices) == Status::Ok);
+  REQUIRE(mapping::add_semantic_neighbours(keys, 16, &offsets, &palette, &indices, &neighbours) == Status::Ok);
+  SemanticGridView g;
+  g.cell = 1.0f;
+  g.tile_cells = 16;
+  g.tile_count = 1;
+  g.tile_keys = keys.data();
+  g.palette_count = static_cast<uint32_t>(palette.size());
+  g.palette_offsets = offsets.data();
+  g.palette = palette.data();
+  g.cells = indices.data();
+  g.neighbours = neighbours.data();
+  LatticeVerification fixture;
+  const Eigen::Isometry3d I = Eigen::Isometry3d::Identity();
+  uint32_t agreeing = 0;
+  bool rounded_in = false;
+  for (float x : {-3.00000024f, -2.5f, -3.5f, -4.5f}) {
+    Cloud one;
+    one.add(x, 5.3f, 0.5f, 70);
+    fixture.build(one);
+    REQUIRE(fixture.voxels.size() == 1);
+    REQUIRE(fixture.voxels.voxel(0).centroid[0] == x);
+    const PoseVerification plain = plain_verify(fixture.voxels, g, I, 4096, fixture.weights);
+    INFO("x " << x);
+    CHECK(same_bits(plain, verify_pose(fixture.voxels, g, I, 4096, fixture.weights)));
+    agreeing += plain.agree > 0.0f;
+    if (x == -3.00000024f) rounded_in = plain.agree > 0.0f;
+  }
+  CHECK(rounded_in);     // the rule puts -3.00000024 in cell -3, beside the vegetation
+  CHECK(agreeing == 2);  // ... as -2.5; -3.5 and -4.5 lie in cells -4 and -5
 }
 
 TEST_CASE("Semantic layer validation rejects unsorted keys, foreign bits and bad shapes") {
