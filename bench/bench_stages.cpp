@@ -3,12 +3,13 @@
 // run, each as a ratio to the floor. Modes run interleaved per scan (floor, GSF off, GSF on, GSF on +
 // refinement; the order rotates per repetition), so they share machine conditions.
 //
-//   bench_stages --map MAP --dataset DIR [--sequence 01] [--limit N] [--repeat R]
+//   bench_stages --map MAP --dataset DIR [--sequence 01] [--first K] [--limit N] [--repeat R]
 //       timing table (median over scans of each stage's fastest of R repetitions)
-//   bench_stages --map MAP --dataset DIR --count MODE [--limit N]
+//   bench_stages --map MAP --dataset DIR --count MODE [--first K] [--limit N]
 //       MODE = floor | instance | gsf | gsf+refine: runs only the floor and that mode, once per scan,
 //       without a clock. Meant for `valgrind --tool=callgrind` (bench/stages.sh --counts): the
 //       inclusive instruction counts of the stage functions are the per-stage instruction counts.
+//   --first K starts at the K-th scan (e.g. a world's repetitive zone: meta.json's query_in_repetitive_zone).
 //
 //   bench_stages ... --set name=value,...   config overrides of `gsf evaluate --set` for every mode
 //
@@ -217,7 +218,7 @@ int main(int argc, char** argv) {
   const std::string count_mode = arg(argc, argv, "--count", "");
   if (map_path.empty() || dataset.empty()) {
     std::fprintf(stderr,
-                 "usage: bench_stages --map MAP --dataset DIR [--sequence 01] [--limit N] [--repeat R] "
+                 "usage: bench_stages --map MAP --dataset DIR [--sequence 01] [--first K] [--limit N] [--repeat R] "
                  "[--count floor|instance|gsf|gsf+refine]\n");
     return 2;
   }
@@ -242,7 +243,9 @@ int main(int argc, char** argv) {
     std::fprintf(stderr, "cannot open %s seq %s\n", dataset.c_str(), sequence.c_str());
     return 1;
   }
-  const uint32_t nq = limit ? std::min(limit, src->size()) : src->size();
+  const uint32_t first = std::min<uint32_t>(static_cast<uint32_t>(std::atoi(arg(argc, argv, "--first", "0"))),
+                                            static_cast<uint32_t>(src->size()));
+  const uint32_t nq = limit ? std::min<uint32_t>(first + limit, src->size()) : src->size();
 
   const bool counting = !count_mode.empty();
   port::SteadyClock steady;
@@ -290,7 +293,7 @@ int main(int argc, char** argv) {
   Fnv floor_digest;
   port::OwnedScanBuffer buf(cli::kMaxScanPoints, true);
 
-  for (uint32_t q = 0; q < nq; ++q) {
+  for (uint32_t q = first; q < nq; ++q) {
     if (cli::read_scan(*src, q, buf.buffer(), cli::LogitMode::Synthetic, 2000000u + src->frame_id(q)) != Status::Ok)
       continue;
     const ScanView view = buf.buffer().view();

@@ -199,6 +199,11 @@ TEST_CASE("GSF filter caches: hits cost nothing, full caches compute into scratc
   CHECK(a.probes() == 2);
   CHECK(a.probe_ready(qf, 0, 9));
   CHECK(*a.cached_similarity(0, 2, 9) == s_other_bin);
+  // Each map instance's grid is dequantised once, whatever the bins and query instances it meets.
+  CHECK(a.map_grids() == 3);  // instances 0, 1 and 2
+  CHECK(a.similarity(qf, 0, map.view, 1, 9) == s_other_bin);
+  CHECK(a.comparisons() == 4);
+  CHECK(a.map_grids() == 3);
 
   // Full caches: one probe slot and one similarity slot. The second bin's probe goes to scratch and a
   // repeated similarity is computed again, with the same values as the big caches give.
@@ -213,6 +218,7 @@ TEST_CASE("GSF filter caches: hits cost nothing, full caches compute into scratc
   b.reset();
   CHECK(b.probes() == 0);
   CHECK(b.comparisons() == 0);
+  CHECK(b.map_grids() == 0);
   CHECK(b.similarity(qf, 0, map.view, 0, 2) == s0);
   CHECK(b.comparisons() == 1);
 }

@@ -30,8 +30,8 @@ Status GsfFilter::bind(Arena& ar, const GsfFilterConfig& config, const FieldConf
   grid_ = ar.allocate<float>(size_t(G) * 3);
   probe_mean_ = ar.allocate<float>(size_t(config.probe_cache_slots + 1) * G * kNumClasses);
   probe_var_ = ar.allocate<float>(size_t(config.probe_cache_slots + 1) * G);
-  map_mean_ = ar.allocate<float>(size_t(G) * kNumClasses);
-  map_var_ = ar.allocate<float>(G);
+  map_mean_ = ar.allocate<float>(size_t(kMapGridSlots) * G * kNumClasses);
+  map_var_ = ar.allocate<float>(size_t(kMapGridSlots) * G);
   if (ar.counting()) return Status::Ok;
   if (!ok || !grid_ || !probe_mean_ || !probe_var_ || !map_mean_ || !map_var_ || !solver_ ||
       (max_triangles > 0 && !below_gate_))
@@ -44,7 +44,21 @@ Status GsfFilter::bind(Arena& ar, const GsfFilterConfig& config, const FieldConf
 void GsfFilter::reset() {
   probe_slot_.clear();
   similarity_.clear();
-  probe_used_ = probe_overflow_ = comparisons_ = 0;
+  probe_used_ = probe_overflow_ = comparisons_ = map_grids_ = 0;
+  for (uint32_t& i : map_grid_instance_) i = UINT32_MAX;
+}
+
+// Map instance mi's grid dequantised (its variances into *var), from its slot or into it.
+const float* GsfFilter::map_grid(const MapView& map, uint32_t mi, const float** var) {
+  const uint32_t G = grid_points(field_), slot = mi % kMapGridSlots;
+  float* mean = map_mean_ + size_t(slot) * G * kNumClasses;
+  *var = map_var_ + size_t(slot) * G;
+  if (map_grid_instance_[slot] != mi) {
+    dequantize_instance_grid(map, mi, mean, map_var_ + size_t(slot) * G, nullptr);
+    map_grid_instance_[slot] = mi;
+    ++map_grids_;
+  }
+  return mean;
 }
 
 float GsfFilter::similarity(const QueryFields& qf, uint32_t qi, const MapView& map, uint32_t mi, uint32_t yaw_bin) {
@@ -84,12 +98,11 @@ float GsfFilter::similarity(const QueryFields& qf, uint32_t qi, const MapView& m
       // The mean only at the observed points: the only ones compared.
       solver_->probe(f, qf.chol + size_t(qi) * M * M, grid_, G, mean, var, nullptr, max_var);
     }
-    // The map's mean, too, only where the query field is observed.
-    uint8_t observed[kMaxGridPoints];
-    for (uint32_t s = 0; s < G; ++s) observed[s] = var[s] <= max_var;
-    dequantize_instance_grid(map, mi, map_mean_, map_var_, observed);
+    // The map's grid whole (compared where the query field is observed), once per map instance.
+    const float* map_var = nullptr;
+    const float* map_mean = map_grid(map, mi, &map_var);
     const ObservedW2 r =
-        w2_squared_diag_observed(mean, var, map_mean_, map_var_, G, weights_, max_var, config_.covariance_weight);
+        w2_squared_diag_observed(mean, var, map_mean, map_var, G, weights_, max_var, config_.covariance_weight);
     if (r.used >= 4) omega = static_cast<float>(std::exp(-(r.w2 / r.used) / config_.tau));
   }
   if (float* slot = similarity_.find_or_insert(skey)) *slot = omega;

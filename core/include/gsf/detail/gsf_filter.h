@@ -95,6 +95,7 @@ class GsfFilter {
 
   uint32_t probes() const { return probe_used_ + probe_overflow_; }
   uint32_t comparisons() const { return comparisons_; }
+  uint32_t map_grids() const { return map_grids_; }  // map instances' grids dequantised since reset()
 
   // The filter over one scan's matches (the localizer's steps 5b and 6): per query triangle its ranked
   // index matches (`matcher`, its limit set by the caller), those at a heading `headings` kept, then the
@@ -128,10 +129,17 @@ class GsfFilter {
   BoundedHashMap<uint32_t> probe_slot_;  // (query instance, yaw bin) -> cache slot
   BoundedHashMap<float> similarity_;     // (query instance, map instance, yaw bin) -> omega
   float* grid_ = nullptr;                // G x 3
-  float* map_mean_ = nullptr;            // G x D, the compared map instance's grid dequantised
-  float* map_var_ = nullptr;             // G
-  float* probe_mean_ = nullptr;          // (slots + 1) x G x D; the last slot is scratch when the cache is full
-  float* probe_var_ = nullptr;           // (slots + 1) x G
+  // The map instances' grids dequantised, direct-mapped by instance: a zone's scan compares some 70 map
+  // instances 13,000 times (query instances x yaw bins), and dequantising each time was a third of the
+  // filter's instructions there.
+  static constexpr uint32_t kMapGridSlots = 128;
+  const float* map_grid(const MapView& map, uint32_t mi, const float** var);
+  float* map_mean_ = nullptr;                  // kMapGridSlots x G x D
+  float* map_var_ = nullptr;                   // kMapGridSlots x G
+  uint32_t map_grid_instance_[kMapGridSlots];  // the instance in each slot (UINT32_MAX: none)
+  uint32_t map_grids_ = 0;                     // grids dequantised since reset()
+  float* probe_mean_ = nullptr;                // (slots + 1) x G x D; the last slot is scratch when the cache is full
+  float* probe_var_ = nullptr;                 // (slots + 1) x G
   float weights_[kNumClasses];
   uint8_t* below_gate_ = nullptr;  // max_triangles_: 1 where pass 0 saw a match below the gate
   uint32_t max_triangles_ = 0;
