@@ -33,7 +33,7 @@ uint32_t tile_lower_bound(const uint32_t* keys, uint32_t n, uint32_t key) {
 // Per-call cache of tile lookups for verify_pose: a hypothesis' voxels fall into a few dozen tiles, so
 // most lookups skip the binary search. Entry value 0: empty, 1: tile absent, t + 2: tile t.
 struct TileCache {
-  static constexpr uint32_t kEntries = 256;
+  static constexpr uint32_t kEntries = 64;
   uint32_t key[kEntries];
   uint32_t value[kEntries] = {};
 };
@@ -102,7 +102,7 @@ inline uint32_t palette_index_at_axes(const SemanticGridView& g, const GridConst
                                       TileCache& cache) {
   if (!k.usable || ax.tile == kOutsideTiles || ay.tile == kOutsideTiles) return kNoCell;
   const uint32_t key = (uint32_t(ax.tile + 32768) << 16) | uint32_t(ay.tile + 32768);
-  const uint32_t e = static_cast<uint32_t>((key * 0x9E3779B1u) >> 24);  // 256 entries
+  const uint32_t e = static_cast<uint32_t>((key * 0x9E3779B1u) >> 26);  // 64 entries
   uint32_t t;
   if (cache.value[e] != 0 && cache.key[e] == key) {
     if (cache.value[e] == 1) return kNoCell;
