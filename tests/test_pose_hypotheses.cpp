@@ -4,6 +4,7 @@
 #include <catch2/catch.hpp>
 
 #include <cmath>
+#include <random>
 #include <vector>
 
 #include "arena_buffer.h"
@@ -137,6 +138,53 @@ TEST_CASE("Removing the edges at a heading removes exactly the pairs that turn b
   CHECK_FALSE(g.adjacent(0, 2));
   CHECK(g.adjacent(1, 2));
   CHECK(g.adjacent(0, 3));  // (0,3) turns by 0 deg
+}
+
+TEST_CASE("Removing the edges at a heading walks the set bits: the same edges as the plain pair loop") {
+  // 150 random correspondences (3 words a row), about a third of the pairs consistent; the plain loop
+  // over every pair (i < j) with the same arithmetic is the reference.
+  std::mt19937 rng(5);
+  std::uniform_real_distribution<float> u(-30.0f, 30.0f);
+  const uint32_t n = 150;
+  std::vector<float> a(3 * n), b(3 * n);
+  for (uint32_t i = 0; i < n; ++i) {
+    a[3 * i] = u(rng), a[3 * i + 1] = u(rng), a[3 * i + 2] = 0.1f * u(rng);
+    // Half the correspondences turned by 90 deg, half by 30 deg, with noise.
+    const float c = i % 2 ? 0.0f : 0.8660254f, s = i % 2 ? 1.0f : 0.5f;
+    b[3 * i] = c * a[3 * i] - s * a[3 * i + 1] + 0.05f * u(rng);
+    b[3 * i + 1] = s * a[3 * i] + c * a[3 * i + 1] + 0.05f * u(rng);
+    b[3 * i + 2] = a[3 * i + 2];
+  }
+  ArenaBuffer buf(2 * ConsistencyGraph::required_bytes(n));
+  ConsistencyGraph g, ref;
+  REQUIRE(g.bind(buf.arena, n) == Status::Ok);
+  REQUIRE(ref.bind(buf.arena, n) == Status::Ok);
+  REQUIRE(g.build(a.data(), b.data(), n, 2.0f) == Status::Ok);
+  REQUIRE(ref.build(a.data(), b.data(), n, 2.0f) == Status::Ok);
+  const double yaw = M_PI / 2, tol = 5.0 * M_PI / 180.0, min2 = 1.0;
+  uint32_t expected = 0, edges = 0;
+  for (uint32_t i = 0; i < n; ++i)
+    for (uint32_t j = i + 1; j < n; ++j) {
+      if (!ref.adjacent(i, j)) continue;
+      ++edges;
+      const double ax = double(a[3 * j]) - a[3 * i], ay = double(a[3 * j + 1]) - a[3 * i + 1];
+      const double bx = double(b[3 * j]) - b[3 * i], by = double(b[3 * j + 1]) - b[3 * i + 1];
+      const double la2 = ax * ax + ay * ay, lb2 = bx * bx + by * by;
+      if (la2 < min2 || lb2 < min2) continue;
+      const double rx = std::cos(yaw) * ax - std::sin(yaw) * ay, ry = std::sin(yaw) * ax + std::cos(yaw) * ay;
+      if ((rx * bx + ry * by) >= std::cos(tol) * std::sqrt(la2 * lb2)) {
+        ref.remove_edge(i, j);
+        ++expected;
+      }
+    }
+  CHECK(g.remove_edges_at_heading(a.data(), b.data(), yaw, tol, 1.0f) == expected);
+  uint32_t differ = 0;
+  for (uint32_t i = 0; i < n; ++i)
+    for (uint32_t j = 0; j < n; ++j) differ += g.adjacent(i, j) != ref.adjacent(i, j);
+  CHECK(differ == 0);
+  INFO(edges << " edges, " << expected << " removed");
+  CHECK(expected > 100);          // the 90 deg pairs went
+  CHECK(edges - expected > 100);  // the 30 deg ones stayed
 }
 
 namespace {

@@ -47,18 +47,23 @@ uint32_t ConsistencyGraph::remove_edges_at_heading(const float* a, const float* 
   const double c = std::cos(yaw), s = std::sin(yaw), cos_tol = std::cos(tolerance);
   const double min2 = double(min_length) * min_length;
   uint32_t removed = 0;
-  for (uint32_t i = 0; i < n_; ++i)
-    for (uint32_t j = i + 1; j < n_; ++j) {
-      if (!adjacent(i, j)) continue;
-      const double ax = double(a[3 * j]) - a[3 * i], ay = double(a[3 * j + 1]) - a[3 * i + 1];
-      const double bx = double(b[3 * j]) - b[3 * i], by = double(b[3 * j + 1]) - b[3 * i + 1];
-      const double la2 = ax * ax + ay * ay, lb2 = bx * bx + by * by;
-      if (la2 < min2 || lb2 < min2) continue;
-      // cos of the angle between the rotated query direction and the map direction
-      const double rx = c * ax - s * ay, ry = s * ax + c * ay;
-      if ((rx * bx + ry * by) >= cos_tol * std::sqrt(la2 * lb2)) {
-        remove_edge(i, j);
-        ++removed;
+  // Each edge (i, j > i) once, by the set bits of row i: removing one clears only its own two bits.
+  for (uint32_t i = 0; i + 1 < n_; ++i)
+    for (uint32_t w = (i + 1) >> 6; w < words_; ++w) {
+      uint64_t bits = row(i)[w];
+      if (w == (i + 1) >> 6) bits &= ~uint64_t(0) << ((i + 1) & 63);  // only j > i
+      for (; bits != 0; bits &= bits - 1) {
+        const uint32_t j = w * 64 + uint32_t(lowest_bit(bits));
+        const double ax = double(a[3 * j]) - a[3 * i], ay = double(a[3 * j + 1]) - a[3 * i + 1];
+        const double bx = double(b[3 * j]) - b[3 * i], by = double(b[3 * j + 1]) - b[3 * i + 1];
+        const double la2 = ax * ax + ay * ay, lb2 = bx * bx + by * by;
+        if (la2 < min2 || lb2 < min2) continue;
+        // cos of the angle between the rotated query direction and the map direction
+        const double rx = c * ax - s * ay, ry = s * ax + c * ay;
+        if ((rx * bx + ry * by) >= cos_tol * std::sqrt(la2 * lb2)) {
+          remove_edge(i, j);
+          ++removed;
+        }
       }
     }
   return removed;
