@@ -734,7 +734,13 @@ Status Localizer::localize(const ScanView& scan, const PositionPrior& prior, Loc
   // 19, the prior 100 m off: a pose 88 m off and turned 90 deg put 6 of its 17 instances on poles and
   // read 0.93). With a right prior such answers are rare (1 of 1,024 on seeds 15-23).
   const bool clique_only = out.inliers <= config_.hypotheses.min_inliers;
-  if (s == Status::Ok && out.confident && (e.z_rival < kPriorGlobalCheckZ || clique_only || copy_outside_prior(out)))
+  // And when a hypothesis dropped outside the disc has nearly the answer's TLS inliers (out.inliers, its
+  // hypothesis's): the scene repeats just beyond the disc, where no rival of the answer comes from (suite
+  // seed 22, the prior 50 m off: a 180 deg copy 38 m from the truth, z_rival 4.5, answered 0.99996).
+  // Seeds 15-23 with a 20 m prior: 329 -> 416 of 1,030 queries checked, answered right unchanged
+  // (docs/vehicle-modes.md, *A copy beyond the disc*).
+  const bool copy_outside = double(out.prior_dropped_best_inliers) >= kPriorCopyInlierShare * double(out.inliers);
+  if (s == Status::Ok && out.confident && (e.z_rival < kPriorGlobalCheckZ || clique_only || copy_outside))
     check_outside_prior(out);
   return s;
 }
@@ -755,19 +761,6 @@ Status Localizer::localize(const ScanView& scan, const PositionPrior& prior, Loc
 // lies in the prior's disc (the restricted search missed its clique), it replaces the answer, with its
 // own confidence. When it scores lower, it is one more rival of the answer (a near tie is a copy all
 // the same). The result's time includes the check.
-// Rivals come from inside the disc, so a copy of the scene just beyond it (a zone's next bay, a hall
-// turned 180 deg) is no rival: with a wrong prior such a copy inside the disc can stand out against all
-// of them (suite seed 22, the prior 50 m off: a 180 deg copy 38 m from the truth, z_rival 4.5, answered
-// 0.99996). The hypotheses dropped outside the disc show the copy: one with nearly the answer's TLS
-// inliers sends the answer to the global check. Seeds 15-23 with a 20 m prior: 329 -> 416 of 1,030
-// queries checked, answered right unchanged (docs/vehicle-modes.md).
-bool Localizer::copy_outside_prior(const LocalizeResult& out) const {
-  const Impl& im = *impl_;
-  if (im.answer.chosen() >= im.hypotheses.size()) return false;
-  return double(out.prior_dropped_best_inliers) >=
-         kPriorCopyInlierShare * double(im.hypotheses[im.answer.chosen()].inliers);
-}
-
 void Localizer::check_outside_prior(LocalizeResult& out) {
   Impl& im = *impl_;
   const uint64_t t0 = now(clock_);

@@ -229,7 +229,7 @@ class Localizer {
   // A prior's confident answer whose z_rival is below this is checked by a global search (localizer.cpp).
   static constexpr float kPriorGlobalCheckZ = 4.0f;
   // ... and so is one when a hypothesis outside the prior's disc has at least this share of the answer's
-  // TLS inliers: the scene repeats beyond the disc (localizer.cpp, copy_outside_prior).
+  // TLS inliers: the scene repeats beyond the disc (localizer.cpp, localize with a prior).
   static constexpr double kPriorCopyInlierShare = 0.8;
   // The confidence of a one-shot or prior answer from a scan of fewer than hypotheses.min_inliers + 2
   // instances is at most this (localizer.cpp, capped_for_few_instances): such answers are right about
@@ -243,7 +243,6 @@ class Localizer {
   // scan_ready: the last call built this scan's voxels, instances, fields and triangles; start at matching.
   Status localize_in(const ScanView& scan, const PositionPrior* prior, LocalizeResult* out, bool scan_ready = false);
   void check_outside_prior(LocalizeResult& out);
-  bool copy_outside_prior(const LocalizeResult& out) const;
   void apply_window(const WindowOutcome& window, LocalizeResult& out) const;
   void check_with_window(const WindowOutcome& window, LocalizeResult& out) const;
   // A sequence scan's confident answer whose z_rival is below this is checked by the window (localizer.cpp).
