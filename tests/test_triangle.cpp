@@ -138,6 +138,11 @@ TEST_CASE("Triangle senses: a turn keeps them, a mirror image reverses them, a n
       CHECK_FALSE(orientations_contradict(kOrientationFlat, o, flip));
       CHECK_FALSE(orientations_contradict(o, kOrientationFlat, flip));
     }
+  // The matcher's one-byte form names exactly the senses the test calls contradicting.
+  for (uint8_t a = 0; a <= kOrientationFlat; ++a)
+    for (bool flip : {false, true})
+      for (uint8_t b = kOrientationCounterClockwise; b <= kOrientationFlat; ++b)
+        CHECK((b == contradicting_orientation(a, flip)) == orientations_contradict(a, b, flip));
 }
 
 TEST_CASE("The vertex-set key is the same for every order of three ids and differs between sets") {

@@ -2,10 +2,12 @@
 // from hand-made map triangles: ranking before the cap, vertex-order ties, mirror images refused.
 #include <catch2/catch.hpp>
 
+#include <algorithm>
 #include <cmath>
 #include <vector>
 
 #include "arena_buffer.h"
+#include "gsf/detail/rng.h"
 #include "gsf/detail/triangle.h"
 #include "gsf/detail/triangle_index.h"
 #include "gsf/detail/triangle_matcher.h"
@@ -225,6 +227,54 @@ TEST_CASE(
     CHECK(matcher.outside_region() == st.outside);
   }
   matcher.set_region(nullptr, nullptr, nullptr);
+}
+
+// The matcher searches only the key bins a side within the tolerance can fall in (of the 27 around the
+// query's): it must accept exactly the map triangles a scan of those 27 keys with the tolerance test
+// accepts, also for sides just below, at and above a bin edge and at the sparse rematch's tolerance.
+TEST_CASE("The matcher's searched bins lose no map triangle within the tolerance") {
+  Rng rng(11);
+  auto uniform = [&rng](float lo, float hi) { return lo + (hi - lo) * float(rng.next_u64() >> 40) / float(1 << 24); };
+  auto edge_side = [&](float lo, float hi) {  // half the sides within 1 mm of a 1 m bin edge
+    const float s = uniform(lo, hi);
+    return rng.uniform(2) ? s : std::round(s) + uniform(-0.001f, 0.001f);
+  };
+  std::vector<Triangle> map;
+  for (uint32_t i = 0; i < 3000; ++i)
+    map.push_back(triangle_with_sides(3 * i, edge_side(2, 8), edge_side(8, 20), edge_side(20, 45)));
+  const Index idx(map, 1.0f);
+  const uint32_t n = static_cast<uint32_t>(map.size());
+  ArenaBuffer buf(TriangleMatcher::required_bytes(n));
+  TriangleMatcher matcher;
+  REQUIRE(matcher.bind(buf.arena, n) == Status::Ok);
+  uint32_t total = 0;
+  for (float tolerance : {0.03f, 0.075f}) {
+    TriangleConfig tc;
+    tc.relative_side_tolerance = tolerance;
+    for (int k = 0; k < 300; ++k) {
+      const Triangle& near = idx.tris[rng.uniform(n)];
+      const Triangle q =
+          triangle_with_sides(0, near.side[0] * uniform(0.97f, 1.03f), near.side[1] * uniform(0.97f, 1.03f),
+                              near.side[2] * uniform(0.97f, 1.03f));
+      std::vector<uint32_t> expected;
+      for (uint32_t m = 0; m < n; ++m) {
+        bool ok = true;
+        for (int s = 0; s < 3; ++s) {
+          const float qs = q.side[s], ms = idx.tris[m].side[s];
+          ok = ok && std::fabs(std::floor(qs) - std::floor(ms)) <= 1.0f && std::fabs(qs - ms) < tolerance * qs;
+        }
+        if (ok) expected.push_back(m);
+      }
+      const TriangleMatchStats st = matcher.match(q, idx.view, idx.tris.data(), tc, 0.0f);
+      std::vector<uint32_t> got;
+      for (uint32_t i = 0; i < matcher.size(); ++i) got.push_back(matcher.match_at(i).map);
+      std::sort(got.begin(), got.end());
+      CHECK(st.accepted == expected.size());
+      CHECK(got == expected);
+      total += static_cast<uint32_t>(expected.size());
+    }
+  }
+  CHECK(total > 600);  // the queries do find matches (about 3 a query)
 }
 
 }  // namespace test_triangle_matcher

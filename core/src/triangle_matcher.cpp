@@ -1,5 +1,6 @@
 #include "gsf/detail/triangle_matcher.h"
 
+#include <algorithm>
 #include <cmath>
 
 #include "gsf/detail/bounded_hash_map.h"
@@ -96,53 +97,59 @@ TriangleMatchStats TriangleMatcher::match(const Triangle& q, const TriangleIndex
   return st;
 }
 
-// The 27 neighbouring keys (q0 +- 1, q1 +- 1, q2 +- 1) of this label triple as 9 key ranges: q2 is the
-// key's lowest field, so its three neighbours are contiguous, and so are their triangles (stored in
-// key order). Quantised sides below 0 or above the key's field do not exist.
+// The neighbouring keys (q0 +- 1, q1 +- 1, q2 +- 1) of this label triple that a map side within the
+// tolerance can have: a side's key bin is floor(side / side_bin), so only the bins of [side - tol, side +
+// tol] (widened by kBinMargin against rounding) can hold a match, 1-2 of the 3 per side at the default
+// 3% tolerance (2 x 8 of the 27 keys for 10-20 m sides). q2 is the key's lowest field, so its neighbours
+// are contiguous, and so are their triangles (stored in key order). Quantised sides below 0 or above the
+// key's field do not exist. The exact test is offer_range's: the bins left out hold no match.
 void TriangleMatcher::search_order(const Triangle& q, uint8_t o, const float side[3], const uint8_t label[3],
                                    const TriangleIndexView& index, const Triangle* map, const TriangleConfig& config,
                                    TriangleMatchStats* st) {
-  int32_t qk[3];
-  for (int i = 0; i < 3; ++i) qk[i] = static_cast<int32_t>(std::floor(side[i] / config.side_bin));
   constexpr int32_t kMax = int32_t(kTriangleKeyMaxBin);
-  const uint32_t lo2 = static_cast<uint32_t>(qk[2] > 0 ? qk[2] - 1 : 0);
-  const uint32_t hi2 = static_cast<uint32_t>(qk[2] < kMax ? qk[2] + 1 : kMax);
-  // The 9 ranges come in increasing key order (same labels; (q0, q1) lexicographic), so each search
+  constexpr float kBinMargin = 1e-3f;  // m; float rounding of the tolerance test is far below this
+  int32_t lo[3], hi[3];
+  for (int i = 0; i < 3; ++i) {
+    const int32_t qk = static_cast<int32_t>(std::floor(side[i] / config.side_bin));
+    const float tol = config.relative_side_tolerance * side[i] + kBinMargin;
+    const int32_t lo_tol = static_cast<int32_t>(std::floor((side[i] - tol) / config.side_bin));
+    const int32_t hi_tol = static_cast<int32_t>(std::floor((side[i] + tol) / config.side_bin));
+    lo[i] = std::max({qk - 1, lo_tol, int32_t(0)});
+    hi[i] = std::min({qk + 1, hi_tol, kMax});
+    if (lo[i] > hi[i]) return;
+  }
+  // The ranges come in increasing key order (same labels; (q0, q1) lexicographic), so each search
   // continues from where the previous one ended.
   uint32_t from = 0;
-  for (int d0 = -1; d0 <= 1; ++d0)
-    for (int d1 = -1; d1 <= 1; ++d1) {
-      const int32_t a0 = qk[0] + d0, a1 = qk[1] + d1;
-      if (a0 < 0 || a1 < 0 || a0 > kMax || a1 > kMax) continue;
+  for (int32_t a0 = lo[0]; a0 <= hi[0]; ++a0)
+    for (int32_t a1 = lo[1]; a1 <= hi[1]; ++a1) {
       uint32_t b, e;
-      if (!index.range_from(triangle_key(label, uint32_t(a0), uint32_t(a1), lo2),
-                            triangle_key(label, uint32_t(a0), uint32_t(a1), hi2), &from, &b, &e))
+      if (!index.range_from(triangle_key(label, uint32_t(a0), uint32_t(a1), uint32_t(lo[2])),
+                            triangle_key(label, uint32_t(a0), uint32_t(a1), uint32_t(hi[2])), &from, &b, &e))
         continue;
-      offer_range(q, o, side, label, b, e, map, config, st);
+      offer_range(q, o, side, b, e, map, config, st);
     }
 }
 
-// Map triangles [begin, end) (a contiguous run, read sequentially) with the query's labels and every
-// side within the relative tolerance, and not a mirror image (when checked), ranked by their largest
-// relative side residual.
-void TriangleMatcher::offer_range(const Triangle& q, uint8_t o, const float side[3], const uint8_t label[3],
-                                  uint32_t begin, uint32_t end, const Triangle* map, const TriangleConfig& config,
-                                  TriangleMatchStats* st) {
+// Map triangles [begin, end) (a contiguous run, read sequentially) with every side within the relative
+// tolerance, and not a mirror image (when checked), ranked by their largest relative side residual. The
+// run shares the query's labels: they are in the key, and a loaded map's index is validated to store each
+// triangle under its own key (TriangleIndexView::validate). A zone scan examines ~650 k map triangles
+// here, so the loop tests the sides before it divides, and a candidate the full heap would refuse on its
+// residual alone is refused before its tie hash is computed.
+void TriangleMatcher::offer_range(const Triangle& q, uint8_t o, const float side[3], uint32_t begin, uint32_t end,
+                                  const Triangle* map, const TriangleConfig& config, TriangleMatchStats* st) {
   // Orders 1-3 swap two vertices (odd permutations): the query's sense in them is reversed.
   const bool flip = o >= 1 && o <= 3;
+  const uint8_t refused = mirror_check_ ? contradicting_orientation(q.orientation, flip) : uint8_t(0);
+  const float s0 = side[0], s1 = side[1], s2 = side[2];
+  const float t0 = config.relative_side_tolerance * s0, t1 = config.relative_side_tolerance * s1,
+              t2 = config.relative_side_tolerance * s2;
   for (uint32_t mid = begin; mid < end; ++mid) {
     const Triangle& m = map[mid];
-    if (m.label[0] != label[0] || m.label[1] != label[1] || m.label[2] != label[2]) continue;
-    float residual = 0.0f;
-    bool ok = true;
-    for (int s = 0; s < 3 && ok; ++s) {
-      const float r = std::fabs(side[s] - m.side[s]);
-      ok = r < config.relative_side_tolerance * side[s];
-      const float rel = side[s] > 0.0f ? r / side[s] : 0.0f;
-      residual = rel > residual ? rel : residual;
-    }
-    if (!ok) continue;
-    if (mirror_check_ && orientations_contradict(q.orientation, m.orientation, flip)) {
+    const float r0 = std::fabs(s0 - m.side[0]), r1 = std::fabs(s1 - m.side[1]), r2 = std::fabs(s2 - m.side[2]);
+    if (!(r0 < t0 && r1 < t1 && r2 < t2)) continue;
+    if (refused != 0 && m.orientation == refused) {
       ++st->mirrored;
       continue;
     }
@@ -154,6 +161,12 @@ void TriangleMatcher::offer_range(const Triangle& q, uint8_t o, const float side
       continue;
     }
     ++st->accepted;
+    // Every side passed, so each is > 0 (r < tolerance x side).
+    float residual = r0 / s0;
+    const float rel1 = r1 / s1, rel2 = r2 / s2;
+    residual = rel1 > residual ? rel1 : residual;
+    residual = rel2 > residual ? rel2 : residual;
+    if (size_ == limit_ && residual > heap_[0].residual) continue;  // offer() would refuse it
     RankedTriangleMatch c{};
     c.map = mid;
     c.residual = residual;

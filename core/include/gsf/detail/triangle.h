@@ -48,6 +48,14 @@ inline bool orientations_contradict(uint8_t a, uint8_t b, bool flip) {
     return false;
   return (a == b) == flip;
 }
+// The one sense a map triangle may not have against a query triangle of sense a (flip as above): b
+// contradicts a exactly when b == contradicting_orientation(a, flip); 0 (no sense, never stored) when a
+// has no reliable sense. The matcher's loop compares one byte instead of calling the test.
+inline uint8_t contradicting_orientation(uint8_t a, bool flip) {
+  if (a != kOrientationCounterClockwise && a != kOrientationClockwise) return 0;
+  if (flip) return a;
+  return a == kOrientationCounterClockwise ? uint8_t(kOrientationClockwise) : uint8_t(kOrientationCounterClockwise);
+}
 
 // The index key (map format v5, docs/map-format.md): bits 62..48 the three labels in vertex order (5 bits
 // each), then the quantised sides q_k = floor(side_k / side_bin), 16 bits each (47..32 q0, 31..16 q1, 15..0

@@ -102,13 +102,13 @@ class TriangleMatcher {
   static uint32_t query_vertex(const Triangle& q, uint8_t order, int j) { return q.v[kTriangleVertexOrders[order][j]]; }
 
  private:
-  // The steps of match(): per possible vertex order the map triangles of the 27 neighbouring keys are
-  // offered to the heap, which is then sorted best first.
+  // The steps of match(): per possible vertex order the map triangles of the neighbouring keys a match
+  // can have (of the 27) are offered to the heap, which is then sorted best first.
   void search_order(const Triangle& q, uint8_t order, const float side[3], const uint8_t label[3],
                     const TriangleIndexView& index, const Triangle* map, const TriangleConfig& config,
                     TriangleMatchStats* st);
-  void offer_range(const Triangle& q, uint8_t order, const float side[3], const uint8_t label[3], uint32_t begin,
-                   uint32_t end, const Triangle* map, const TriangleConfig& config, TriangleMatchStats* st);
+  void offer_range(const Triangle& q, uint8_t order, const float side[3], uint32_t begin, uint32_t end,
+                   const Triangle* map, const TriangleConfig& config, TriangleMatchStats* st);
   void offer(const RankedTriangleMatch& m);
   void sort_best_first();
   void set_vertex_ranges(const Triangle& q, uint8_t order);
