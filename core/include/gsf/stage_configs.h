@@ -232,7 +232,7 @@ struct VerifyConfig {
   // hall or a symmetric street the true pose can be the 180-degree twin of the best, whose clique pose is
   // a few metres off and scores low until searched (issue 24: the confident wrong answers were flips).
   // Only with refine_top > 0 (the best is the first searched); a prior's global check searches none.
-  // With a prior both are at most 1 (its disc holds one or two places: localizer.cpp, disc_verify_config).
+  // With a prior at most 2 and 1 (its disc holds one or two places: localizer.cpp, disc_verify_config).
   uint32_t refine_turned = 2;
   uint32_t refine_rounds = 3;
   // The pattern search's probes are scored on max_points / search_divisor voxels, those of its last
