@@ -8,11 +8,11 @@
 #include <vector>
 
 #include "arena_buffer.h"
+#include "dense_semantic_layer.h"
 #include "gsf/detail/confidence.h"
 #include "gsf/localizer.h"
 #include "gsf/port/logit_synthesis.h"
 #include "label_errors/label_errors.h"
-#include "mapping/semantic_layer.h"
 #include "tiny_world.h"
 
 namespace test_confidence {
@@ -23,44 +23,8 @@ namespace {
 
 // A map semantic layer over [-64, 64)^2 m (1 m cells, 16 m tiles): road everywhere, observed, and
 // building cells where set().
-struct RoadLayer {
-  std::vector<uint32_t> keys, cells, palette_offsets, palette, neighbours;
-  std::vector<uint8_t> indices;
-  SemanticGridView view;
-  RoadLayer() {
-    for (int tx = -4; tx < 4; ++tx)
-      for (int ty = -4; ty < 4; ++ty) {
-        uint32_t k;
-        semantic_tile_key(tx, ty, &k);
-        keys.push_back(k);
-      }
-    std::sort(keys.begin(), keys.end());
-    cells.assign(keys.size() * 256, kCellObserved | class_bit(kRoad));
-  }
-  void set(float x, float y, uint32_t bits) {
-    const int tx = static_cast<int>(std::floor(x / 16)), ty = static_cast<int>(std::floor(y / 16));
-    uint32_t k;
-    semantic_tile_key(tx, ty, &k);
-    const size_t t = std::lower_bound(keys.begin(), keys.end(), k) - keys.begin();
-    const int cx = static_cast<int>(std::floor(x - 16.0f * tx)), cy = static_cast<int>(std::floor(y - 16.0f * ty));
-    cells[t * 256 + cy * 16 + cx] |= bits;
-  }
-  const SemanticGridView& finish() {
-    const uint32_t T = 16;
-    view.cell = 1.0f;
-    view.tile_cells = T;
-    view.tile_count = static_cast<uint32_t>(keys.size());
-    view.tile_keys = keys.data();
-    REQUIRE(mapping::palette_semantic_layer(cells, view.tile_count, T, &palette_offsets, &palette, &indices) ==
-            Status::Ok);
-    REQUIRE(mapping::add_semantic_neighbours(keys, T, &palette_offsets, &palette, &indices, &neighbours) == Status::Ok);
-    view.palette_count = static_cast<uint32_t>(palette.size());
-    view.palette_offsets = palette_offsets.data();
-    view.palette = palette.data();
-    view.cells = indices.data();
-    view.neighbours = neighbours.data();
-    return view;
-  }
+struct RoadLayer : gsf_test::DenseSemanticLayer {
+  RoadLayer() : DenseSemanticLayer(-4, 4, -4, 4, kCellObserved | class_bit(kRoad)) {}
 };
 
 // k scan blocks (4 m squares along x) with four building voxels each, on building cells of the map at

@@ -279,22 +279,9 @@ TEST_CASE("Verification's fast paths (compact points, exact reciprocals) give th
 // cheaper either): vegetation at global cell -2 agrees with a vegetation voxel in cell -3 (a neighbour)
 // and not in cell -4.
 TEST_CASE("Verification's multiply path follows the plain rule's rounding in tile -1") {
-  std::vector<uint32_t> keys(1), cells(256, kCellObserved | class_bit(kRoad)), offsets, palette, neighbours;
-  std::vector<uint8_t> indices;
-  REQUIRE(semantic_tile_key(-1, 0, &keys[0]));
-  for (int cy = 0; cy < 16; ++cy) cells[cy * 16 + 14] |= class_bit(kVegetation);  // global x cell -2
-  REQUIRE(mapping::palette_semantic_layer(cells, 1, 16, &offsets, &palette, &indices) == Status::Ok);
-  REQUIRE(mapping::add_semantic_neighbours(keys, 16, &offsets, &palette, &indices, &neighbours) == Status::Ok);
-  SemanticGridView g;
-  g.cell = 1.0f;
-  g.tile_cells = 16;
-  g.tile_count = 1;
-  g.tile_keys = keys.data();
-  g.palette_count = static_cast<uint32_t>(palette.size());
-  g.palette_offsets = offsets.data();
-  g.palette = palette.data();
-  g.cells = indices.data();
-  g.neighbours = neighbours.data();
+  gsf_test::DenseSemanticLayer layer(-1, 0, 0, 1, kCellObserved | class_bit(kRoad));
+  for (int cy = 0; cy < 16; ++cy) layer.set(-1.5f, cy + 0.5f, class_bit(kVegetation));  // global x cell -2
+  const SemanticGridView& g = layer.finish();
   LatticeVerification fixture;
   const Eigen::Isometry3d I = Eigen::Isometry3d::Identity();
   uint32_t agreeing = 0;

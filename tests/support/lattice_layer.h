@@ -9,11 +9,11 @@
 #include <vector>
 
 #include "arena_buffer.h"
+#include "dense_semantic_layer.h"
 #include "gsf/detail/semantic_grid.h"
 #include "gsf/detail/voxel_layer.h"
 #include "gsf/detail/wasserstein.h"
 #include "gsf/semantic_classes.h"
-#include "mapping/semantic_layer.h"
 #include "test_cloud.h"
 
 namespace gsf_test {
@@ -22,44 +22,12 @@ using namespace gsf;
 
 // The map's semantic layer over a 64 x 32 m patch: road everywhere, a column every 8 m along y = 0,
 // and ONE bush (vegetation) beside the column at x = 24.
-struct LatticeLayer {
-  std::vector<uint32_t> keys, cells;  // cells: dense masks, stored with a palette per tile as the map does
-  std::vector<uint32_t> palette_offsets, palette, neighbours;
-  std::vector<uint8_t> indices;
-  SemanticGridView view;
-  LatticeLayer() {
-    const uint32_t T = 16;
-    for (int tx = 0; tx < 4; ++tx)
-      for (int ty = -1; ty < 1; ++ty) {
-        uint32_t k;
-        semantic_tile_key(tx, ty, &k);
-        keys.push_back(k);
-      }
-    std::sort(keys.begin(), keys.end());
-    cells.assign(keys.size() * T * T, kCellObserved | class_bit(kRoad));
-    view.cell = 1.0f;
-    view.tile_cells = T;
-    view.tile_count = static_cast<uint32_t>(keys.size());
-    view.tile_keys = keys.data();
+struct LatticeLayer : DenseSemanticLayer {
+  LatticeLayer() : DenseSemanticLayer(0, 4, -1, 1, kCellObserved | class_bit(kRoad)) {
     for (int c = 0; c < 8; ++c) set(8.0f * c + 0.5f, 0.5f, class_bit(kPole));
     for (float x = 26.0f; x < 28.5f; x += 1.0f)
       for (float y = 2.0f; y < 4.5f; y += 1.0f) set(x, y, class_bit(kVegetation));
-    REQUIRE(mapping::palette_semantic_layer(cells, view.tile_count, T, &palette_offsets, &palette, &indices) ==
-            Status::Ok);
-    REQUIRE(mapping::add_semantic_neighbours(keys, T, &palette_offsets, &palette, &indices, &neighbours) == Status::Ok);
-    view.palette_count = static_cast<uint32_t>(palette.size());
-    view.palette_offsets = palette_offsets.data();
-    view.palette = palette.data();
-    view.cells = indices.data();
-    view.neighbours = neighbours.data();
-  }
-  void set(float x, float y, uint32_t bits) {
-    const int tx = static_cast<int>(std::floor(x / 16)), ty = static_cast<int>(std::floor(y / 16));
-    uint32_t k;
-    semantic_tile_key(tx, ty, &k);
-    const size_t t = std::lower_bound(keys.begin(), keys.end(), k) - keys.begin();
-    const int cx = static_cast<int>(x - 16.0f * tx), cy = static_cast<int>(y - 16.0f * ty);
-    cells[t * 256 + cy * 16 + cx] |= bits;
+    finish();
   }
 };
 
