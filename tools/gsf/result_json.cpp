@@ -80,6 +80,8 @@ void write_stage_counts(JsonWriter& j, const LocalizeResult& x) {
     j.field("prior_dropped_best_inliers", x.prior_dropped_best_inliers);
     j.field("prior_global_check", x.prior_global_check);
     j.field("prior_contradicted", x.prior_contradicted);
+    j.field("prior_asked_one_shot", x.prior_asked_one_shot);
+    j.field("prior_one_shot_vouched", x.prior_one_shot_vouched);
   }
   if (x.tracked) j.field("tracked", true);
 }

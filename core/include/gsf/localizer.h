@@ -109,6 +109,8 @@ struct LocalizeResult {
   bool tracked = false;                     // the result of track(): no instances, triangles or hypotheses
   bool prior_global_check = false;          // a global search checked the prior's answer (thin margin)
   bool prior_contradicted = false;          // ... and gave another pose: confidence <= 1 - its confidence
+  bool prior_asked_one_shot = false;        // the prior's answer was not confident: one-shot ran too
+  bool prior_one_shot_vouched = false;      // ... was confident at the same pose: this is its result
   // Several scans (localize_sequence): this scan's number in the sequence (calls since reset_sequence,
   // from 0), its own one-shot confidence, and the scans whose evidence made the answer: window_scans of
   // them (1: this scan alone), their numbers in window_ids, newest (this one) first.
@@ -157,6 +159,10 @@ class Localizer {
   // a disc holding a turned copy of a repetitive scene whose rivals there are weak (position_prior.h);
   // a heading in the prior rules it out. The query (and its check) runs on the scan's labels without the GSF filter:
   // the disc narrows the candidates as the filter would, so the logits are not read (docs/vehicle-modes.md).
+  // An answer left not confident that the check did not contradict is localized again without the prior
+  // (prior_asked_one_shot): when one-shot is confident at the same pose (hypotheses.same_pose_m / _deg),
+  // its result is returned (prior_one_shot_vouched), so a prior never answers less than one-shot would;
+  // after that call last_instances() / last_correspondences() / score_pose() describe the one-shot run.
   Status localize(const ScanView& scan, const PositionPrior& prior, LocalizeResult* out);
 
   // Tracking (detail/tracker.h): the pose of `scan` near `predicted_map_frame_T_scan` (the map's frame,
@@ -243,6 +249,7 @@ class Localizer {
   // scan_ready: the last call built this scan's voxels, instances, fields and triangles; start at matching.
   Status localize_in(const ScanView& scan, const PositionPrior* prior, LocalizeResult* out, bool scan_ready = false);
   void check_outside_prior(LocalizeResult& out);
+  void ask_one_shot(const ScanView& scan, LocalizeResult& out);
   void apply_window(const WindowOutcome& window, LocalizeResult& out) const;
   void check_with_window(const WindowOutcome& window, LocalizeResult& out) const;
   // A sequence scan's confident answer whose z_rival is below this is checked by the window (localizer.cpp).
