@@ -179,7 +179,8 @@ typedef struct gsf_position_prior {
 // gives a wrong pose at low confidence (confident = 0) or none, with one known exception: a disc that
 // holds a turned copy of a repetitive scene and no pose near the truth (2 of 2,044 suite queries with the
 // prior 50 m off, none 100 m off; docs/vehicle-modes.md). Give the heading (a GNSS course) when known:
-// it rules those out.
+// it rules those out. An answer that is not confident is also localized without the prior, and when that
+// is confident at the same pose its result is returned: a prior answers at least what one-shot would.
 int gsf_localize_with_prior(gsf_localizer* localizer, const float* xyz_stride, uint32_t stride, uint32_t count,
                             const uint32_t* labels, const float* logits, uint32_t logit_dim,
                             const gsf_position_prior* prior, gsf_result* out) GSF_NOEXCEPT;
