@@ -306,7 +306,7 @@ constexpr double kMaxOdometryStepM = 1e3;
 // deg settle them (one-shot runs 4 and 2). The second search is the answer's closest rival's: the
 // confidence compares the answer with its rivals, and a rival left unsearched reads weaker than it is
 // (z_rival too high: the model was fitted on searched rivals). With one search, held-out family seed
-// 8's b16 avenue with the prior 100 m off answered a 180-degree copy at 0.949 (its rival, searched,
+// 7's b16 avenue with the prior 100 m off answered a 180-degree copy at 0.949 (its rival, searched,
 // reads 0.885, and one-shot gave the copy 0.76). On the 120 family worlds of seeds 7-8
 // (docs/vehicle-modes.md, *The prior on every family*): the 20 m prior answers 12,200 right instead of
 // 12,223 and the prior 100 m off 0 confident wrong instead of 1 of 13,620, one search more a query
@@ -762,16 +762,16 @@ Status Localizer::localize(const ScanView& scan, const PositionPrior& prior, Loc
 // evidence speaks against the pose (a prior 100 m off, ns hall seed 8 query 70: one-shot answers the same
 // wrong copy at 0.97 that the check contradicted). Costs a one-shot query on each declined answer.
 void Localizer::ask_one_shot(const ScanView& scan, LocalizeResult& out) {
-  LocalizeResult free;
-  localize_in(scan, nullptr, &free);  // the voxels again, from the logits
+  LocalizeResult one_shot;
+  localize_in(scan, nullptr, &one_shot);  // the voxels again, from the logits
   out.prior_asked_one_shot = true;
-  out.times.total += free.times.total;
+  out.times.total += one_shot.times.total;
   const HypothesisConfig& hc = config_.hypotheses;
-  if (free.status != Status::Ok || !free.confident ||
-      !within_pose(free.map_T_scan, out.map_T_scan, hc.same_pose_m, deg_to_rad(hc.same_pose_deg)))
+  if (one_shot.status != Status::Ok || !one_shot.confident ||
+      !within_pose(one_shot.map_T_scan, out.map_T_scan, hc.same_pose_m, deg_to_rad(hc.same_pose_deg)))
     return;
-  LocalizeResult prior_part = out;
-  out = free;
+  const LocalizeResult prior_part = out;
+  out = one_shot;
   out.times.total = prior_part.times.total;
   out.prior_used = true;
   out.prior_outside_matches = prior_part.prior_outside_matches;
