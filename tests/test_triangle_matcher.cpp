@@ -274,7 +274,7 @@ TEST_CASE("The matcher's searched bins lose no map triangle within the tolerance
       total += static_cast<uint32_t>(expected.size());
     }
   }
-  CHECK(total > 600);  // the queries do find matches (about 3 a query)
+  CHECK(total > 600);  // the queries do find matches (more than one a query)
 }
 
 }  // namespace test_triangle_matcher

@@ -100,9 +100,10 @@ TriangleMatchStats TriangleMatcher::match(const Triangle& q, const TriangleIndex
 // The neighbouring keys (q0 +- 1, q1 +- 1, q2 +- 1) of this label triple that a map side within the
 // tolerance can have: a side's key bin is floor(side / side_bin), so only the bins of [side - tol, side +
 // tol] (widened by kBinMargin against rounding) can hold a match, 1-2 of the 3 per side at the default
-// 3% tolerance (2 x 8 of the 27 keys for 10-20 m sides). q2 is the key's lowest field, so its neighbours
-// are contiguous, and so are their triangles (stored in key order). Quantised sides below 0 or above the
-// key's field do not exist. The exact test is offer_range's: the bins left out hold no match.
+// 3% tolerance (at most 8 of the 27 keys, 1 where no side is near a bin edge). q2 is the key's lowest
+// field, so its neighbours are contiguous, and so are their triangles (stored in key order). Quantised
+// sides below 0 or above the key's field do not exist. The exact test is offer_range's: the bins left
+// out hold no match.
 void TriangleMatcher::search_order(const Triangle& q, uint8_t o, const float side[3], const uint8_t label[3],
                                    const TriangleIndexView& index, const Triangle* map, const TriangleConfig& config,
                                    TriangleMatchStats* st) {
