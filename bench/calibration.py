@@ -339,7 +339,8 @@ def main():
     if a.model:
         global MODEL
         sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-        MODEL = [float(v) for v in a.model.split(",")]
+        import fit_confidence  # bench/, beside this file
+        MODEL = fit_confidence.parse_model(a.model)
         if a.min_confidence is None:
             a.min_confidence = 0.9
     if a.min_confidence is not None and not 0 <= a.min_confidence <= 1:

@@ -125,7 +125,7 @@ def main():
     ap.add_argument("--model", default="")
     ap.add_argument("--min-confidence", type=float, default=0.9)
     a = ap.parse_args()
-    model = [float(v) for v in a.model.split(",")] if a.model else library_model()
+    model = fc.parse_model(a.model) if a.model else library_model()
     fams = a.families.replace(",", " ").split() or [f for f in FAMILY_ORDER if os.path.isdir(os.path.join(a.dir, f))]
     allfiles = []
     for fam in fams:

@@ -3,8 +3,8 @@
 replays any model on held-out ones.
 
 The model (core/include/gsf/detail/confidence.h): P = s(a_r + b_r z_rival + c_r rival_margin)
-s(a_p + b_s z_shift + b_t z_turn) s(a_i + b_i inlier_share), s the logistic function, each z
-clipped to [-3, 10], the margin to [0, 1]. --factors fits other forms (e.g. inlier_share+inliers).
+s(a_p + b_f z_shift_far + b_s z_shift + b_t z_turn) s(a_i + b_i inlier_share), s the logistic function,
+each z clipped to [-3, 10], the margin to [0, 1]. --factors fits other forms (e.g. inlier_share+inliers).
 The evidence is the library's own measurement, written per query by `gsf evaluate --json`
 (diagnostics.confidence_evidence), so a fit needs no re-run of the localizer: fit on some runs, paste
 the printed C++ line, rebuild, and report on other runs (other seeds) from the library itself.
@@ -35,15 +35,27 @@ import os
 # (core/src/confidence.cpp clips the same way).
 # A factor may read several fields (s(offset + slope_1 x_1 + slope_2 x_2)); --factors joins them with '+'.
 FEATURES = {"z_rival": (-3.0, 10.0), "rival_margin": (0.0, 1.0), "z_shift": (-3.0, 10.0), "z_turn": (-3.0, 10.0),
+            "z_shift_far": (-3.0, 10.0),
             "inlier_share": (0.0, 1.0), "inliers": (3.0, 12.0), "known_share": (0.0, 1.0),
             "excess_inliers": (0.0, 9.0), "excess_share": (0.0, 1.0), "beyond_clique": (0.0, 60.0),
             "explained_share": (0.0, 1.0), "explained_excess": (0.0, 20.0),
             "layer_share": (0.0, 1.0), "layer_excess": (0.0, 20.0)}
-FACTORS = [["z_rival", "rival_margin"], ["z_shift", "z_turn"], ["inlier_share"]]
+FACTORS = [["z_rival", "rival_margin"], ["z_shift_far", "z_shift", "z_turn"], ["inlier_share"]]
 
 
 def parameter_count():
     return sum(1 + len(f) for f in FACTORS)
+
+
+def parse_model(text):
+    """--model's numbers, as many as the factors take (the models before 2026-12-06 evening have eight:
+    no z_shift_far)."""
+    m = [float(v) for v in text.split(",")]
+    if len(m) != parameter_count():
+        raise SystemExit(f"the model has {len(m)} numbers, the factors {','.join('+'.join(f) for f in FACTORS)} "
+                         f"take {parameter_count()} (an eight-number model: fit_confidence.py --factors "
+                         "z_rival+rival_margin,z_shift+z_turn,inlier_share)")
+    return m
 
 
 def logistic(x):
@@ -259,7 +271,7 @@ def main():
     train = {d: records(d, a.mode) for d in expand(a.train)}
     test = {d: records(d, a.mode) for d in expand(a.test)}
     if a.model:
-        m = [float(v) for v in a.model.split(",")]
+        m = parse_model(a.model)
     else:
         pooled = [r for rs in train.values() for r in rs]
         if not pooled:

@@ -2,9 +2,9 @@
 """The confidence's evidence on the real nuScenes drives, by outcome (issue 24): for the right answers
 the rule answered, the right ones it declined, the wrong ones on the street (in-map pairs) and every
 answer against the distractor map (all wrong), the 10th percentile / median / 90th percentile of each
-input of the model (z_rival, rival_margin, z_shift, z_turn, inlier_share). Which inputs separate the
-declined right answers from the wrong ones says which factor declines them for want of evidence and
-which for a threshold the real scans do not reach.
+input of the model (z_rival, rival_margin, z_shift_far, z_shift, z_turn, inlier_share). Which inputs
+separate the declined right answers from the wrong ones says which factor declines them for want of
+evidence and which for a threshold the real scans do not reach.
 
 Reads bench/real_data.sh output directories (nuscenes-0004-0002.json, nuscenes-0002-0004.json and
 nuscenes-0001-0002.json in each), e.g. the runs of several noise seeds:
@@ -23,7 +23,7 @@ import statistics
 import declined_right
 import fit_confidence
 
-INPUTS = ["z_rival", "rival_margin", "z_shift", "z_turn", "inlier_share"]
+INPUTS = ["z_rival", "rival_margin", "z_shift_far", "z_shift", "z_turn", "inlier_share"]
 PAIRS = ["nuscenes-0004-0002.json", "nuscenes-0002-0004.json"]
 DISTRACTOR = "nuscenes-0001-0002.json"
 

@@ -22,7 +22,7 @@ Z_RIVAL, MARGIN, SHARE = 1.2, 0.1, 0.5
 
 
 def thin_margin(z):
-    """z: fit_confidence.features' tuple ((z_rival, rival_margin), (z_shift, z_turn), (inlier_share,)),
+    """z: fit_confidence.features' tuple ((z_rival, rival_margin), (z_shift_far, z_shift, z_turn), (inlier_share,)),
     clipped to ranges that hold these thresholds."""
     (z_rival, margin), _, (share,) = z
     return z_rival < Z_RIVAL and margin < MARGIN and share > SHARE
@@ -41,7 +41,7 @@ def main():
     ap.add_argument("dirs", nargs="+")
     ap.add_argument("--model", default="")
     a = ap.parse_args()
-    m = [float(v) for v in a.model.split(",")] if a.model else declined_right.library_model()
+    m = fc.parse_model(a.model) if a.model else declined_right.library_model()
     print("| family | answers with a pose | thin margin | of those right | mean predicted |")
     print("| --- | ---: | ---: | ---: | ---: |")
     for d in a.dirs:

@@ -133,6 +133,53 @@ TEST_CASE("Without a rival the closest probe stands in; empty input gives no evi
   CHECK(measure(conf, scene.points, SemanticGridView(), unit_weights(), 3.0f, nullptr, 0).samples == 0);
 }
 
+// Blocks of four building voxels 12 m apart on a grid; in the map each block's building runs 2 m further
+// along x either way (a wall seen end-on, a uniform street), so shifted 2 m along x the answer ties in
+// every block, shifted 8 m it loses.
+namespace {
+struct LongWalls {
+  RoadLayer layer;
+  std::vector<VerifyPoint> points;
+  LongWalls() {
+    for (int i = -4; i <= 4; ++i)
+      for (int r = -4; r <= 4; ++r) {
+        for (float dx : {0.5f, 1.5f})
+          for (float dy : {0.5f, 1.5f})
+            points.push_back(VerifyPoint{12.0f * i + dx, 12.0f * r + dy, uint32_t(kBuilding)});
+        for (int cx = -2; cx < 4; ++cx)
+          for (int cy = 0; cy < 2; ++cy) layer.set(12.0f * i + cx + 0.5f, 12.0f * r + cy + 0.5f, class_bit(kBuilding));
+      }
+    layer.finish();
+  }
+};
+}  // namespace
+
+TEST_CASE("The 8 m probes are a z of their own: a right answer may be off by less than 5 m") {
+  const LongWalls walls;
+  gsf_test::ArenaBuffer buf(AnswerConfidence::required_bytes(4096));
+  AnswerConfidence conf;
+  REQUIRE(conf.bind(buf.arena, 4096) == Status::Ok);
+  const Eigen::Isometry3d rival = moved(0.0, 6.0);
+  const ConfidenceEvidence e = measure(conf, walls.points, walls.layer.view, unit_weights(), 3.0f, &rival, 1);
+  CHECK(e.blocks == 81u);
+  CHECK(e.z_shift == 0.0f);  // the 2 m shifts along x tie in every block: no evidence either way
+  CHECK(e.z_shift_far > 5.0f);
+  CHECK(e.z_shift_far <= 9.0f);  // at most sqrt(81): every block ahead by as much
+  // The peak factor reads the 8 m probes: where the 2 m ones tie (a pose within 5 m of the truth is
+  // still right), an answer well ahead of its 8 m neighbours is confident; where those tie too, not.
+  ConfidenceEvidence a;
+  a.samples = e.samples;
+  a.z_rival = 10.0f;
+  a.rival_margin = 1.0f;
+  a.inlier_share = 1.0f;
+  a.z_turn = 4.0f;  // about a right answer's 10th percentile
+  a.z_shift = 0.0f;
+  a.z_shift_far = 8.0f;
+  CHECK(confidence_probability(a) >= 0.9);
+  a.z_shift_far = 0.0f;  // the scene slides 8 m as well: not a peak at that scale
+  CHECK(confidence_probability(a) < 0.5);
+}
+
 // k blocks of building voxels as BuildingBlocks, and the map's buildings also mirrored through the
 // sensor (the scene turned 180 deg, a symmetric hall), except one: missing_mirror drops block 0's mirror
 // (the answer is ahead of its flip by one block), missing_own drops block 0 itself (the flip is ahead).
@@ -176,7 +223,7 @@ TEST_CASE("The 180-degree probe counts only when it is ahead of the answer if th
 TEST_CASE("The probability is a product of rising logistic factors, in [0, 1]") {
   ConfidenceEvidence e;
   e.samples = 1000;
-  e.z_rival = e.z_shift = e.z_turn = 10.0f;
+  e.z_rival = e.z_shift = e.z_shift_far = e.z_turn = 10.0f;
   e.rival_margin = 1.0f;
   e.inlier_share = 1.0f;
   const double top = confidence_probability(e);
@@ -201,36 +248,41 @@ TEST_CASE("The probability is a product of rising logistic factors, in [0, 1]") 
   e.rival_margin = 0.02f;
   CHECK(confidence_probability(e) < 0.5);
   e.z_rival = 10.0f;
-  e.z_shift = 3.0f;  // clearly ahead of its shifted copies (a right answer's median is about 3)
-  e.z_turn = -3.0f;  // but a turned copy of the scan fits better: not a peak
+  e.z_shift = e.z_shift_far = 3.0f;  // clearly ahead of its shifted copies (a right answer's median is about 3)
+  e.z_turn = -3.0f;                  // but a turned copy of the scan fits better: not a peak
   CHECK(confidence_probability(e) < 0.01);
   e.z_turn = 5.0f;  // a right answer's 5th percentile
   const double turned_well = confidence_probability(e);
   CHECK(turned_well > 0.9);
-  e.z_shift = -3.0f;  // and the other way round: a shifted copy fits better
+  e.z_shift = e.z_shift_far = -3.0f;  // and the other way round: a copy shifted 8 m fits better
   CHECK(confidence_probability(e) < 0.5);
-  for (float z = -3.0f; z <= 10.0f; z += 0.5f) {  // the peak factor rises with either z
-    e.z_shift = z;
+  double last_far = 0.0;
+  for (float z = -3.0f; z <= 10.0f; z += 0.5f) {  // the peak factor rises with each z
+    e.z_shift = e.z_shift_far = z;
     const double p_shift = confidence_probability(e);
     e.z_shift = 3.0f;
+    const double p_far = confidence_probability(e);
+    e.z_shift_far = 3.0f;
     e.z_turn = z;
     const double p_turn = confidence_probability(e);
     e.z_turn = 5.0f;
     if (z > -3.0f) {
       CHECK(p_shift >= last);
+      CHECK(p_far >= last_far);
       CHECK(p_turn >= last_turn);
     }
     last = p_shift;
+    last_far = p_far;
     last_turn = p_turn;
   }
-  e.z_shift = 10.0f;
+  e.z_shift = e.z_shift_far = 10.0f;
   e.z_turn = 10.0f;
   e.inlier_share = 0.5f;
   const double half = confidence_probability(e);
   e.inlier_share = 0.0f;  // none of the scan's instances explained: a coincidence somewhere else
   CHECK(confidence_probability(e) < 0.05);
   CHECK(confidence_probability(e) < half);
-  const ConfidenceModel flat{0, 0, 0, 0, 0, 0, 0, 0};  // every factor (rival, peak, inlier) 1/2
+  const ConfidenceModel flat{0, 0, 0, 0, 0, 0, 0, 0, 0};  // every factor (rival, peak, inlier) 1/2
   CHECK(confidence_probability(e, flat) == Approx(0.125));
 }
 

@@ -92,6 +92,7 @@ void write_confidence_evidence(JsonWriter& j, const ConfidenceEvidence& e) {
   j.begin_object();
   j.field("z_rival", e.z_rival);
   j.field("z_shift", e.z_shift);
+  j.field("z_shift_far", e.z_shift_far);
   j.field("z_turn", e.z_turn);
   j.field("rivals", e.rivals);
   j.field("samples", e.samples);

@@ -183,6 +183,7 @@ void write_window_record(JsonWriter& j, const WindowRecord& r) {
   j.field("z_rival", r.evidence.z_rival);
   j.field("rival_margin", r.evidence.rival_margin);
   j.field("z_shift", r.evidence.z_shift);
+  j.field("z_shift_far", r.evidence.z_shift_far);
   j.field("z_turn", r.evidence.z_turn);
   j.field("inliers", r.evidence.inliers);
   j.field("inlier_share", r.evidence.inlier_share);

@@ -17,7 +17,10 @@ struct PoseVerification {
 // What the confidence was computed from (confidence.h; LocalizeResult diagnostics).
 struct ConfidenceEvidence {
   float z_rival = 0.0f;  // against the closest rival; without one, the closest probe of either kind
-  float z_shift = 0.0f;  // against the closest shifted probe
+  float z_shift = 0.0f;  // against the closest shifted probe (2 or 8 m)
+  // Against the closest probe shifted 8 m: farther than the 5 m a right answer may be off, so a pose that
+  // stands out only at that scale is right even where its 2 m neighbours tie it (a uniform street).
+  float z_shift_far = 0.0f;
   float z_turn = 0.0f;   // against the closest turned probe
   uint32_t rivals = 0;   // rivals compared (at most AnswerConfidence::kMaxRivals)
   uint32_t samples = 0;  // sampled voxels compared

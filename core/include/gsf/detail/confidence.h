@@ -8,7 +8,8 @@
 // its TRUE pose too, so a threshold fitted at one noise level declines right answers at another. Instead
 // the answer is compared with wrong poses of the same scan, on the same sampled voxels:
 //   - its rivals: the best other hypotheses at another place or heading (a lattice shift, a flip);
-//   - shifted probes: the answer moved 2 and 8 m forward, back, left and right (is it a peak at all?);
+//   - shifted probes: the answer moved 2 and 8 m forward, back, left and right (is it a peak at all?
+//     The 8 m ones ask it at the scale of a right answer, which may be up to 5 m off: z_shift_far);
 //   - turned probes: the answer turned by +-10 and 180 deg about the sensor.
 // Each comparison is a paired statistic whose noise term comes from the scan itself. The sampled voxels
 // are grouped in 4 m blocks of the scan (the voxels of one object or patch move together and are often
@@ -26,12 +27,13 @@
 // hundredths). The probability is a product of one logistic factor per question the answer must pass:
 // is it ahead of its rivals, is it a peak (ahead of its shifted and turned neighbours), does it explain
 // the scan's instances:
-//   P = s(a_r + b_r z_rival + c_r m_r) s(a_p + b_s z_shift + b_t z_turn) s(a_i + b_i inlier_share),
+//   P = s(a_r + b_r z_rival + c_r m_r) s(a_p + b_f z_shift_far + b_s z_shift + b_t z_turn)
+//       s(a_i + b_i inlier_share),
 // s(x) = 1 / (1 + e^-x), z of a kind being its closest comparison (the smallest z). Shift and turn share
 // one factor: both ask whether the answer is a peak, and a strong turned comparison makes up for a weak
 // shifted one (along a uniform street a shift costs little) and back; as two factors each had to pass
 // alone, which cost the simulated nuScenes-labelled and real scans, and let more distractors through.
-// The eight numbers are fitted on simulated suites of fifteen segmentation-error, sensor and label-set
+// The nine numbers are fitted on simulated suites of fifteen segmentation-error, sensor and label-set
 // families, with queries against other worlds' maps among them (bench/fit_confidence.py;
 // docs/confidence.md has the command and the data), and checked on other seeds and on real data.
 #pragma once
@@ -50,7 +52,7 @@ namespace gsf {
 // The logistic factors of the probability (see above).
 struct ConfidenceModel {
   float rival_offset, rival_slope, rival_margin_slope;
-  float peak_offset, peak_shift_slope, peak_turn_slope;
+  float peak_offset, peak_far_slope, peak_shift_slope, peak_turn_slope;
   float inlier_offset, inlier_slope;
 };
 // Fitted by bench/fit_confidence.py (docs/confidence.md).
