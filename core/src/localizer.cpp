@@ -796,8 +796,9 @@ void Localizer::ask_one_shot(const ScanView& scan, LocalizeResult& out) {
 // search_elsewhere). When the best of them beats the answer's score, its confidence is measured
 // (against the prior's answer and its own rivals) and the answer keeps at most 1 - that, and at most
 // its own confidence with that pose as one more rival; when that pose lies in the prior's disc (the
-// restricted search missed its clique), it replaces the answer, with its own confidence. When it scores lower, it is
-// one more rival of the answer (a near tie is a copy all the same). The result's time includes the check.
+// restricted search missed its clique), it replaces the answer, with its own confidence. When it
+// scores lower, it is one more rival of the answer (a near tie is a copy all the same). The result's
+// time includes the check.
 void Localizer::check_outside_prior(LocalizeResult& out) {
   Impl& im = *impl_;
   const uint64_t t0 = now(clock_);
@@ -831,7 +832,7 @@ void Localizer::check_outside_prior(LocalizeResult& out) {
       // A pose elsewhere that scores higher is one more rival of the answer, and the closest: the scan's
       // evidence prefers it, whatever its own rivals make of it. Bounding the answer by 1 - its
       // confidence alone left it confident where that pose has copies of its own (held-out seeds 31-32,
-      // the prior 100 m off: two 180-degree avenue copies answered at 0.94 and 0.91).
+      // the prior 100 m off: two 180-degree avenue copies answered at 0.95 and 0.91).
       out.confidence_evidence = im.against_elsewhere(config_, answer, best, out.confidence_evidence);
       const double p = out.confidence_evidence.samples > 0 ? confidence_probability(out.confidence_evidence) : 0.0;
       out.confidence = std::min({out.confidence, im.capped_for_few_instances(config_, p), 1.0 - c});
