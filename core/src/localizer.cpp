@@ -807,13 +807,17 @@ void Localizer::check_outside_prior(LocalizeResult& out) {
   const float answer_score = im.hypotheses[im.answer.chosen()].verification.score;
   Elsewhere best;
   const bool found = im.search_elsewhere(config_, map_, clock_, answer, &best);
+  // The answer's confidence with the best pose elsewhere as one more rival (its evidence kept).
+  auto with_best_as_rival = [&] {
+    out.confidence_evidence = im.against_elsewhere(config_, answer, best, out.confidence_evidence);
+    const ConfidenceEvidence& e = out.confidence_evidence;
+    return im.capped_for_few_instances(config_, e.samples > 0 ? confidence_probability(e) : 0.0);
+  };
   if (found && best.score <= answer_score) {
     // A pose elsewhere that scores a little lower is a copy of the scene all the same: the answer is no
     // surer than its margin over it (with the prior 100 m off under label noise 0.15 the truth scored
     // just below a copy inside the prior: suite seeds 7 and 10, confident wrong before).
-    out.confidence_evidence = im.against_elsewhere(config_, answer, best, out.confidence_evidence);
-    const double c = out.confidence_evidence.samples > 0 ? confidence_probability(out.confidence_evidence) : 0.0;
-    out.confidence = std::min(out.confidence, im.capped_for_few_instances(config_, c));
+    out.confidence = std::min(out.confidence, with_best_as_rival());
     out.confident = out.confidence >= config_.confidence.min_probability;
   } else if (found) {  // best.score > answer_score
     const ConfidenceEvidence e = im.elsewhere_evidence(config_, answer, best);
@@ -833,9 +837,7 @@ void Localizer::check_outside_prior(LocalizeResult& out) {
       // evidence prefers it, whatever its own rivals make of it. Bounding the answer by 1 - its
       // confidence alone left it confident where that pose has copies of its own (held-out seeds 31-32,
       // the prior 100 m off: two 180-degree avenue copies answered at 0.95 and 0.91).
-      out.confidence_evidence = im.against_elsewhere(config_, answer, best, out.confidence_evidence);
-      const double p = out.confidence_evidence.samples > 0 ? confidence_probability(out.confidence_evidence) : 0.0;
-      out.confidence = std::min({out.confidence, im.capped_for_few_instances(config_, p), 1.0 - c});
+      out.confidence = std::min({out.confidence, with_best_as_rival(), 1.0 - c});
     }
     out.confident = out.confidence >= config_.confidence.min_probability;
   }
