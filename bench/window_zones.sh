@@ -6,26 +6,29 @@
 # confident, the window of N = 3 at a start or a loss), with the default labels and with --label-noise
 # 0.15. Prints one table row per world and a total (from the evaluations' JSON summaries): success /
 # answered / confident wrong of all scans, and answered of the scans in the repetitive zone. Two
-# worlds at a time.
+# worlds at a time. --simulate adds options to gsf simulate, e.g. "--map-coverage 0.6" for stretches
+# that drive off the mapped part of the road (the edge family's worlds, bench/families.sh).
 #
 #   bash bench/window_zones.sh OUT [--seeds "11 12 13 14"] [--zones "row lattice hall avenue"] [--window N]
-#                                  [--gsf BIN]
+#                                  [--gsf BIN] [--simulate "OPTIONS"]
 set -euo pipefail
 here=$(pwd)
 cd "$(dirname "$0")/.."
-out=${1:?usage: bench/window_zones.sh OUT [--seeds S] [--zones Z] [--window N] [--gsf BIN]}
+out=${1:?usage: bench/window_zones.sh OUT [--seeds S] [--zones Z] [--window N] [--gsf BIN] [--simulate OPTIONS]}
 shift
 case "$out" in /*) ;; *) out=$here/$out ;; esac
 seeds="11 12 13 14"
 zones="row lattice hall avenue"
 gsf=""
 window=3
+simulate=""
 while [ $# -gt 0 ]; do
   case "$1" in
     --seeds) seeds=$2; shift 2 ;;
     --zones) zones=$2; shift 2 ;;
     --gsf) gsf=$2; shift 2 ;;
     --window) window=$2; shift 2 ;;
+    --simulate) simulate=$2; shift 2 ;;
     *) echo "window_zones.sh: unknown option $1" >&2; exit 2 ;;
   esac
 done
@@ -39,7 +42,7 @@ mkdir -p "$out"
 one_world() {  # seed zone
   local d=$out/$1-$2
   mkdir -p "$d"
-  "$gsf" simulate --out "$d/ds" --preset suite --seed "$1" --zone "$2" --stretches 6 --quiet
+  "$gsf" simulate --out "$d/ds" --preset suite --seed "$1" --zone "$2" --stretches 6 --quiet $simulate
   "$gsf" build-map --dataset "$d/ds" --out "$d/m.map" --quiet >/dev/null
   for n in 1 "$window"; do
     for noise in 0 0.15; do

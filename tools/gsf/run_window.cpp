@@ -188,6 +188,8 @@ void write_window_record(JsonWriter& j, const WindowRecord& r) {
   j.field("inliers", r.evidence.inliers);
   j.field("inlier_share", r.evidence.inlier_share);
   j.field("samples", r.evidence.samples);
+  j.field("known_share", r.evidence.known_share);
+  j.field("agreement", r.evidence.agreement);
   j.field("translation_error_m", r.ok ? r.error.translation_m : -1.0);
   j.field("rotation_error_deg", r.ok ? r.error.rotation_deg : -1.0);
   j.field("time_ms", r.time_ms);
