@@ -141,6 +141,8 @@ for q in w["scans"]:
     assert q["window_ids"][0] == q["sequence_index"] and len(q["window_ids"]) <= 3, q
     assert q["combined"] == (len(q["window_ids"]) > 1), q
     assert not q["answered"] or q["status"] == "Ok", q
+    assert 0.0 <= q["known_share"] <= 1.0 and 0.0 <= q["agreement"] <= 1.0, q  # the answer's, as measured
+    assert not q["answered"] or q["known_share"] > 0.0, q  # never vouched for with no sample on the map
 assert w["summary"]["all"]["confident_wrong"] == sum(q["answered"] and not q["success"] for q in w["scans"])
 one = json.loads(open(f"{t}/one.json").read().splitlines()[0])
 assert one["frame"] == 3 and len(one["pose"]) == 12
