@@ -820,3 +820,39 @@ TEST_CASE("An answer from fewer than min_inliers + 2 instances is never vouched 
   CHECK(capped >= 3);
   CHECK(held_down >= 1);
 }
+
+TEST_CASE("The confidence's probes read confidence.probe_points voxels, whatever verification samples") {
+  // The probes' sample is the one the model is fitted at (core/src/confidence.cpp): a scan of at most
+  // confidence.probe_points voxels is read whole, however few verification scores a hypothesis on, and a
+  // smaller setting strides it as verification does (n voxels at stride ceil(n / max): ceil(n / stride)).
+  const auto& w = tiny_world();
+  auto samples_at = [](uint32_t n, uint32_t max_points) {
+    const uint32_t stride = (n + max_points - 1) / max_points;
+    return (n + stride - 1) / stride;
+  };
+  struct Setting {
+    uint32_t verify_points, probe_points;
+  };
+  for (const Setting& s :
+       {Setting{1000, w.config.confidence.probe_points}, Setting{w.config.verify.max_points, 1000}}) {
+    LocalizerConfig config = w.config;
+    config.verify.max_points = s.verify_points;
+    config.confidence.probe_points = s.probe_points;
+    Workspace ws(config);
+    Localizer loc;
+    REQUIRE(loc.init(config, w.map, ws.data(), ws.bytes()) == Status::Ok);
+    int checked = 0;
+    for (size_t q = 0; q < w.queries.size() && checked < 3; ++q) {
+      LocalizeResult out;
+      if (loc.localize(w.queries[q].view(), &out) != Status::Ok || !out.verified) continue;
+      INFO("verify " << s.verify_points << ", probes " << s.probe_points << ", query " << q << ": " << out.scan_voxels
+                     << " voxels");
+      REQUIRE(out.scan_voxels > 2000u);  // so that 1000 strides it
+      REQUIRE(out.scan_voxels <= w.config.confidence.probe_points);
+      CHECK(out.confidence_evidence.samples == samples_at(out.scan_voxels, s.probe_points));
+      if (s.probe_points == w.config.confidence.probe_points) CHECK(out.confidence_evidence.samples == out.scan_voxels);
+      ++checked;
+    }
+    CHECK(checked == 3);
+  }
+}

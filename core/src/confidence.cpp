@@ -9,11 +9,11 @@ namespace gsf {
 
 // bench/fit_confidence.py on the training suites (docs/confidence.md). The inlier factor is held at the
 // fit of 2026-12-05: refitted on the inliers counted on the map's instances it asks shares the simulated
-// right answers reach (about 0.8) and real ones do not (0.3-0.5). The rival factor is held at the fit of
-// 2026-12-06 and the peak factor refitted with the 8 m probes as a z of their own (2026-12-06 evening,
-// *The peak at the scale of a right answer*): refitted too, the rival factor read a near-tie (z_rival
-// 1.2, margin 0.05) at 0.93 instead of 0.89, and a 180-degree copy with the prior 100 m off answered.
-const ConfidenceModel kConfidenceModel = {-2.073f, 3.253f, 3.297f, -13.986f, 1.791f, 0.578f, 2.088f, -5.006f, 29.669f};
+// right answers reach (about 0.8) and real ones do not (0.3-0.5). The rival and peak factors were refitted
+// on 2026-12-07 when the probes came to score confidence.probe_points (8,192) voxels instead of
+// verify.max_points (4,096): the same difference over twice the samples reads a larger z, so the model is
+// fitted at the probes' sample (docs/confidence.md, *The probes read the scan whole*).
+const ConfidenceModel kConfidenceModel = {-1.758f, 3.034f, 6.295f, -14.327f, 1.790f, 0.717f, 2.036f, -5.006f, 29.669f};
 
 namespace {
 

@@ -192,10 +192,11 @@ Status Localizer::bind_workspace(Arena& ar, const LocalizerConfig& config, Impl&
                      search_sample_points(config.verify)) != Status::Ok &&
       !ar.counting())
     return Status::InvalidArgument;
-  // The confidence's per-sample arrays hold the window's combined sample (one scan's without a window).
+  // The confidence's per-sample arrays hold the window's combined sample (one scan's without a window) or the
+  // one-shot probes' sample (confidence.probe_points), whichever is larger.
   const uint32_t window_scans = std::max(1u, std::min(config.window.scans, ScanWindow::kMaxScans));
-  if (im.confidence.bind(ar, config.verify.max_points * window_scans) != Status::Ok && !ar.counting())
-    return Status::InvalidArgument;
+  const uint32_t confidence_samples = std::max(config.verify.max_points * window_scans, config.confidence.probe_points);
+  if (im.confidence.bind(ar, confidence_samples) != Status::Ok && !ar.counting()) return Status::InvalidArgument;
   im.height_samples = ar.allocate<HeightSample>(C);
   im.instance_marks = ar.allocate<uint8_t>(I, true);
   im.moved_xy = ar.allocate<float>(size_t(I) * 2);
@@ -587,7 +588,7 @@ void Localizer::Impl::measure_confidence(const LocalizerConfig& cfg, LocalizeRes
     const Explained x = explained_at(answer.answer_pose(), out.inliers, cfg.hypotheses.tls_threshold);
     const AnswerConfidence::Answer a{answer.answer_pose(), answer.rival_poses(), answer.rival_count(), x.inliers,
                                      x.share};
-    out.confidence_evidence = evidence_for(a, cfg.verify.max_points);
+    out.confidence_evidence = evidence_for(a, cfg.confidence.probe_points);
     out.confidence = capped_for_few_instances(cfg, confidence_probability(out.confidence_evidence));
   }
   out.confident = out.confidence >= cfg.confidence.min_probability;
@@ -707,7 +708,7 @@ ConfidenceEvidence Localizer::Impl::elsewhere_evidence(const LocalizerConfig& cf
     rivals[n++] = answer.rival_poses()[k];
   const Explained x = explained_at(best.pose, best.inliers, cfg.hypotheses.tls_threshold);
   const AnswerConfidence::Answer a{best.pose, rivals, n, x.inliers, x.share};
-  return evidence_for(a, cfg.verify.max_points);
+  return evidence_for(a, cfg.confidence.probe_points);
 }
 
 // The prior's answer's evidence `e` with the best pose elsewhere as one more rival: its z_rival and margin
@@ -715,7 +716,7 @@ ConfidenceEvidence Localizer::Impl::elsewhere_evidence(const LocalizerConfig& cf
 ConfidenceEvidence Localizer::Impl::against_elsewhere(const LocalizerConfig& cfg, const Eigen::Isometry3d& prior_answer,
                                                       const Elsewhere& best, ConfidenceEvidence e) {
   const AnswerConfidence::Answer a{prior_answer, &best.pose, 1, e.inliers, e.inlier_share};
-  const ConfidenceEvidence pair = evidence_for(a, cfg.verify.max_points);
+  const ConfidenceEvidence pair = evidence_for(a, cfg.confidence.probe_points);
   if (pair.samples == 0) return ConfidenceEvidence();  // no sample (measure() read nothing)
   if (pair.z_rival < e.z_rival) {
     e.z_rival = pair.z_rival;
