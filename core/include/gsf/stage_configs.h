@@ -273,7 +273,7 @@ struct ConfidenceConfig {
   // Query voxels the confidence scores the answer and each of its probes and rivals on (a uniform
   // stride). Twice verify.max_points: a 32-beam scan's 5-6k voxels whole. The probes compare the answer
   // with poses a few metres or a half turn away; under label noise the voxels that tell them apart are a
-  // few fence or hedge cues, and a stride of 2 dropped half of them (seeds 7-8: 93.6 -> 95.0% of right
+  // few fence or hedge cues, and a stride of 2 dropped half of them (seeds 7-8: 93.6 -> 94.9% of right
   // answers vouched for, docs/confidence.md). kConfidenceModel is fitted at this value.
   uint32_t probe_points = 8192;
 };
