@@ -29,6 +29,7 @@ expect 2 "unknown config name" -- "$gsf" build-map --dataset d --out m --set mat
 expect 2 "gsf.tau must be (0, 1000]" -- "$gsf" build-map --dataset d --out m --set gsf.tau=0
 expect 2 "must be <= hypotheses.shift_bin" -- "$gsf" build-map --dataset d --out m --set hypotheses.tls_threshold=3
 expect 0 "gsf.tau = 0.1 (default 0.2)" -- "$gsf" params --set gsf.tau=0.1
+expect 2 "given twice" -- "$gsf" params --set gsf.tau=0.1 --set gsf.tau=0.2
 expect 0 "## User-facing (25)" -- "$gsf" params --markdown
 # Simulated network errors on the labels read (build-map, evaluate, localize): rates in 0..1, seed >= 0.
 expect 2 "label-noise must be a number in 0..1" -- "$gsf" evaluate --map m --dataset d --label-noise 1.5

@@ -45,6 +45,12 @@ bool Args::parse(int argc, char** argv, int first, const std::vector<OptionSpec>
       }
       value = argv[++i];
     }
+    // A second value would silently replace the first (a second `--set` dropped the first list's
+    // overrides in a benchmark once): strict, like an unknown option.
+    if (values_.count(name)) {
+      *error = "option '--" + name + "' given twice (--set takes one list: name=value,name=value)";
+      return false;
+    }
     values_[name] = value;
   }
   for (const auto& s : specs)

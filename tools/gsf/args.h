@@ -1,4 +1,5 @@
-// Minimal, strict command-line parsing for the gsf CLI: --name value / --flag, unknown options are errors.
+// Minimal, strict command-line parsing for the gsf CLI: --name value / --flag, unknown options and a
+// value option given twice are errors.
 #pragma once
 #include <map>
 #include <string>
