@@ -119,6 +119,27 @@ TEST_CASE("The statistic is self-normalised: the evidence's scale and noise that
   CHECK(e.z_rival == Approx(std::sqrt(6.0)).epsilon(1e-6));
 }
 
+TEST_CASE("rivals_only compares the rivals as the whole measure does, and skips the probes") {
+  BuildingBlocks scene(6, true);
+  gsf_test::ArenaBuffer buf(AnswerConfidence::required_bytes(4096));
+  AnswerConfidence conf;
+  REQUIRE(conf.bind(buf.arena, 4096) == Status::Ok);
+  const Eigen::Isometry3d answer = Eigen::Isometry3d::Identity(), rival = moved(40.0, 0.0);
+  const std::vector<float> w = unit_weights();
+  const uint32_t n = static_cast<uint32_t>(scene.points.size());
+  const AnswerConfidence::Answer whole{answer, &rival, 1, 10, 0.5f};
+  const AnswerConfidence::Answer only{answer, &rival, 1, 10, 0.5f, false, /*rivals_only=*/true};
+  const ConfidenceEvidence a = conf.measure(scene.points.data(), n, scene.layer.view, w.data(), 3.0f, whole, 4096);
+  const ConfidenceEvidence b = conf.measure(scene.points.data(), n, scene.layer.view, w.data(), 3.0f, only, 4096);
+  REQUIRE(a.z_shift < 10.0f);     // the whole measure's probes read something
+  CHECK(b.z_rival == a.z_rival);  // bit for bit
+  CHECK(b.rival_margin == a.rival_margin);
+  CHECK(b.samples == a.samples);
+  CHECK(b.z_shift == 10.0f);  // kZMax: not measured
+  CHECK(b.z_shift_far == 10.0f);
+  CHECK(b.z_turn == 10.0f);
+}
+
 TEST_CASE("Without a rival the closest probe stands in; empty input gives no evidence") {
   BuildingBlocks scene(5);
   gsf_test::ArenaBuffer buf(AnswerConfidence::required_bytes(4096));

@@ -131,13 +131,13 @@ ConfidenceEvidence AnswerConfidence::measure(const VerifyPoint* points, uint32_t
   for (double d : {2.0, 8.0}) {
     const double moves[4][2] = {{d, 0.0}, {-d, 0.0}, {0.0, d}, {0.0, -d}};
     for (const auto& m : moves) {
-      const Paired p = paired(s, shifted_pose(a.pose, m[0], m[1]));
+      const Paired p = a.rivals_only ? Paired{kZMax, 1.0f} : paired(s, shifted_pose(a.pose, m[0], m[1]));
       keep_closest(shift, p);
       if (d == 8.0) keep_closest(far, p);
     }
   }
   for (double deg : {10.0, -10.0, 180.0}) {
-    const Paired p = paired(s, turned_pose(a.pose, deg));
+    const Paired p = a.rivals_only ? Paired{kZMax, 1.0f} : paired(s, turned_pose(a.pose, deg));
     if (deg != 180.0 || !a.flip_only_if_ahead || p.z < 0.0f) keep_closest(turn, p);
   }
   e.z_shift = shift.z;

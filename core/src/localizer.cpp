@@ -715,7 +715,7 @@ ConfidenceEvidence Localizer::Impl::elsewhere_evidence(const LocalizerConfig& cf
 // when that comparison is the closer one.
 ConfidenceEvidence Localizer::Impl::against_elsewhere(const LocalizerConfig& cfg, const Eigen::Isometry3d& prior_answer,
                                                       const Elsewhere& best, ConfidenceEvidence e) {
-  const AnswerConfidence::Answer a{prior_answer, &best.pose, 1, e.inliers, e.inlier_share};
+  const AnswerConfidence::Answer a{prior_answer, &best.pose, 1, e.inliers, e.inlier_share, false, /*rivals_only=*/true};
   const ConfidenceEvidence pair = evidence_for(a, cfg.confidence.probe_points);
   if (pair.samples == 0) return ConfidenceEvidence();  // no sample (measure() read nothing)
   if (pair.z_rival < e.z_rival) {

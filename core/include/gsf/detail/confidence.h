@@ -83,6 +83,10 @@ class AnswerConfidence {
     // The 180-degree turned probe counts only where it scores above the answer: a tracked pose, whose
     // prediction rules out the flip unless the scan itself prefers it (tracker.h).
     bool flip_only_if_ahead = false;
+    // Only the rivals are compared (z_rival, rival_margin): the shift and turn probes are skipped and
+    // their z's read kZMax. For a caller that needs one more comparison of an answer it measured already
+    // (a prior's answer against the best pose elsewhere: 11 probes fewer a check).
+    bool rivals_only = false;
   };
   ConfidenceEvidence measure(const VerifyPoint* points, uint32_t n, const SemanticGridView& grid, const float* weights,
                              DisagreeWeights disagree, const Answer& answer, uint32_t max_points);
