@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "arena_buffer.h"
+#include "dense_semantic_layer.h"
 #include "gsf/detail/scan_window.h"
 #include "gsf/localizer.h"
 #include "tiny_world.h"
@@ -106,6 +107,53 @@ TEST_CASE("Without a map semantic layer the window combines nothing") {
   const WindowOutcome o =
       win.combine(nullptr, 0, SemanticGridView(), nullptr, VerifyConfig(), HypothesisConfig(), conf);
   CHECK(!o.combined);
+}
+
+TEST_CASE("A candidate that moves the scans off the map never outscores the truth under label noise") {
+  // A 40 m building front on a road map; the scan's 80 voxels on it, 32 of them given another
+  // above-ground class (fence): at the truth 48 agree and 32 disagree, a score of 48 - 3 x 32 < 0. An
+  // older scan offers a pose 1 km away, where the map has no cell at all: nothing known, score 0. The
+  // window keeps only candidates the map knows about as well as the best-known one (keep_known), so
+  // the truth is its answer; by score alone the pose off the map was (suite seed 14's hall, stretch 5).
+  gsf_test::DenseSemanticLayer layer(-4, 4, -4, 4, kCellObserved | class_bit(kRoad));
+  std::vector<VerifyPoint> pts;
+  for (int x = 0; x < 40; ++x)
+    for (float y : {0.5f, 1.5f}) {
+      layer.set(float(x) + 0.5f, y, class_bit(kBuilding));
+      const bool confused = pts.size() % 5 < 2;  // 2 of every 5
+      pts.push_back(VerifyPoint{float(x) + 0.5f, y, uint32_t(confused ? kFence : kBuilding)});
+    }
+  const SemanticGridView& grid = layer.finish();
+  const uint32_t n = static_cast<uint32_t>(pts.size());
+  WindowConfig wc;
+  wc.scans = 2;
+  gsf_test::ArenaBuffer buf(ScanWindow::required_bytes(wc, n) + AnswerConfidence::required_bytes(2 * n));
+  ScanWindow win;
+  AnswerConfidence conf;
+  REQUIRE(win.bind(buf.arena, wc, n) == Status::Ok);
+  REQUIRE(conf.bind(buf.arena, 2 * n) == Status::Ok);
+  const std::vector<float> weights(kNumClasses, 1.0f);
+  VerifyConfig vc;
+  vc.refine_top = 0;  // the candidates as offered
+  const DisagreeWeights disagree(vc.disagree_weight);
+  const Eigen::Isometry3d truth = Eigen::Isometry3d::Identity();
+  const PoseVerification at_truth = verify_pose(pts.data(), n, grid, truth, n, weights.data(), disagree);
+  REQUIRE(at_truth.scored == n);
+  REQUIRE(at_truth.score < 0.0f);  // the premise: label noise puts the truth below "nothing known"
+  win.begin_scan(truth, pts.data(), n);
+  WindowCandidate off_map;
+  off_map.map_T_scan = planar(1000.0, 0.0, 0.0);
+  off_map.inlier_share = 0.5f;
+  win.set_candidates(&off_map, 1);
+  win.begin_scan(truth, pts.data(), n);  // the next scan at the same place (a stop)
+  WindowCandidate own;
+  own.map_T_scan = truth;
+  own.inlier_share = 0.5f;
+  const WindowOutcome o = win.combine(&own, 1, grid, weights.data(), vc, HypothesisConfig(), conf);
+  REQUIRE(o.combined);
+  CHECK(o.candidates == 2);  // both gathered, the one off the map not kept
+  CHECK(o.map_T_scan.translation().norm() < 1e-9);
+  CHECK(o.verification.scored == 2 * n);
 }
 
 TEST_CASE("Lattice scans declined alone are answered with their neighbours, never wrongly") {

@@ -82,8 +82,9 @@ class ScanWindow {
 
   // The newest scan's pose from all held scans: `own` (the newest scan's candidates) and the older
   // scans' moved to it, scored on the combined sample (weights: the newest scan's verification weights),
-  // the best pattern-refined, and the confidence of the best against the others (`confidence`'s
-  // capacity must hold the combined sample).
+  // where one puts most samples on the map those it knows half as well or less dropped (keep_known), the
+  // best pattern-refined, and the confidence of the best against the others (`confidence`'s capacity
+  // must hold the combined sample).
   WindowOutcome combine(const WindowCandidate* own, uint32_t n_own, const SemanticGridView& grid, const float* weights,
                         const VerifyConfig& vc, const HypothesisConfig& hc, AnswerConfidence& confidence);
 
@@ -103,6 +104,7 @@ class ScanWindow {
   };
   void drop_oldest();
   uint32_t gather(const WindowCandidate* own, uint32_t n_own, float same_m, float same_deg);
+  uint32_t keep_known(uint32_t n, uint32_t samples);
   uint32_t pick_rivals(uint32_t n, float same_m, float same_deg, Eigen::Isometry3d* rivals) const;
   bool newest_agrees(const SemanticGridView& grid, const float* weights, float lambda) const;
 
