@@ -262,8 +262,17 @@ TEST_CASE("A confident answer with a prior and a thin margin or a copy outside h
         LocalizeResult out;
         if (r.loc.localize(w->queries[k].view(), prior_near(w->queries[k].truth, off, 15.0f, k), &out) != Status::Ok)
           continue;
+        // A check ran on a confident answer only, and for the reason its trigger read (z_rival before
+        // the check could lower it).
+        if (out.prior_global_check) {
+          CHECK(out.prior_confident_before_check);
+          CHECK((out.prior_trigger_z_rival < Localizer::kPriorGlobalCheckZ || out.prior_dropped_best_inliers > 0 ||
+                 out.inliers <= w->config.hypotheses.min_inliers));
+        }
         // A vouched answer is one-shot's own result: its rivals are one-shot's, not the disc's.
         if (!out.confident || out.prior_global_check || out.prior_one_shot_vouched) continue;
+        CHECK(out.prior_confident_before_check);
+        CHECK(out.prior_trigger_z_rival == out.confidence_evidence.z_rival);  // unchecked: unchanged
         INFO("query " << k << ", prior " << off << " m off: z_rival " << out.confidence_evidence.z_rival
                       << ", agreement " << out.confidence_evidence.agreement);
         CHECK(out.confidence_evidence.z_rival >= Localizer::kPriorGlobalCheckZ);

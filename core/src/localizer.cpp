@@ -747,7 +747,9 @@ Status Localizer::localize(const ScanView& scan, const PositionPrior& prior, Loc
   // Seeds 15-23 with a 20 m prior: 329 -> 416 of 1,030 queries checked, answered right unchanged
   // (docs/vehicle-modes.md, *A copy beyond the disc*).
   const bool copy_outside = double(out.prior_dropped_best_inliers) >= kPriorCopyInlierShare * double(out.inliers);
-  if (s == Status::Ok && out.confident && (e.z_rival < kPriorGlobalCheckZ || clique_only || copy_outside))
+  out.prior_confident_before_check = s == Status::Ok && out.confident;
+  out.prior_trigger_z_rival = e.z_rival;
+  if (out.prior_confident_before_check && (e.z_rival < kPriorGlobalCheckZ || clique_only || copy_outside))
     check_outside_prior(out);
   if (s == Status::Ok && !out.confident && !out.prior_contradicted) ask_one_shot(scan, out);
   return out.status;
@@ -778,6 +780,8 @@ void Localizer::ask_one_shot(const ScanView& scan, LocalizeResult& out) {
   out.prior_outside_matches = prior_part.prior_outside_matches;
   out.prior_dropped_hypotheses = prior_part.prior_dropped_hypotheses;
   out.prior_dropped_best_inliers = prior_part.prior_dropped_best_inliers;
+  out.prior_confident_before_check = prior_part.prior_confident_before_check;
+  out.prior_trigger_z_rival = prior_part.prior_trigger_z_rival;
   out.prior_global_check = prior_part.prior_global_check;
   out.prior_asked_one_shot = true;
   out.prior_one_shot_vouched = true;

@@ -78,6 +78,8 @@ void write_stage_counts(JsonWriter& j, const LocalizeResult& x) {
     j.field("prior_outside_matches", x.prior_outside_matches);
     j.field("prior_dropped_hypotheses", x.prior_dropped_hypotheses);
     j.field("prior_dropped_best_inliers", x.prior_dropped_best_inliers);
+    j.field("prior_confident_before_check", x.prior_confident_before_check);
+    j.field("prior_trigger_z_rival", x.prior_trigger_z_rival);
     j.field("prior_global_check", x.prior_global_check);
     j.field("prior_contradicted", x.prior_contradicted);
     j.field("prior_asked_one_shot", x.prior_asked_one_shot);

@@ -106,11 +106,15 @@ struct LocalizeResult {
   uint32_t prior_outside_matches = 0;       // map triangle candidates refused as outside the prior
   uint32_t prior_dropped_hypotheses = 0;    // hypotheses outside the prior's disc or heading
   uint32_t prior_dropped_best_inliers = 0;  // the most TLS inliers of one of them
-  bool tracked = false;                     // the result of track(): no instances, triangles or hypotheses
-  bool prior_global_check = false;          // a global search checked the prior's answer (thin margin)
-  bool prior_contradicted = false;          // ... and gave another pose: confidence <= 1 - its confidence
-  bool prior_asked_one_shot = false;        // the prior's answer was not confident: one-shot ran too
-  bool prior_one_shot_vouched = false;      // ... was confident at the same pose: this is its result
+  // What the check's trigger read (Localizer::localize with a prior), before the check could lower it:
+  // whether the prior's own answer was confident, and its z_rival against the disc's rivals.
+  bool prior_confident_before_check = false;
+  float prior_trigger_z_rival = 0.0f;
+  bool tracked = false;                 // the result of track(): no instances, triangles or hypotheses
+  bool prior_global_check = false;      // a global search checked the prior's answer (thin margin)
+  bool prior_contradicted = false;      // ... and gave another pose: confidence <= 1 - its confidence
+  bool prior_asked_one_shot = false;    // the prior's answer was not confident: one-shot ran too
+  bool prior_one_shot_vouched = false;  // ... was confident at the same pose: this is its result
   // Several scans (localize_sequence): this scan's number in the sequence (calls since reset_sequence,
   // from 0), its own one-shot confidence, and the scans whose evidence made the answer: window_scans of
   // them (1: this scan alone), their numbers in window_ids, newest (this one) first.
