@@ -27,6 +27,7 @@
 #include "gsf/detail/triangle.h"
 #include "gsf/detail/triangle_index.h"
 #include "gsf/detail/triangle_matcher.h"
+#include "gsf/detail/twin_completion.h"
 #include "gsf/detail/voxel_layer.h"
 #include "gsf/detail/wasserstein.h"
 #include "gsf/position_prior.h"
@@ -49,6 +50,10 @@ bool same_answer(const Eigen::Isometry3d& a, const Eigen::Isometry3d& b) {
   return d.translation().norm() < kSameM && Eigen::AngleAxisd(d.rotation()).angle() < kSameRad;
 }
 
+// Twins that outscore the first answer, kept for the second choice (Localizer::Impl::complete_twins): a
+// missing twin and its neighbours' snaps land on it or a few others.
+constexpr uint32_t kMaxTwinsFound = 4;
+
 }  // namespace
 
 struct Localizer::Impl {
@@ -70,6 +75,7 @@ struct Localizer::Impl {
   CorrespondenceSet correspondences;
   PoseHypotheses hypotheses;
   AnswerSelector answer;
+  InstanceSnap twin_snap;  // the missing twin's proposals onto the map's instances (complete_twins)
   AnswerConfidence confidence;
   Refiner refiner;
   ScanWindow window;  // several scans (localize_sequence); bound when window.scans > 1
@@ -113,6 +119,7 @@ struct Localizer::Impl {
   Status generate_hypotheses(const LocalizerConfig& cfg, uint32_t C, LocalizeResult& out);
   void drop_outside_prior(const LocalizerConfig& cfg, LocalizeResult& out);
   void choose_answer(const HypothesisConfig& hc, const VerifyConfig& vc, LocalizeResult& out);
+  bool complete_twins(const HypothesisConfig& hc, const VerifyConfig& vc, LocalizeResult& out);
   void settle_height(const LocalizerConfig& cfg, const MapView& map, uint32_t C, LocalizeResult& out);
   void measure_confidence(const LocalizerConfig& cfg, LocalizeResult& out);
   void refine_answer(LocalizeResult& out);
@@ -197,6 +204,7 @@ Status Localizer::bind_workspace(Arena& ar, const LocalizerConfig& config, Impl&
   const uint32_t window_scans = std::max(1u, std::min(config.window.scans, ScanWindow::kMaxScans));
   const uint32_t confidence_samples = std::max(config.verify.max_points * window_scans, config.confidence.probe_points);
   if (im.confidence.bind(ar, confidence_samples) != Status::Ok && !ar.counting()) return Status::InvalidArgument;
+  if (im.twin_snap.bind(ar, I) != Status::Ok && !ar.counting()) return Status::InvalidArgument;
   im.height_samples = ar.allocate<HeightSample>(C);
   im.instance_marks = ar.allocate<uint8_t>(I, true);
   im.moved_xy = ar.allocate<float>(size_t(I) * 2);
@@ -553,6 +561,57 @@ void Localizer::Impl::choose_answer(const HypothesisConfig& hc, const VerifyConf
   out.other_class_weight = choice.verified ? answer.disagree_weights().other_class : 0.0f;
   for (uint32_t k = 0; k < choice.ranked; ++k)
     out.hypothesis[k] = hypothesis_report(hypotheses[choice.rank[k]], choice.rank[k], choice.fully_verified[k]);
+}
+
+// 9a. The missing twin (twin_completion.h): the other headings' best hypotheses moved by the answer's
+// periods, snapped onto the map's instances and scored on the full sample. When one outscores the answer
+// (as the pattern search left it), those that do join the best first-pass hypotheses and verification
+// chooses again among them, all scored on the full sample (the pattern search, the disagree weights and
+// the rivals as in the first choice). Returns whether it chose again.
+bool Localizer::Impl::complete_twins(const HypothesisConfig& hc, const VerifyConfig& vc, LocalizeResult& out) {
+  const uint32_t reports = std::min<uint32_t>(out.hypotheses, kMaxReportedHypotheses);
+  Eigen::Isometry3d ranked[kMaxReportedHypotheses];
+  uint32_t n = 0, answer_at = UINT32_MAX;
+  for (uint32_t k = 0; k < reports; ++k) {
+    const HypothesisReport& r = out.hypothesis[k];
+    if (!r.fully_verified) continue;
+    if (r.index == out.chosen_hypothesis) answer_at = n;
+    ranked[n++] = hypotheses[r.index].map_T_scan;
+  }
+  Eigen::Isometry3d proposed[TwinLimits::kMaxProposals];
+  const uint32_t np =
+      propose_twin_poses(ranked, n, answer_at, hc.same_pose_m, hc.same_pose_deg, proposed, TwinLimits::kMaxProposals);
+  out.twins_proposed = np;
+  if (np == 0 || answer.compact_points() == nullptr) return false;
+  const float answer_score = hypotheses[answer.chosen()].verification.score;
+  PoseHypothesis found[kMaxTwinsFound];
+  uint32_t nf = 0;
+  for (uint32_t k = 0; k < np && nf < kMaxTwinsFound; ++k) {
+    PoseHypothesis h;
+    if (!twin_snap.snap(centroids, labels, instance_count, map_instances, map_instance_count, proposed[k],
+                        hc.tls_threshold, hc.min_inliers, &h.map_T_scan))
+      continue;
+    bool repeat = false;
+    for (uint32_t f = 0; f < nf && !repeat; ++f) repeat = same_answer(found[f].map_T_scan, h.map_T_scan);
+    if (repeat) continue;
+    const PoseVerification v =
+        verify_pose(answer.compact_points(), answer.compact_point_count(), semantic, h.map_T_scan, vc.max_points,
+                    answer.verify_weights(), answer.disagree_weights());
+    if (!(v.score > answer_score)) continue;
+    h.inliers = inliers_at(h.map_T_scan, hc.tls_threshold);
+    if (h.inliers >= hc.min_inliers) found[nf++] = h;
+  }
+  out.twins_found = nf;
+  if (nf == 0) return false;
+  uint8_t keep[PoseHypotheses::kMaxHypotheses] = {};
+  const uint32_t first_pass = vc.full_top > nf ? vc.full_top - nf : 0;
+  for (uint32_t k = 0; k < reports && k < first_pass; ++k)
+    if (out.hypothesis[k].fully_verified) keep[out.hypothesis[k].index] = 1;
+  hypotheses.retain(keep);
+  for (uint32_t f = 0; f < nf; ++f) hypotheses.add(found[f]);
+  out.hypotheses = hypotheses.size();
+  choose_answer(hc, vc, out);
+  return true;
 }
 
 // 9b. The answer's roll and pitch from the scan's and the map's ground, its height from every
@@ -913,6 +972,7 @@ Status Localizer::localize_in(const ScanView& scan, const PositionPrior* prior, 
   if (prior) im.drop_outside_prior(cfg, out);
   if (im.hypotheses.size() == 0) return finish(Status::NoSolution);
   im.choose_answer(cfg.hypotheses, prior ? disc_verify_config(cfg.verify) : cfg.verify, out);
+  if (!prior && cfg.hypotheses.complete_twins && out.verified) im.complete_twins(cfg.hypotheses, cfg.verify, out);
   im.settle_height(cfg, map_, C, out);
   lap(&out.times.pose);
   im.measure_confidence(cfg, out);

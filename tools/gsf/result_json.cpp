@@ -74,6 +74,8 @@ void write_stage_counts(JsonWriter& j, const LocalizeResult& x) {
   j.field("other_class_weight", x.other_class_weight);
   j.field("chosen_hypothesis", x.chosen_hypothesis);
   j.field("height_votes", x.height_votes);
+  j.field("twins_proposed", x.twins_proposed);
+  j.field("twins_found", x.twins_found);
   if (x.prior_used) {  // a position prior (docs/vehicle-modes.md)
     j.field("prior_outside_matches", x.prior_outside_matches);
     j.field("prior_dropped_hypotheses", x.prior_dropped_hypotheses);

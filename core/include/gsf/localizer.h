@@ -93,6 +93,10 @@ struct LocalizeResult {
   // (detail/disagree_weights.h); every other disagreement costs verify.disagree_weight.
   float other_class_weight = 0.0f;
   uint32_t height_votes = 0;  // correspondences whose median set the answer's height (0: its hypothesis's)
+  // The missing twin (detail/twin_completion.h, hypotheses.complete_twins): poses proposed from the
+  // ranked hypotheses' repetition, and those of them that outscored the first answer and joined a second
+  // choice among the hypotheses.
+  uint32_t twins_proposed = 0, twins_found = 0;
   HypothesisReport hypothesis[kMaxReportedHypotheses];
   uint64_t clique_nodes = 0;
   uint32_t field_probes = 0;        // query-field probes computed by the GSF filter (cost driver)

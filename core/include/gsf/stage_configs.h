@@ -214,6 +214,11 @@ struct HypothesisConfig {
   // road's grade (<= ~10%, 5.7 deg) plus mounting; clique poses of few mid-height centroids came out
   // tilted 8-12 deg at the right place. 0 disables.
   float max_tilt_deg = 8.0f;
+  // The missing twin (detail/twin_completion.h): after verification, the other headings' best hypotheses
+  // moved by the displacements between the answer and its twins are snapped onto the map's instances
+  // and verified; one that outscores the answer joins a second choice. One-shot only (a prior's disc
+  // holds its own place). Off: the hypotheses as generated.
+  bool complete_twins = true;
   // The answer's height is then the weighted median vertical offset of every correspondence that the
   // answer places within tls_threshold in x and y (answer_height.h), not its hypothesis's own (for a
   // shift vote, the mean of a few votes, each as high as the part of a trunk the scan saw).

@@ -67,6 +67,13 @@ class PoseHypotheses {
   // Keeps the hypotheses h with keep[h] != 0 (size() entries), in their order; a correspondence whose
   // clique was dropped belongs to none. Returns how many were dropped (a position prior's filter).
   uint32_t retain(const uint8_t* keep);
+  // Appends a hypothesis found outside generate() (twin_completion.h; no clique of its own, so no
+  // correspondence is in_clique of it). False when max_hypotheses are held.
+  bool add(const PoseHypothesis& h) {
+    if (count_ >= max_h_) return false;
+    hyps_[count_++] = h;
+    return true;
+  }
 
  private:
   struct Run;  // one generate() call: its inputs, config, thresholds and stats (pose_hypotheses.cpp)

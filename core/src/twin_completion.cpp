@@ -1,0 +1,125 @@
+#include "gsf/detail/twin_completion.h"
+
+#include <algorithm>
+#include <cmath>
+
+#include "gsf/detail/angles.h"
+#include "gsf/detail/pose_distance.h"
+#include "gsf/detail/pose_solver.h"
+
+namespace gsf {
+
+namespace {
+
+// Heading difference of two poses, wrapped to [0, pi].
+double heading_gap(const Eigen::Isometry3d& a, const Eigen::Isometry3d& b) {
+  const double d = std::fabs(yaw_of(b) - yaw_of(a));
+  return d > kPi ? 2.0 * kPi - d : d;
+}
+
+}  // namespace
+
+uint32_t propose_twin_poses(const Eigen::Isometry3d* ranked, uint32_t n, uint32_t answer, float same_pose_m,
+                            float same_pose_deg, Eigen::Isometry3d* out, uint32_t max_out) {
+  if (ranked == nullptr || out == nullptr || answer >= n) return 0;
+  const double same_rad = double(same_pose_deg) / kDegPerRad;
+  const Eigen::Isometry3d& a = ranked[answer];
+  Eigen::Vector2d period[TwinLimits::kMaxPeriods];
+  uint32_t periods = 0;
+  const Eigen::Isometry3d* heads[TwinLimits::kMaxHeads];
+  uint32_t nh = 0;
+  for (uint32_t k = 0; k < n; ++k) {
+    if (k == answer) continue;
+    const Eigen::Vector2d d = (ranked[k].translation() - a.translation()).head<2>();
+    if (heading_gap(a, ranked[k]) <= same_rad) {
+      if (d.norm() >= double(same_pose_m) && periods < TwinLimits::kMaxPeriods) period[periods++] = d;
+    } else if (nh < TwinLimits::kMaxHeads) {
+      heads[nh++] = &ranked[k];
+    }
+  }
+  if (periods == 0 || nh == 0) return 0;
+  uint32_t count = 0;
+  auto propose = [&](const Eigen::Isometry3d& p) {
+    for (uint32_t j = 0; j < count; ++j)
+      if (within_pose(out[j], p, same_pose_m, same_rad)) return;
+    if (count < max_out) out[count++] = p;
+  };
+  for (uint32_t h = 0; h < nh; ++h) {
+    propose(*heads[h]);
+    for (uint32_t k = 0; k < periods; ++k)
+      for (double sign : {1.0, -1.0}) {
+        Eigen::Isometry3d p = *heads[h];
+        p.translation().x() += sign * period[k].x();
+        p.translation().y() += sign * period[k].y();
+        propose(p);
+      }
+  }
+  return count;
+}
+
+size_t InstanceSnap::required_bytes(uint32_t max_instances) { return counted_bytes<InstanceSnap>(max_instances); }
+
+Status InstanceSnap::bind(Arena& arena, uint32_t max_instances) {
+  capacity_ = max_instances;
+  moved_ = arena.allocate<float>(size_t(max_instances) * 2);
+  nearest_ = arena.allocate<float>(max_instances);
+  match_ = arena.allocate<int32_t>(max_instances);
+  a_ = arena.allocate<float>(size_t(max_instances) * 3);
+  b_ = arena.allocate<float>(size_t(max_instances) * 3);
+  w_ = arena.allocate<float>(max_instances);
+  return arena.overflowed() ? Status::BufferTooSmall : Status::Ok;
+}
+
+bool InstanceSnap::snap(const float* centroids, const uint8_t* labels, uint32_t n, const MapInstance* map, uint32_t m,
+                        const Eigen::Isometry3d& start, float radius, uint32_t min_pairs,
+                        Eigen::Isometry3d* snapped) const {
+  n = std::min(n, capacity_);
+  if (n == 0 || n < min_pairs || map == nullptr || m == 0 || !(radius > 0.0f) || w_ == nullptr) return false;
+  Eigen::Isometry3d pose = start;
+  for (uint32_t round = 0; round < kSnapRounds; ++round) {
+    const float r = round == 0 ? 2.0f * radius : radius;
+    const Eigen::Matrix3f R = pose.linear().cast<float>();
+    const Eigen::Vector3f t = pose.translation().cast<float>();
+    // The scan's instances at the pose, and their box padded by the radius: one pass over the map's
+    // instances with a box test, the nearest search only for those inside (as Localizer's inliers_at).
+    float x0 = INFINITY, y0 = INFINITY, x1 = -INFINITY, y1 = -INFINITY;
+    for (uint32_t q = 0; q < n; ++q) {
+      const Eigen::Vector3f p = R * Eigen::Vector3f(centroids[3 * q], centroids[3 * q + 1], centroids[3 * q + 2]) + t;
+      moved_[2 * q] = p.x();
+      moved_[2 * q + 1] = p.y();
+      x0 = std::min(x0, p.x() - r), x1 = std::max(x1, p.x() + r);
+      y0 = std::min(y0, p.y() - r), y1 = std::max(y1, p.y() + r);
+      nearest_[q] = r * r;
+      match_[q] = -1;
+    }
+    for (uint32_t k = 0; k < m; ++k) {
+      const float* c = map[k].centroid;
+      if (c[0] < x0 || c[0] > x1 || c[1] < y0 || c[1] > y1) continue;
+      for (uint32_t q = 0; q < n; ++q) {
+        if (labels[q] != map[k].label) continue;
+        const float dx = c[0] - moved_[2 * q], dy = c[1] - moved_[2 * q + 1], d = dx * dx + dy * dy;
+        if (d <= nearest_[q]) {
+          nearest_[q] = d;
+          match_[q] = static_cast<int32_t>(k);
+        }
+      }
+    }
+    uint32_t pairs = 0;
+    for (uint32_t q = 0; q < n; ++q) {
+      if (match_[q] < 0) continue;
+      for (int j = 0; j < 3; ++j) {
+        a_[3 * pairs + j] = centroids[3 * q + j];
+        b_[3 * pairs + j] = map[match_[q]].centroid[j];
+      }
+      w_[pairs++] = 1.0f;
+    }
+    if (pairs < min_pairs) return false;
+    Eigen::Isometry3d fitted;
+    if (fit_upright(a_, b_, w_, nullptr, pairs, &fitted) != Status::Ok || !fitted.matrix().allFinite()) return false;
+    pose = fitted;
+  }
+  *snapped = pose;
+  return true;
+}
+
+}  // namespace gsf
