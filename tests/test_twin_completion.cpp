@@ -33,8 +33,8 @@ bool proposes(const std::vector<Eigen::Isometry3d>& out, const Eigen::Isometry3d
 
 std::vector<Eigen::Isometry3d> propose(const std::vector<Eigen::Isometry3d>& ranked, uint32_t answer) {
   std::vector<Eigen::Isometry3d> out(TwinLimits::kMaxProposals);
-  out.resize(propose_twin_poses(ranked.data(), uint32_t(ranked.size()), answer, 2.0f, 5.0f, out.data(),
-                                uint32_t(out.size())));
+  out.resize(
+      propose_twin_poses(ranked.data(), uint32_t(ranked.size()), answer, 2.0f, 5.0f, out.data(), uint32_t(out.size())));
   return out;
 }
 
@@ -61,9 +61,8 @@ std::vector<MapInstance> pole_lattice() {
 TEST_CASE("The other heading's best hypothesis moved by the answer's periods proposes the missing twin") {
   // A hall: the wrong heading's twins at x = 290, 300, 310, 320 (the answer 290, best first); the right
   // heading's at 340 and 360, the truth at 350 missing.
-  const std::vector<Eigen::Isometry3d> ranked = {pose_at(290, 104, 92), pose_at(360, 105, -88),
-                                                 pose_at(300, 104, 92), pose_at(310, 104, 92),
-                                                 pose_at(340, 105, -88), pose_at(320, 104, 92)};
+  const std::vector<Eigen::Isometry3d> ranked = {pose_at(290, 104, 92), pose_at(360, 105, -88), pose_at(300, 104, 92),
+                                                 pose_at(310, 104, 92), pose_at(340, 105, -88), pose_at(320, 104, 92)};
   const std::vector<Eigen::Isometry3d> out = propose(ranked, 0);
   // The heads are 360 (best of the other heading) and 340; the periods 10, 20 and 30 m along x.
   REQUIRE(proposes(out, pose_at(360, 105, -88)));
@@ -120,14 +119,16 @@ TEST_CASE("A proposal a metre and a half and a few degrees off snaps onto the in
   CHECK(std::fabs(std::remainder(yaw_of(snapped) - yaw_of(truth), kTwoPi)) < 1e-4);
   // Fewer pairs than asked for: refused, the output untouched.
   Eigen::Isometry3d untouched = pose_at(1, 2, 3);
-  CHECK_FALSE(snap.snap(scan.data(), labels.data(), n, map.data(), uint32_t(map.size()), start, 1.5f, n + 1, &untouched));
+  CHECK_FALSE(
+      snap.snap(scan.data(), labels.data(), n, map.data(), uint32_t(map.size()), start, 1.5f, n + 1, &untouched));
   CHECK(within_pose(untouched, pose_at(1, 2, 3), 0.0, 0.0));
   // A start far from every instance of the labels pairs nothing.
-  CHECK_FALSE(snap.snap(scan.data(), labels.data(), n, map.data(), uint32_t(map.size()), pose_at(500, 500, 0), 1.5f,
-                        3, &untouched));
+  CHECK_FALSE(snap.snap(scan.data(), labels.data(), n, map.data(), uint32_t(map.size()), pose_at(500, 500, 0), 1.5f, 3,
+                        &untouched));
   // Unbound: nothing to pair into.
   InstanceSnap unbound;
-  CHECK_FALSE(unbound.snap(scan.data(), labels.data(), n, map.data(), uint32_t(map.size()), start, 1.5f, 3, &untouched));
+  CHECK_FALSE(
+      unbound.snap(scan.data(), labels.data(), n, map.data(), uint32_t(map.size()), start, 1.5f, 3, &untouched));
 }
 
 }  // namespace test_twin_completion
