@@ -25,14 +25,18 @@ Eigen::Isometry3d pose_at(double x, double y, double yaw_deg) {
   return T;
 }
 
-bool proposes(const std::vector<Eigen::Isometry3d>& out, const Eigen::Isometry3d& p) {
+PlanarPose planar(double x, double y, double yaw_deg) { return PlanarPose{x, y, deg_to_rad(yaw_deg), 0}; }
+
+bool proposes(const std::vector<PlanarPose>& out, double x, double y, double yaw_deg) {
   for (const auto& q : out)
-    if (within_pose(q, p, 0.01, deg_to_rad(0.01))) return true;
+    if (std::fabs(q.x - x) < 0.01 && std::fabs(q.y - y) < 0.01 &&
+        std::fabs(std::remainder(q.yaw - deg_to_rad(yaw_deg), kTwoPi)) < 1e-9)
+      return true;
   return false;
 }
 
-std::vector<Eigen::Isometry3d> propose(const std::vector<Eigen::Isometry3d>& ranked, uint32_t answer) {
-  std::vector<Eigen::Isometry3d> out(TwinLimits::kMaxProposals);
+std::vector<PlanarPose> propose(const std::vector<PlanarPose>& ranked, uint32_t answer) {
+  std::vector<PlanarPose> out(TwinLimits::kMaxProposals);
   out.resize(
       propose_twin_poses(ranked.data(), uint32_t(ranked.size()), answer, 2.0f, 5.0f, out.data(), uint32_t(out.size())));
   return out;
@@ -61,35 +65,40 @@ std::vector<MapInstance> pole_lattice() {
 TEST_CASE("The other heading's best hypothesis moved by the answer's periods proposes the missing twin") {
   // A hall: the wrong heading's twins at x = 290, 300, 310, 320 (the answer 290, best first); the right
   // heading's at 340 and 360, the truth at 350 missing.
-  const std::vector<Eigen::Isometry3d> ranked = {pose_at(290, 104, 92), pose_at(360, 105, -88), pose_at(300, 104, 92),
-                                                 pose_at(310, 104, 92), pose_at(340, 105, -88), pose_at(320, 104, 92)};
-  const std::vector<Eigen::Isometry3d> out = propose(ranked, 0);
-  // The heads are 360 (best of the other heading) and 340; the periods 10, 20 and 30 m along x.
-  REQUIRE(proposes(out, pose_at(360, 105, -88)));
-  REQUIRE(proposes(out, pose_at(350, 105, -88)));  // 360 - 10: the missing twin
-  REQUIRE(proposes(out, pose_at(330, 105, -88)));  // 340 - 10
-  REQUIRE(proposes(out, pose_at(390, 105, -88)));  // 360 + 30
-  // Nothing of the answer's own heading, and no proposal twice (350 is 360 - 10 and 340 + 10).
+  const std::vector<PlanarPose> ranked = {planar(290, 104, 92), planar(360, 105, -88), planar(300, 104, 92),
+                                          planar(310, 104, 92), planar(340, 105, -88), planar(320, 104, 92)};
+  const std::vector<PlanarPose> out = propose(ranked, 0);
+  // The heads are 360 (best of the other heading, ranked 1) and 340 (ranked 4); the periods 10, 20 and
+  // 30 m along x.
+  REQUIRE(proposes(out, 360, 105, -88));
+  REQUIRE(proposes(out, 350, 105, -88));  // 360 - 10: the missing twin
+  REQUIRE(proposes(out, 330, 105, -88));  // 360 - 30 (or 340 - 10)
+  REQUIRE(proposes(out, 390, 105, -88));  // 360 + 30
+  REQUIRE(proposes(out, 310, 105, -88));  // 340 - 30: the second head's
+  // Nothing of the answer's own heading; each names its head; no proposal twice (350 is 360 - 10 and
+  // 340 + 10).
   for (size_t i = 0; i < out.size(); ++i) {
-    CHECK(std::fabs(std::remainder(yaw_of(out[i]) * kDegPerRad + 88.0, 360.0)) < 1e-6);
-    for (size_t j = 0; j < i; ++j) CHECK_FALSE(within_pose(out[i], out[j], 2.0, deg_to_rad(5.0)));
+    CHECK(std::fabs(std::remainder(out[i].yaw - deg_to_rad(-88.0), kTwoPi)) < 1e-12);
+    CHECK((out[i].from == 1 || out[i].from == 4));
+    CHECK(std::fabs(ranked[out[i].from].y - out[i].y) < 1e-12);
+    for (size_t j = 0; j < i; ++j) CHECK(std::hypot(out[i].x - out[j].x, out[i].y - out[j].y) > 2.0);
   }
-  // 2 heads x (itself + 3 periods x 2 signs) = 14, less the repeats (350, 340 +- 20 = 360 / 320 ...).
-  CHECK(out.size() < 14);
-  CHECK(out.size() >= 8);
+  // Head 360: itself and +-10, +-20, +-30 (7); head 340 adds only 320 and 310.
+  CHECK(out.size() == 9);
 }
 
 TEST_CASE("No proposal without a twin of the answer or without another heading") {
   // Another heading but the answer has no twin (the only same-heading pose is within same_pose_m).
-  CHECK(propose({pose_at(0, 0, 0), pose_at(1, 0, 1), pose_at(30, 0, 180)}, 0).empty());
+  CHECK(propose({planar(0, 0, 0), planar(1, 0, 1), planar(30, 0, 180)}, 0).empty());
   // Twins but one heading only.
-  CHECK(propose({pose_at(0, 0, 0), pose_at(10, 0, 0), pose_at(20, 0, 2)}, 0).empty());
+  CHECK(propose({planar(0, 0, 0), planar(10, 0, 0), planar(20, 0, 2)}, 0).empty());
   // An answer index outside the ranked poses.
-  CHECK(propose({pose_at(0, 0, 0), pose_at(10, 0, 0), pose_at(30, 0, 180)}, 3).empty());
+  CHECK(propose({planar(0, 0, 0), planar(10, 0, 0), planar(30, 0, 180)}, 3).empty());
   // With both, the proposals keep the other heading.
-  const auto out = propose({pose_at(0, 0, 0), pose_at(10, 0, 0), pose_at(30, 0, 180)}, 0);
+  const auto out = propose({planar(0, 0, 0), planar(10, 0, 0), planar(30, 0, 180)}, 0);
   REQUIRE(out.size() == 3);  // 30, 40, 20
-  CHECK(proposes(out, pose_at(20, 0, 180)));
+  CHECK(proposes(out, 20, 0, 180));
+  CHECK(out[0].from == 2);
 }
 
 TEST_CASE("A proposal a metre and a half and a few degrees off snaps onto the instances' pose") {

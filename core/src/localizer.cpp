@@ -570,15 +570,17 @@ void Localizer::Impl::choose_answer(const HypothesisConfig& hc, const VerifyConf
 // the rivals as in the first choice). Returns whether it chose again.
 bool Localizer::Impl::complete_twins(const HypothesisConfig& hc, const VerifyConfig& vc, LocalizeResult& out) {
   const uint32_t reports = std::min<uint32_t>(out.hypotheses, kMaxReportedHypotheses);
-  Eigen::Isometry3d ranked[kMaxReportedHypotheses];
+  PlanarPose ranked[kMaxReportedHypotheses];
+  uint32_t index_of[kMaxReportedHypotheses];  // ranked -> hypothesis
   uint32_t n = 0, answer_at = UINT32_MAX;
   for (uint32_t k = 0; k < reports; ++k) {
     const HypothesisReport& r = out.hypothesis[k];
     if (!r.fully_verified) continue;
     if (r.index == out.chosen_hypothesis) answer_at = n;
-    ranked[n++] = hypotheses[r.index].map_T_scan;
+    index_of[n] = r.index;
+    ranked[n++] = planar_of(hypotheses[r.index].map_T_scan);
   }
-  Eigen::Isometry3d proposed[TwinLimits::kMaxProposals];
+  PlanarPose proposed[TwinLimits::kMaxProposals];
   const uint32_t np =
       propose_twin_poses(ranked, n, answer_at, hc.same_pose_m, hc.same_pose_deg, proposed, TwinLimits::kMaxProposals);
   out.twins_proposed = np;
@@ -588,8 +590,11 @@ bool Localizer::Impl::complete_twins(const HypothesisConfig& hc, const VerifyCon
   uint32_t nf = 0;
   for (uint32_t k = 0; k < np && nf < kMaxTwinsFound; ++k) {
     PoseHypothesis h;
-    if (!twin_snap.snap(centroids, labels, instance_count, map_instances, map_instance_count, proposed[k],
-                        hc.tls_threshold, hc.min_inliers, &h.map_T_scan))
+    Eigen::Isometry3d start = hypotheses[index_of[proposed[k].from]].map_T_scan;  // the head, moved
+    start.translation().x() = proposed[k].x;
+    start.translation().y() = proposed[k].y;
+    if (!twin_snap.snap(centroids, labels, instance_count, map_instances, map_instance_count, start, hc.tls_threshold,
+                        hc.min_inliers, &h.map_T_scan))
       continue;
     bool repeat = false;
     for (uint32_t f = 0; f < nf && !repeat; ++f) repeat = same_answer(found[f].map_T_scan, h.map_T_scan);

@@ -12,47 +12,53 @@ namespace gsf {
 namespace {
 
 // Heading difference of two poses, wrapped to [0, pi].
-double heading_gap(const Eigen::Isometry3d& a, const Eigen::Isometry3d& b) {
-  const double d = std::fabs(yaw_of(b) - yaw_of(a));
+double heading_gap(const PlanarPose& a, const PlanarPose& b) {
+  const double d = std::fabs(b.yaw - a.yaw);
   return d > kPi ? 2.0 * kPi - d : d;
 }
 
 }  // namespace
 
-uint32_t propose_twin_poses(const Eigen::Isometry3d* ranked, uint32_t n, uint32_t answer, float same_pose_m,
-                            float same_pose_deg, Eigen::Isometry3d* out, uint32_t max_out) {
+PlanarPose planar_of(const Eigen::Isometry3d& pose) {
+  return PlanarPose{pose.translation().x(), pose.translation().y(), yaw_of(pose), 0};
+}
+
+uint32_t propose_twin_poses(const PlanarPose* ranked, uint32_t n, uint32_t answer, float same_pose_m,
+                            float same_pose_deg, PlanarPose* out, uint32_t max_out) {
   if (ranked == nullptr || out == nullptr || answer >= n) return 0;
-  const double same_rad = double(same_pose_deg) / kDegPerRad;
-  const Eigen::Isometry3d& a = ranked[answer];
-  Eigen::Vector2d period[TwinLimits::kMaxPeriods];
+  const double same_rad = double(same_pose_deg) / kDegPerRad, same_m = double(same_pose_m);
+  const PlanarPose& a = ranked[answer];
+  double period_x[TwinLimits::kMaxPeriods], period_y[TwinLimits::kMaxPeriods];
   uint32_t periods = 0;
-  const Eigen::Isometry3d* heads[TwinLimits::kMaxHeads];
+  uint32_t heads[TwinLimits::kMaxHeads];
   uint32_t nh = 0;
   for (uint32_t k = 0; k < n; ++k) {
     if (k == answer) continue;
-    const Eigen::Vector2d d = (ranked[k].translation() - a.translation()).head<2>();
+    const double dx = ranked[k].x - a.x, dy = ranked[k].y - a.y;
     if (heading_gap(a, ranked[k]) <= same_rad) {
-      if (d.norm() >= double(same_pose_m) && periods < TwinLimits::kMaxPeriods) period[periods++] = d;
+      if (std::sqrt(dx * dx + dy * dy) >= same_m && periods < TwinLimits::kMaxPeriods) {
+        period_x[periods] = dx;
+        period_y[periods++] = dy;
+      }
     } else if (nh < TwinLimits::kMaxHeads) {
-      heads[nh++] = &ranked[k];
+      heads[nh++] = k;
     }
   }
   if (periods == 0 || nh == 0) return 0;
   uint32_t count = 0;
-  auto propose = [&](const Eigen::Isometry3d& p) {
-    for (uint32_t j = 0; j < count; ++j)
-      if (within_pose(out[j], p, same_pose_m, same_rad)) return;
+  auto propose = [&](const PlanarPose& p) {
+    for (uint32_t j = 0; j < count; ++j) {
+      const double dx = p.x - out[j].x, dy = p.y - out[j].y;
+      if (std::sqrt(dx * dx + dy * dy) <= same_m && heading_gap(p, out[j]) <= same_rad) return;
+    }
     if (count < max_out) out[count++] = p;
   };
   for (uint32_t h = 0; h < nh; ++h) {
-    propose(*heads[h]);
+    const PlanarPose& g = ranked[heads[h]];
+    propose(PlanarPose{g.x, g.y, g.yaw, heads[h]});
     for (uint32_t k = 0; k < periods; ++k)
-      for (double sign : {1.0, -1.0}) {
-        Eigen::Isometry3d p = *heads[h];
-        p.translation().x() += sign * period[k].x();
-        p.translation().y() += sign * period[k].y();
-        propose(p);
-      }
+      for (double sign : {1.0, -1.0})
+        propose(PlanarPose{g.x + sign * period_x[k], g.y + sign * period_y[k], g.yaw, heads[h]});
   }
   return count;
 }

@@ -95,7 +95,7 @@ struct LocalizeResult {
   uint32_t height_votes = 0;  // correspondences whose median set the answer's height (0: its hypothesis's)
   // The missing twin (detail/twin_completion.h, hypotheses.complete_twins): poses proposed from the
   // ranked hypotheses' repetition, and those of them that outscored the first answer and joined a second
-  // choice among the hypotheses.
+  // choice among the hypotheses (`hypotheses`, `chosen_hypothesis` and the reports are then that choice's).
   uint32_t twins_proposed = 0, twins_found = 0;
   HypothesisReport hypothesis[kMaxReportedHypotheses];
   uint64_t clique_nodes = 0;

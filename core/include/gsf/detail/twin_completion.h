@@ -30,14 +30,23 @@ struct TwinLimits {
   static constexpr uint32_t kMaxProposals = kMaxHeads * (1 + 2 * kMaxPeriods);
 };
 
+// A bird's-eye pose (verification's view: horizontal position and heading), 24 bytes where an
+// Isometry3d takes 128: the proposals live on the query's stack.
+struct PlanarPose {
+  double x = 0.0, y = 0.0, yaw = 0.0;  // m, m, rad
+  uint32_t from = 0;                   // a proposal: the ranked pose it is moved from (its index there)
+};
+PlanarPose planar_of(const Eigen::Isometry3d& pose);
+
 // Proposed poses: for each of the best kMaxHeads poses of `ranked` (best first, n of them) whose heading
 // is more than same_pose_deg from the answer's (ranked[answer]), that pose and that pose moved by +- each
 // displacement from the answer to a twin (a pose within same_pose_deg of its heading, at least
 // same_pose_m away; at most kMaxPeriods, best first). None when the answer has no twin or no other
-// heading is ranked. Proposals within same_pose_m / same_pose_deg of an earlier one are left out.
-// Returns how many were written to out (at most max_out).
-uint32_t propose_twin_poses(const Eigen::Isometry3d* ranked, uint32_t n, uint32_t answer, float same_pose_m,
-                            float same_pose_deg, Eigen::Isometry3d* out, uint32_t max_out);
+// heading is ranked. Proposals within same_pose_m / same_pose_deg of an earlier one are left out. Each
+// carries the index of its head in `ranked` (PlanarPose::from): the caller moves that pose's own
+// transform to the proposal's x and y. Returns how many were written to out (at most max_out).
+uint32_t propose_twin_poses(const PlanarPose* ranked, uint32_t n, uint32_t answer, float same_pose_m,
+                            float same_pose_deg, PlanarPose* out, uint32_t max_out);
 
 // Moves a pose onto the map's instances: each scan instance is paired with the nearest map instance of
 // its label (bird's-eye) within a radius, the pose refitted upright on the pairs (yaw and translation,
