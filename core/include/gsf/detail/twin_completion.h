@@ -30,7 +30,7 @@ struct TwinLimits {
   static constexpr uint32_t kMaxProposals = kMaxHeads * (1 + 2 * kMaxPeriods);
 };
 
-// A bird's-eye pose (verification's view: horizontal position and heading), 24 bytes where an
+// A bird's-eye pose (verification's view: horizontal position and heading), 32 bytes where an
 // Isometry3d takes 128: the proposals live on the query's stack.
 struct PlanarPose {
   double x = 0.0, y = 0.0, yaw = 0.0;  // m, m, rad
