@@ -2,7 +2,6 @@
 
 #include <algorithm>
 #include <cmath>
-#include <limits>
 #include <new>
 
 #include "gsf/detail/angles.h"
@@ -49,10 +48,6 @@ bool same_answer(const Eigen::Isometry3d& a, const Eigen::Isometry3d& b) {
   constexpr double kSameM = 5.0, kSameRad = deg_to_rad(10.0);
   return d.translation().norm() < kSameM && Eigen::AngleAxisd(d.rotation()).angle() < kSameRad;
 }
-
-// Twins that outscore the first answer, kept for the second choice (Localizer::Impl::complete_twins): a
-// missing twin and its neighbours' snaps land on it or a few others.
-constexpr uint32_t kMaxTwinsFound = 4;
 
 }  // namespace
 
@@ -586,9 +581,9 @@ bool Localizer::Impl::complete_twins(const HypothesisConfig& hc, const VerifyCon
   out.twins_proposed = np;
   if (np == 0 || answer.compact_points() == nullptr) return false;
   const float answer_score = hypotheses[answer.chosen()].verification.score;
-  PoseHypothesis found[kMaxTwinsFound];
+  PoseHypothesis found[TwinLimits::kMaxFound];
   uint32_t nf = 0;
-  for (uint32_t k = 0; k < np && nf < kMaxTwinsFound; ++k) {
+  for (uint32_t k = 0; k < np && nf < TwinLimits::kMaxFound; ++k) {
     PoseHypothesis h;
     Eigen::Isometry3d start = hypotheses[index_of[proposed[k].from]].map_T_scan;  // the head, moved
     start.translation().x() = proposed[k].x;
@@ -690,21 +685,12 @@ Localizer::Impl::Explained Localizer::Impl::explained_at(const Eigen::Isometry3d
 uint32_t Localizer::Impl::inliers_at(const Eigen::Isometry3d& map_T_scan, double radius) const {
   const uint32_t n = instance_count;
   if (n == 0 || map_instances == nullptr) return 0;
-  const Eigen::Matrix3f R = map_T_scan.linear().cast<float>();
-  const Eigen::Vector3f t = map_T_scan.translation().cast<float>();
   const float r = float(radius);
-  float x0 = std::numeric_limits<float>::max(), y0 = x0, x1 = -x0, y1 = -x0;
-  for (uint32_t q = 0; q < n; ++q) {
-    const Eigen::Vector3f p = R * Eigen::Vector3f(centroids[3 * q], centroids[3 * q + 1], centroids[3 * q + 2]) + t;
-    moved_xy[2 * q] = p.x();
-    moved_xy[2 * q + 1] = p.y();
-    x0 = std::min(x0, p.x() - r), x1 = std::max(x1, p.x() + r);
-    y0 = std::min(y0, p.y() - r), y1 = std::max(y1, p.y() + r);
-  }
+  const InstanceBox box = instances_at(centroids, n, map_T_scan, r, moved_xy);
   uint32_t count = 0;
   for (uint32_t m = 0; m < map_instance_count && count < n; ++m) {
     const float* c = map_instances[m].centroid;
-    if (c[0] < x0 || c[0] > x1 || c[1] < y0 || c[1] > y1) continue;
+    if (!box.contains(c)) continue;
     for (uint32_t q = 0; q < n; ++q) {
       if (instance_marks[q] || labels[q] != map_instances[m].label) continue;
       const float dx = c[0] - moved_xy[2 * q], dy = c[1] - moved_xy[2 * q + 1];

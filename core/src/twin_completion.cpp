@@ -63,6 +63,21 @@ uint32_t propose_twin_poses(const PlanarPose* ranked, uint32_t n, uint32_t answe
   return count;
 }
 
+InstanceBox instances_at(const float* centroids, uint32_t n, const Eigen::Isometry3d& pose, float pad,
+                         float* moved_xy) {
+  const Eigen::Matrix3f R = pose.linear().cast<float>();
+  const Eigen::Vector3f t = pose.translation().cast<float>();
+  InstanceBox box{INFINITY, INFINITY, -INFINITY, -INFINITY};
+  for (uint32_t q = 0; q < n; ++q) {
+    const Eigen::Vector3f p = R * Eigen::Vector3f(centroids[3 * q], centroids[3 * q + 1], centroids[3 * q + 2]) + t;
+    moved_xy[2 * q] = p.x();
+    moved_xy[2 * q + 1] = p.y();
+    box.x0 = std::min(box.x0, p.x() - pad), box.x1 = std::max(box.x1, p.x() + pad);
+    box.y0 = std::min(box.y0, p.y() - pad), box.y1 = std::max(box.y1, p.y() + pad);
+  }
+  return box;
+}
+
 size_t InstanceSnap::required_bytes(uint32_t max_instances) { return counted_bytes<InstanceSnap>(max_instances); }
 
 Status InstanceSnap::bind(Arena& arena, uint32_t max_instances) {
@@ -84,23 +99,13 @@ bool InstanceSnap::snap(const float* centroids, const uint8_t* labels, uint32_t 
   Eigen::Isometry3d pose = start;
   for (uint32_t round = 0; round < kSnapRounds; ++round) {
     const float r = round == 0 ? 2.0f * radius : radius;
-    const Eigen::Matrix3f R = pose.linear().cast<float>();
-    const Eigen::Vector3f t = pose.translation().cast<float>();
-    // The scan's instances at the pose, and their box padded by the radius: one pass over the map's
-    // instances with a box test, the nearest search only for those inside (as Localizer's inliers_at).
-    float x0 = INFINITY, y0 = INFINITY, x1 = -INFINITY, y1 = -INFINITY;
-    for (uint32_t q = 0; q < n; ++q) {
-      const Eigen::Vector3f p = R * Eigen::Vector3f(centroids[3 * q], centroids[3 * q + 1], centroids[3 * q + 2]) + t;
-      moved_[2 * q] = p.x();
-      moved_[2 * q + 1] = p.y();
-      x0 = std::min(x0, p.x() - r), x1 = std::max(x1, p.x() + r);
-      y0 = std::min(y0, p.y() - r), y1 = std::max(y1, p.y() + r);
-      nearest_[q] = r * r;
-      match_[q] = -1;
-    }
+    // One pass over the map's instances with a box test, the nearest search only for those inside.
+    const InstanceBox box = instances_at(centroids, n, pose, r, moved_);
+    std::fill(nearest_, nearest_ + n, r * r);
+    std::fill(match_, match_ + n, -1);
     for (uint32_t k = 0; k < m; ++k) {
+      if (!box.contains(map[k].centroid)) continue;
       const float* c = map[k].centroid;
-      if (c[0] < x0 || c[0] > x1 || c[1] < y0 || c[1] > y1) continue;
       for (uint32_t q = 0; q < n; ++q) {
         if (labels[q] != map[k].label) continue;
         const float dx = c[0] - moved_[2 * q], dy = c[1] - moved_[2 * q + 1], d = dx * dx + dy * dy;

@@ -28,7 +28,19 @@ struct TwinLimits {
   static constexpr uint32_t kMaxPeriods = 8;  // the answer's twins whose displacements are used
   static constexpr uint32_t kMaxHeads = 2;    // other headings' best hypotheses displaced by them
   static constexpr uint32_t kMaxProposals = kMaxHeads * (1 + 2 * kMaxPeriods);
+  // Proposals that outscore the first answer, kept for the second choice: a missing twin and its
+  // neighbours' snaps land on it or a few others.
+  static constexpr uint32_t kMaxFound = 4;
 };
+
+// The scan's instances at a pose, bird's-eye (centroids: n x 3 -> moved_xy: n x 2), and the box around
+// them padded by `pad`: a pass over the map's instances tests the box first (InstanceSnap and
+// Localizer's inlier recount). n > 0.
+struct InstanceBox {
+  float x0, y0, x1, y1;
+  bool contains(const float* c) const { return !(c[0] < x0 || c[0] > x1 || c[1] < y0 || c[1] > y1); }
+};
+InstanceBox instances_at(const float* centroids, uint32_t n, const Eigen::Isometry3d& pose, float pad, float* moved_xy);
 
 // A bird's-eye pose (verification's view: horizontal position and heading), 32 bytes where an
 // Isometry3d takes 128: the proposals live on the query's stack.
