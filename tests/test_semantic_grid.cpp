@@ -255,6 +255,16 @@ TEST_CASE("Verification's fast paths (compact points, exact reciprocals) give th
   }
   CHECK(compared == 360);
   CHECK(with_disagreement > 30);  // the neighbour lookups ran too
+  // Poses beyond the representable tiles (|x / tile| past 32768: 524 km at 16 m tiles) and partly so:
+  // the block arithmetic computes those samples on 0 and marks them outside, as the plain rule reads them.
+  for (double far : {6.0e5, -5.2427e5, 1.0e12}) {
+    Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
+    T.translation() = Eigen::Vector3d(far, 2.0, 0.0);
+    const PoseVerification ref = plain_verify(voxels, layer.view, T, 4096, weights);
+    INFO("x " << far);
+    CHECK(same_bits(ref, verify_pose(points.data(), voxels.size(), layer.view, T, 4096, weights)));
+    if (std::fabs(far) > 5.3e5) CHECK(ref.scored == 0);
+  }
   // Where x / tile and x * (1 / tile) floor to different tiles (0.85 m cells: 13.6 m tiles, so 1 / tile
   // is inexact), the scorer must follow the division: a one-voxel scan at the layer's far edge (tile 3
   // stored, tile 4 not) is scored or unknown exactly as the plain rule says.

@@ -95,6 +95,57 @@ inline GridAxis grid_axis(const GridConstants& k, float x) {
   return {tile, c};
 }
 
+// grid_axis over a block of positions at once: the same arithmetic without branches (a position outside
+// the representable tiles, or NaN, computes on 0 and is then marked outside), so the compiler runs it a
+// vector of positions at a time. tile[j], cell[j]: grid_axis(k, x[j]), bit for bit.
+template <bool kExactInverse>
+inline void grid_axes(const GridConstants& k, const float* __restrict x, uint32_t m, int32_t* __restrict tile,
+                      int32_t* __restrict cell) {
+  const float inv_tile = k.inv_tile, inv_cell = k.inv_cell, tile_m = k.tile, cell_m = k.cell;
+  const int32_t last = k.tile_cells - 1;
+  for (uint32_t j = 0; j < m; ++j) {
+    const float q = kExactInverse ? x[j] * inv_tile : x[j] / tile_m;
+    const bool inside = (q >= -32767.0f) & (q < 32768.0f);
+    const float qs = inside ? q : 0.0f, xs = inside ? x[j] : 0.0f;
+    int32_t t = static_cast<int32_t>(qs);
+    float f = static_cast<float>(t);
+    const bool below = f > qs;
+    t -= below ? 1 : 0;
+    f -= below ? 1.0f : 0.0f;
+    const float r = xs - f * tile_m;
+    int32_t c = static_cast<int32_t>(kExactInverse ? r * inv_cell : r / cell_m);
+    c = c < 0 ? 0 : (c > last ? last : c);
+    tile[j] = inside ? t : kOutsideTiles;
+    cell[j] = inside ? c : 0;
+  }
+}
+
+// A block of samples' positions and cells, for the scoring loops: positions computed sample by sample,
+// cells a vector at a time (grid_axes).
+struct SampleBlock {
+  static constexpr uint32_t kSize = 64;
+  float x[kSize], y[kSize];
+  int32_t tile_x[kSize], cell_x[kSize], tile_y[kSize], cell_y[kSize];
+  uint8_t label[kSize];
+
+  // One axis of the first m positions (grid_axis of each, outside every tile when k is not usable).
+  template <bool kExactInverse>
+  static void axis_of(const GridConstants& k, uint32_t m, const float* pos, int32_t* tile, int32_t* cell) {
+    if (k.usable) {
+      grid_axes<kExactInverse>(k, pos, m, tile, cell);
+      return;
+    }
+    std::fill(tile, tile + m, kOutsideTiles);
+    std::fill(cell, cell + m, 0);
+  }
+  // Both axes of the first m positions (x, y).
+  template <bool kExactInverse>
+  void cells_of(const GridConstants& k, uint32_t m) {
+    axis_of<kExactInverse>(k, m, x, tile_x, cell_x);
+    axis_of<kExactInverse>(k, m, y, tile_y, cell_y);
+  }
+};
+
 // Index into g.palette (and g.neighbours) of the cell at the two axes, the tile found through `cache`
 // (the cell cell_at finds); kNoCell outside the stored tiles.
 constexpr uint32_t kNoCell = UINT32_MAX;
@@ -272,13 +323,22 @@ PoseVerification score_samples(const Source& src, const SemanticGridView& grid, 
   const Eigen::Vector3f t = T.translation().cast<float>();
   TileCache cache;
   Tally tally;
-  for (uint32_t i = 0; i < n; i += stride) {
-    uint8_t label;
-    const Eigen::Vector2f p = src.at(i, R, t, &label);
-    const GridAxis ax = grid_axis<kExactInverse>(k, p.x()), ay = grid_axis<kExactInverse>(k, p.y());
-    const Verdict verdict = verdict_of(grid, palette_index_at_axes(grid, k, ax, ay, cache), class_bit(label));
-    const float e = tally.add(verdict, weights[label], disagree);
-    if (evidence) *evidence++ = e;
+  SampleBlock b;
+  for (uint32_t i = 0; i < n;) {
+    uint32_t m = 0;
+    for (; m < SampleBlock::kSize && i < n; ++m, i += stride) {
+      const Eigen::Vector2f p = src.at(i, R, t, &b.label[m]);
+      b.x[m] = p.x();
+      b.y[m] = p.y();
+    }
+    b.cells_of<kExactInverse>(k, m);
+    for (uint32_t j = 0; j < m; ++j) {
+      const GridAxis ax{b.tile_x[j], b.cell_x[j]}, ay{b.tile_y[j], b.cell_y[j]};
+      const uint8_t label = b.label[j];
+      const Verdict verdict = verdict_of(grid, palette_index_at_axes(grid, k, ax, ay, cache), class_bit(label));
+      const float e = tally.add(verdict, weights[label], disagree);
+      if (evidence) *evidence++ = e;
+    }
   }
   return tally.result((n + stride - 1) / stride, disagree);
 }
@@ -316,12 +376,16 @@ inline GridAxis unpacked_cell(int32_t c) {
   return {(c - cell) / 16, cell};
 }
 
-// Scores T on the sample and records it into `to` (rotated positions, cells, verdicts): score_samples'
+// Scores T on the sample and records it into `to` (rotated positions, cells, verdicts) when kTurn is
+// false; when true, T is the pose recorded in `from` turned about the sensor, and a sample whose cells
+// along both axes did not change keeps its verdict without a map lookup (a verdict depends on the cell
+// and the label only; a small turn moves only the far samples across cells). Either way score_samples'
 // sums, bit for bit (rotated + t is PointSource::at's sum in its order).
-template <bool kExactInverse>
+template <bool kExactInverse, bool kTurn>
 PoseVerification record_pose(const PointSource& src, const SemanticGridView& grid, const GridConstants& k,
                              const Eigen::Isometry3d& T, uint32_t stride, const float* weights,
-                             DisagreeWeights disagree, SearchMemo::Sample* __restrict to) {
+                             DisagreeWeights disagree, const SearchMemo::Sample* __restrict from,
+                             SearchMemo::Sample* __restrict to) {
   const float yaw = static_cast<float>(std::atan2(T.linear()(1, 0), T.linear()(0, 0)));
   const Eigen::Matrix3f R = Eigen::AngleAxisf(yaw, Eigen::Vector3f::UnitZ()).toRotationMatrix();
   const float r00 = R(0, 0), r01 = R(0, 1), r10 = R(1, 0), r11 = R(1, 1);
@@ -333,21 +397,32 @@ PoseVerification record_pose(const PointSource& src, const SemanticGridView& gri
   const uint32_t n = src.n;
   TileCache cache;
   Tally tally;
+  SampleBlock b;
   uint32_t s = 0;
-  for (uint32_t i = 0; i < n; i += stride, ++s) {
-    const VerifyPoint q = points[i];
-    const uint8_t label = static_cast<uint8_t>(q.label);
-    SearchMemo::Sample r;
-    r.rotated[0] = r00 * q.x + r01 * q.y;
-    r.rotated[1] = r10 * q.x + r11 * q.y;
-    const GridAxis ax = grid_axis<kExactInverse>(kc, r.rotated[0] + tx);
-    const GridAxis ay = grid_axis<kExactInverse>(kc, r.rotated[1] + ty);
-    const Verdict verdict = verdict_of(g, palette_index_at_axes(g, kc, ax, ay, cache), class_bit(label));
-    r.cell[0] = packed_cell(ax);
-    r.cell[1] = packed_cell(ay);
-    r.verdict = static_cast<uint32_t>(verdict);
-    to[s] = r;
-    tally.add(verdict, weights[label], disagree);
+  for (uint32_t i = 0; i < n;) {
+    uint32_t m = 0;
+    for (; m < SampleBlock::kSize && i < n; ++m, i += stride) {
+      const VerifyPoint q = points[i];
+      SearchMemo::Sample& r = to[s + m];
+      r.rotated[0] = r00 * q.x + r01 * q.y;
+      r.rotated[1] = r10 * q.x + r11 * q.y;
+      b.x[m] = r.rotated[0] + tx;
+      b.y[m] = r.rotated[1] + ty;
+      b.label[m] = static_cast<uint8_t>(q.label);
+    }
+    b.cells_of<kExactInverse>(kc, m);
+    for (uint32_t j = 0; j < m; ++j, ++s) {
+      const GridAxis ax{b.tile_x[j], b.cell_x[j]}, ay{b.tile_y[j], b.cell_y[j]};
+      const uint8_t label = b.label[j];
+      SearchMemo::Sample& r = to[s];
+      r.cell[0] = packed_cell(ax);
+      r.cell[1] = packed_cell(ay);
+      r.verdict =
+          kTurn && r.cell[0] == from[s].cell[0] && r.cell[1] == from[s].cell[1]
+              ? from[s].verdict
+              : static_cast<uint32_t>(verdict_of(g, palette_index_at_axes(g, kc, ax, ay, cache), class_bit(label)));
+      tally.add(static_cast<Verdict>(r.verdict), weights[label], disagree);
+    }
   }
   return tally.result(s, disagree);
 }
@@ -364,29 +439,37 @@ PoseVerification probe_shift(const PointSource& src, const SemanticGridView& gri
   const SemanticGridView g = grid;
   const VerifyPoint* const points = src.points;
   const uint32_t n = src.n;
+  const uint32_t count = n == 0 ? 0 : (n + stride - 1) / stride;
   TileCache cache;
   Tally tally;
-  uint32_t s = 0;
-  for (uint32_t i = 0; i < n; i += stride, ++s) {
-    SearchMemo::Sample r = from[s];
-    const uint8_t label = static_cast<uint8_t>(points[i].label);
-    const GridAxis moved = grid_axis<kExactInverse>(kc, r.rotated[kAxis] + shift);
-    const int32_t cell = packed_cell(moved);
-    if (cell != r.cell[kAxis]) {
-      const GridAxis kept = unpacked_cell(r.cell[1 - kAxis]);
-      const uint32_t at = kAxis == 0 ? palette_index_at_axes(g, kc, moved, kept, cache)
-                                     : palette_index_at_axes(g, kc, kept, moved, cache);
-      r.cell[kAxis] = cell;
-      r.verdict = static_cast<uint32_t>(verdict_of(g, at, class_bit(label)));
+  SampleBlock b;
+  for (uint32_t s0 = 0; s0 < count; s0 += SampleBlock::kSize) {
+    const uint32_t m = std::min(SampleBlock::kSize, count - s0);
+    for (uint32_t j = 0; j < m; ++j) b.x[j] = from[s0 + j].rotated[kAxis] + shift;
+    b.axis_of<kExactInverse>(kc, m, b.x, b.tile_x, b.cell_x);
+    for (uint32_t j = 0; j < m; ++j) {
+      const uint32_t s = s0 + j;
+      SearchMemo::Sample r = from[s];
+      const uint8_t label = static_cast<uint8_t>(points[size_t(s) * stride].label);
+      const GridAxis moved{b.tile_x[j], b.cell_x[j]};
+      const int32_t cell = packed_cell(moved);
+      if (cell != r.cell[kAxis]) {
+        const GridAxis kept = unpacked_cell(r.cell[1 - kAxis]);
+        const uint32_t at = kAxis == 0 ? palette_index_at_axes(g, kc, moved, kept, cache)
+                                       : palette_index_at_axes(g, kc, kept, moved, cache);
+        r.cell[kAxis] = cell;
+        r.verdict = static_cast<uint32_t>(verdict_of(g, at, class_bit(label)));
+      }
+      to[s] = r;
+      tally.add(static_cast<Verdict>(r.verdict), weights[label], disagree);
     }
-    to[s] = r;
-    tally.add(static_cast<Verdict>(r.verdict), weights[label], disagree);
   }
-  return tally.result(s, disagree);
+  return tally.result(count, disagree);
 }
 
 // The pattern search's score of T on max_points through the memo: from the record in `from` when T moves
-// it along shift_axis (0: x, 1: y), else (shift_axis -1) from scratch; recorded into `to`.
+// it along shift_axis (0: x, 1: y), from it turned about the sensor (shift_axis 2), else (shift_axis -1)
+// from scratch; recorded into `to`.
 PoseVerification memo_score(const PointSource& src, const SemanticGridView& grid, const Eigen::Isometry3d& T,
                             uint32_t max_points, const float* weights, DisagreeWeights disagree,
                             const SearchMemo::Sample* from, SearchMemo::Sample* to, int shift_axis) {
@@ -401,8 +484,11 @@ PoseVerification memo_score(const PointSource& src, const SemanticGridView& grid
   if (shift_axis == 1)
     return e ? probe_shift<true, 1>(src, grid, k, T, stride, weights, disagree, from, to)
              : probe_shift<false, 1>(src, grid, k, T, stride, weights, disagree, from, to);
-  return e ? record_pose<true>(src, grid, k, T, stride, weights, disagree, to)
-           : record_pose<false>(src, grid, k, T, stride, weights, disagree, to);
+  if (shift_axis == 2)
+    return e ? record_pose<true, true>(src, grid, k, T, stride, weights, disagree, from, to)
+             : record_pose<false, true>(src, grid, k, T, stride, weights, disagree, from, to);
+  return e ? record_pose<true, false>(src, grid, k, T, stride, weights, disagree, nullptr, to)
+           : record_pose<false, false>(src, grid, k, T, stride, weights, disagree, nullptr, to);
 }
 
 // Samples score_pose takes of n on max_points.
@@ -432,7 +518,7 @@ PoseVerification search_pose(const Source& src, const SemanticGridView& grid, co
       if (memo_fits) {
         SearchMemo::Sample* to = memo->slot[k < 0 ? best_slot : best_slot ^ 1];
         return memo_score(src, grid, c, points, weights, disagree, memo->slot[best_slot], to,
-                          k >= 0 && k < 4 ? k / 2 : -1)
+                          k < 0 ? -1 : (k < 4 ? k / 2 : 2))
             .score;
       }
     }
