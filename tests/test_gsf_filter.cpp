@@ -11,6 +11,7 @@
 #include "gsf/detail/gaussian_field.h"
 #include "gsf/detail/gsf_filter.h"
 #include "gsf/detail/map_quantization.h"
+#include "gsf/detail/wasserstein.h"
 #include "gsf/map_format.h"
 
 namespace test_gsf_filter {
@@ -158,6 +159,60 @@ TEST_CASE("GSF similarity: a field against itself seen from a rotated frame is ~
   const QueryFields empty{q.inputs.data(), q.alpha.data(), q.chol.data(), &none, fc.inducing_points};
   filter.reset();
   CHECK(filter.similarity(empty, 0, map.view, 0, 5) == 0.0f);
+}
+
+// The omega of (query instance 0, map instance 0) at yaw_bin, the regression run at that bin's turned grid
+// (GsfFilter::similarity without its shared probes).
+float fresh_omega(FieldSolver& solver, const FieldConfig& fc, const GsfFilterConfig& gc, const Fitted& q,
+                  const MapView& map, uint32_t yaw_bin) {
+  const uint32_t G = grid_points(fc);
+  std::vector<float> grid(size_t(G) * 3), mean(size_t(G) * kNumClasses), var(G), map_mean(mean.size()), map_var(G);
+  make_probe_grid(fc, -static_cast<float>(kTwoPi * yaw_bin / gc.yaw_bins), grid.data());
+  const float max_var = gc.observed_variance * fc.signal_variance;
+  FieldView f{q.inputs.data(), q.alpha.data(), q.m};
+  REQUIRE(solver.probe(f, q.chol.data(), grid.data(), G, mean.data(), var.data(), nullptr, max_var) == Status::Ok);
+  dequantize_instance_grid(map, 0, map_mean.data(), map_var.data());
+  float weights[kNumClasses];
+  stability_weights(weights);
+  const ObservedW2 r = w2_squared_diag_observed(mean.data(), var.data(), map_mean.data(), map_var.data(), G, weights,
+                                                max_var, gc.covariance_weight);
+  REQUIRE(r.used >= 4);
+  return static_cast<float>(std::exp(-(r.w2 / r.used) / gc.tau));
+}
+
+TEST_CASE("A yaw bin a whole turn of the probe grid from another reuses its regression, re-indexed") {
+  for (const uint32_t ny : {6u, 4u}) {  // square grid: quarter turns; 6 x 4: half turns only
+    FieldConfig fc;
+    fc.grid_ny = ny;
+    GsfFilterConfig gc;  // 36 yaw bins: a quarter turn is 9 bins
+    gsf_test::ArenaBuffer buf(FieldSolver::required_bytes(fc, 64) + GsfFilter::required_bytes(gc, fc) + 256);
+    FieldSolver solver;
+    REQUIRE(solver.bind(buf.arena, fc, 64) == Status::Ok);
+    GsfFilter filter;
+    REQUIRE(filter.bind(buf.arena, gc, fc, &solver) == Status::Ok);
+    const Neighbourhood nb;
+    const OneMap map = make_map(solver, fc, nb, 1);
+    // Seen at 140 deg (bin 14, a quarter turn past bin 5), 230 deg (bin 23, a half turn) and 320 deg.
+    for (const double deg : {140.0, 230.0, 320.0}) {
+      const Fitted q = fit(solver, fc, nb, -deg * kPi / 180.0);
+      const QueryFields qf{q.inputs.data(), q.alpha.data(), q.chol.data(), &q.m, fc.inducing_points};
+      const uint32_t bin = static_cast<uint32_t>(deg / 10.0);
+      filter.reset();
+      const float shared = filter.similarity(qf, 0, map.view, 0, bin);
+      const bool quarter = ny == fc.grid_nx, whole_turn = quarter || bin % 18 == 5;
+      INFO("grid 6 x " << ny << ", " << deg << " deg");
+      // One regression: the base bin's (5), re-indexed; or none shared (the bin's own).
+      CHECK(filter.probes() == 1);
+      CHECK(filter.probe_ready(qf, 0, 5) == whole_turn);
+      CHECK(shared > 0.99f);  // the field against itself at its yaw
+      CHECK(std::fabs(shared - fresh_omega(solver, fc, gc, q, map.view, bin)) < 1e-4f);
+      // The other bins of the same base cost no regression; a bin of another base does.
+      for (uint32_t turn = 0; turn < 4; ++turn) filter.similarity(qf, 0, map.view, 0, 5 + 9 * turn);
+      CHECK(filter.probes() == (quarter ? 1u : 2u));  // 6 x 4: bins 5 and 23 share, 14 and 32 do too
+      filter.similarity(qf, 0, map.view, 0, 6);
+      CHECK(filter.probes() == (quarter ? 2u : 3u));
+    }
+  }
 }
 
 TEST_CASE("GSF filter caches: hits cost nothing, full caches compute into scratch with the same values") {

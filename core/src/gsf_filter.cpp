@@ -1,5 +1,6 @@
 #include "gsf/detail/gsf_filter.h"
 
+#include <algorithm>
 #include <cmath>
 
 #include "gsf/detail/angles.h"
@@ -10,6 +11,34 @@ namespace gsf {
 namespace {
 
 uint64_t now(Clock* c) { return c ? c->now_ns() : 0; }
+}  // namespace
+
+namespace {
+
+// How many whole turns map the probe grid onto itself: the grid is centred, so a half turn re-indexes
+// it; a square one (and the same spacing on both axes) a quarter turn too. Only turns that are whole
+// numbers of yaw bins count.
+uint32_t grid_turns(const FieldConfig& field, uint32_t yaw_bins) {
+  if (yaw_bins % 4 == 0 && field.grid_nx == field.grid_ny) return 4;
+  return yaw_bins % 2 == 0 ? 2 : 1;
+}
+
+// index[t G + g]: the point of the grid (layer by layer, row j by column i) that the grid's point g
+// turned by -t whole turns lands on (make_probe_grid turns by -yaw). A quarter turn by -90 deg takes
+// (x_i, y_j) to (y_j, -x_i) = (x_j, y_{n-1-i}) on a centred square grid; a half turn to
+// (x_{nx-1-i}, y_{ny-1-j}).
+void fill_turn_index(const FieldConfig& field, uint32_t turns, uint16_t* index) {
+  const uint32_t nx = field.grid_nx, ny = field.grid_ny, layer = nx * ny, G = grid_points(field);
+  for (uint32_t g = 0; g < G; ++g) index[g] = static_cast<uint16_t>(g);
+  for (uint32_t t = 1; t < turns; ++t)
+    for (uint32_t g = 0; g < G; ++g) {
+      const uint32_t l = g / layer, j = (g % layer) / nx, i = g % nx;
+      const uint32_t turned =
+          turns == 4 ? l * layer + (nx - 1 - i) * nx + j : l * layer + (ny - 1 - j) * nx + (nx - 1 - i);
+      index[t * G + g] = index[(t - 1) * G + turned];
+    }
+}
+
 }  // namespace
 
 size_t GsfFilter::required_bytes(const GsfFilterConfig& config, const FieldConfig& field, uint32_t max_triangles) {
@@ -28,14 +57,18 @@ Status GsfFilter::bind(Arena& ar, const GsfFilterConfig& config, const FieldConf
     return Status::InvalidArgument;
   const bool ok = probe_slot_.bind(ar, config.probe_cache_slots) && similarity_.bind(ar, config.similarity_cache_slots);
   grid_ = ar.allocate<float>(size_t(G) * 3);
-  probe_mean_ = ar.allocate<float>(size_t(config.probe_cache_slots + 1) * G * kNumClasses);
-  probe_var_ = ar.allocate<float>(size_t(config.probe_cache_slots + 1) * G);
+  probe_mean_ = ar.allocate<float>(size_t(config.probe_cache_slots + 2) * G * kNumClasses);
+  probe_var_ = ar.allocate<float>(size_t(config.probe_cache_slots + 2) * G);
+  const uint32_t turns = grid_turns(field, config.yaw_bins);
+  turn_bins_ = config.yaw_bins / turns;
+  turn_index_ = ar.allocate<uint16_t>(size_t(turns) * G);
   map_mean_ = ar.allocate<float>(size_t(kMapGridSlots) * G * kNumClasses);
   map_var_ = ar.allocate<float>(size_t(kMapGridSlots) * G);
   if (ar.counting()) return Status::Ok;
-  if (!ok || !grid_ || !probe_mean_ || !probe_var_ || !map_mean_ || !map_var_ || !solver_ ||
+  if (!ok || !grid_ || !probe_mean_ || !probe_var_ || !map_mean_ || !map_var_ || !solver_ || !turn_index_ ||
       (max_triangles > 0 && !below_gate_))
     return Status::BufferTooSmall;
+  fill_turn_index(field, turns, turn_index_);
   stability_weights(weights_);
   reset();
   return Status::Ok;
@@ -44,7 +77,7 @@ Status GsfFilter::bind(Arena& ar, const GsfFilterConfig& config, const FieldConf
 void GsfFilter::reset() {
   probe_slot_.clear();
   similarity_.clear();
-  probe_used_ = probe_overflow_ = comparisons_ = map_grids_ = 0;
+  probe_used_ = probe_fits_ = comparisons_ = map_grids_ = 0;
   for (uint32_t& i : map_grid_instance_) i = UINT32_MAX;
 }
 
@@ -61,43 +94,63 @@ const float* GsfFilter::map_grid(const MapView& map, uint32_t mi, const float** 
   return mean;
 }
 
+uint32_t GsfFilter::probe_slot(uint32_t qi, uint32_t yaw_bin, uint32_t scratch, bool* fresh) {
+  const uint64_t key = probe_key(qi, yaw_bin);
+  if (const uint32_t* cached = probe_slot_.find(key)) {
+    *fresh = false;
+    return *cached;
+  }
+  *fresh = true;
+  uint32_t* ps = probe_slot_.find_or_insert(key);
+  if (!ps) return scratch;  // full cache: compute into scratch
+  *ps = probe_used_++;
+  return *ps;
+}
+
+void GsfFilter::fill_probe(const QueryFields& qf, uint32_t qi, uint32_t yaw_bin, uint32_t slot, float max_var) {
+  const uint32_t G = grid_points(field_), D = kNumClasses, M = qf.stride_m;
+  float* mean = probe_mean_ + size_t(slot) * G * D;
+  float* var = probe_var_ + size_t(slot) * G;
+  const uint32_t base = yaw_bin % turn_bins_, turn = yaw_bin / turn_bins_;
+  if (turn > 0) {
+    // The base bin's probe (cached, or into the other scratch slot), its points re-indexed.
+    bool base_fresh = false;
+    const uint32_t from = probe_slot(qi, base, config_.probe_cache_slots, &base_fresh);
+    if (base_fresh) fill_probe(qf, qi, base, from, max_var);
+    const float* base_mean = probe_mean_ + size_t(from) * G * D;
+    const float* base_var = probe_var_ + size_t(from) * G;
+    const uint16_t* index = turn_index_ + size_t(turn) * G;
+    for (uint32_t g = 0; g < G; ++g) {
+      var[g] = base_var[index[g]];
+      std::copy(base_mean + size_t(index[g]) * D, base_mean + size_t(index[g] + 1) * D, mean + size_t(g) * D);
+    }
+    return;
+  }
+  // Map grid offsets g (map frame) are R^T g = Rz(-yaw) g in the query frame.
+  const float yaw = static_cast<float>(kTwoPi * yaw_bin / config_.yaw_bins);
+  make_probe_grid(field_, -yaw, grid_);
+  FieldView f;
+  f.inputs = qf.inputs + size_t(qi) * M * 3;
+  f.alpha = qf.alpha + size_t(qi) * M * D;
+  f.m = qf.m[qi];
+  // The mean only at the observed points: the only ones compared.
+  solver_->probe(f, qf.chol + size_t(qi) * M * M, grid_, G, mean, var, nullptr, max_var);
+  ++probe_fits_;
+}
+
 float GsfFilter::similarity(const QueryFields& qf, uint32_t qi, const MapView& map, uint32_t mi, uint32_t yaw_bin) {
   const uint64_t skey = similarity_key(qi, mi, yaw_bin);
   if (const float* cached = similarity_.find(skey)) return *cached;
   ++comparisons_;
   float omega = 0.0f;
   if (qf.m[qi] > 0) {
-    const uint32_t G = grid_points(field_), M = qf.stride_m;
+    const uint32_t G = grid_points(field_);
     const float max_var = observed_max_var();  // grid points above it are neither probed for a mean nor compared
-    const uint64_t pkey = (uint64_t(qi) << 32) | yaw_bin;
-    uint32_t slot;
     bool fresh = false;
-    if (uint32_t* ps = probe_slot_.find(pkey)) {
-      slot = *ps;
-    } else {
-      ps = probe_slot_.find_or_insert(pkey);
-      if (ps) {
-        slot = probe_used_++;
-        *ps = slot;
-      } else {
-        slot = config_.probe_cache_slots;  // full cache: compute into scratch
-        ++probe_overflow_;
-      }
-      fresh = true;
-    }
-    float* mean = probe_mean_ + size_t(slot) * G * kNumClasses;
-    float* var = probe_var_ + size_t(slot) * G;
-    if (fresh) {
-      // Map grid offsets g (map frame) are R^T g = Rz(-yaw) g in the query frame.
-      const float yaw = static_cast<float>(kTwoPi * yaw_bin / config_.yaw_bins);
-      make_probe_grid(field_, -yaw, grid_);
-      FieldView f;
-      f.inputs = qf.inputs + size_t(qi) * M * 3;
-      f.alpha = qf.alpha + size_t(qi) * M * kNumClasses;
-      f.m = qf.m[qi];
-      // The mean only at the observed points: the only ones compared.
-      solver_->probe(f, qf.chol + size_t(qi) * M * M, grid_, G, mean, var, nullptr, max_var);
-    }
+    const uint32_t slot = probe_slot(qi, yaw_bin, config_.probe_cache_slots + 1, &fresh);
+    if (fresh) fill_probe(qf, qi, yaw_bin, slot, max_var);
+    const float* mean = probe_mean_ + size_t(slot) * G * kNumClasses;
+    const float* var = probe_var_ + size_t(slot) * G;
     // The map's grid whole (compared where the query field is observed), once per map instance.
     const float* map_var = nullptr;
     const float* map_mean = map_grid(map, mi, &map_var);

@@ -90,10 +90,13 @@ class GsfFilter {
     return similarity_.find(similarity_key(qi, mi, yaw_bin));
   }
   bool probe_ready(const QueryFields& fields, uint32_t qi, uint32_t yaw_bin) const {
-    return fields.m[qi] == 0 || probe_slot_.find((uint64_t(qi) << 32) | yaw_bin) != nullptr;
+    return fields.m[qi] == 0 || probe_slot_.find(probe_key(qi, yaw_bin)) != nullptr ||
+           probe_slot_.find(probe_key(qi, yaw_bin % turn_bins_)) != nullptr;
   }
 
-  uint32_t probes() const { return probe_used_ + probe_overflow_; }
+  // Query-field probes evaluated since reset() (the field's regressions; a probe a whole turn of the
+  // grid away is a permuted copy, not counted).
+  uint32_t probes() const { return probe_fits_; }
   uint32_t comparisons() const { return comparisons_; }
   uint32_t map_grids() const { return map_grids_; }  // map instances' grids dequantised since reset()
 
@@ -123,6 +126,13 @@ class GsfFilter {
   static uint64_t similarity_key(uint32_t qi, uint32_t mi, uint32_t yaw_bin) {
     return (uint64_t(qi) << 44) | (uint64_t(yaw_bin) << 32) | mi;
   }
+  static uint64_t probe_key(uint32_t qi, uint32_t yaw_bin) { return (uint64_t(qi) << 32) | yaw_bin; }
+  // The probe of (qi, yaw_bin) into a cache slot (the scratch slot `scratch` when the cache is full);
+  // returns the slot and whether it is new (to be filled).
+  uint32_t probe_slot(uint32_t qi, uint32_t yaw_bin, uint32_t scratch, bool* fresh);
+  // Fills the probe of (qi, yaw_bin) into `slot`: the field's regression at the grid turned by the
+  // bin's angle, or for a bin a whole turn of the grid past a base bin, the base's probe permuted.
+  void fill_probe(const QueryFields& qf, uint32_t qi, uint32_t yaw_bin, uint32_t slot, float max_var);
   GsfFilterConfig config_{};
   FieldConfig field_{};
   FieldSolver* solver_ = nullptr;
@@ -138,12 +148,17 @@ class GsfFilter {
   float* map_var_ = nullptr;                   // kMapGridSlots x G
   uint32_t map_grid_instance_[kMapGridSlots];  // the instance in each slot (UINT32_MAX: none)
   uint32_t map_grids_ = 0;                     // grids dequantised since reset()
-  float* probe_mean_ = nullptr;                // (slots + 1) x G x D; the last slot is scratch when the cache is full
-  float* probe_var_ = nullptr;                 // (slots + 1) x G
+  float* probe_mean_ = nullptr;                // (slots + 2) x G x D; the last two are scratch when the cache is full
+  float* probe_var_ = nullptr;                 // (slots + 2) x G
+  // The grid's symmetry: a square grid turned a quarter (a rectangle: a half) turn is the same points,
+  // re-indexed. Bins turn_bins_ apart share one regression (yaw_bins when neither applies).
+  uint32_t turn_bins_ = 1;
+  uint16_t* turn_index_ = nullptr;  // (yaw_bins / turn_bins_) x G: point g of the grid turned t times is
+                                    // point turn_index_[t G + g] of the grid itself
   float weights_[kNumClasses];
   uint8_t* below_gate_ = nullptr;  // max_triangles_: 1 where pass 0 saw a match below the gate
   uint32_t max_triangles_ = 0;
-  uint32_t probe_used_ = 0, probe_overflow_ = 0, comparisons_ = 0;
+  uint32_t probe_used_ = 0, probe_fits_ = 0, comparisons_ = 0;
 };
 
 }  // namespace gsf
