@@ -11,9 +11,6 @@ namespace gsf {
 namespace {
 
 uint64_t now(Clock* c) { return c ? c->now_ns() : 0; }
-}  // namespace
-
-namespace {
 
 // How many whole turns map the probe grid onto itself: the grid is centred, so a half turn re-indexes
 // it; a square one (and the same spacing on both axes) a quarter turn too. Only turns that are whole
@@ -108,24 +105,31 @@ uint32_t GsfFilter::probe_slot(uint32_t qi, uint32_t yaw_bin, uint32_t scratch, 
 }
 
 void GsfFilter::fill_probe(const QueryFields& qf, uint32_t qi, uint32_t yaw_bin, uint32_t slot, float max_var) {
+  const uint32_t base = yaw_bin % turn_bins_, turn = yaw_bin / turn_bins_;
+  if (turn == 0) {
+    regress_probe(qf, qi, yaw_bin, slot, max_var);
+    return;
+  }
+  // The base bin's probe (cached, or into the other scratch slot), its points re-indexed.
+  const uint32_t G = grid_points(field_), D = kNumClasses;
+  bool base_fresh = false;
+  const uint32_t from = probe_slot(qi, base, config_.probe_cache_slots, &base_fresh);
+  if (base_fresh) regress_probe(qf, qi, base, from, max_var);
+  const float* base_mean = probe_mean_ + size_t(from) * G * D;
+  const float* base_var = probe_var_ + size_t(from) * G;
+  float* mean = probe_mean_ + size_t(slot) * G * D;
+  float* var = probe_var_ + size_t(slot) * G;
+  const uint16_t* index = turn_index_ + size_t(turn) * G;
+  for (uint32_t g = 0; g < G; ++g) {
+    var[g] = base_var[index[g]];
+    std::copy(base_mean + size_t(index[g]) * D, base_mean + size_t(index[g] + 1) * D, mean + size_t(g) * D);
+  }
+}
+
+void GsfFilter::regress_probe(const QueryFields& qf, uint32_t qi, uint32_t yaw_bin, uint32_t slot, float max_var) {
   const uint32_t G = grid_points(field_), D = kNumClasses, M = qf.stride_m;
   float* mean = probe_mean_ + size_t(slot) * G * D;
   float* var = probe_var_ + size_t(slot) * G;
-  const uint32_t base = yaw_bin % turn_bins_, turn = yaw_bin / turn_bins_;
-  if (turn > 0) {
-    // The base bin's probe (cached, or into the other scratch slot), its points re-indexed.
-    bool base_fresh = false;
-    const uint32_t from = probe_slot(qi, base, config_.probe_cache_slots, &base_fresh);
-    if (base_fresh) fill_probe(qf, qi, base, from, max_var);
-    const float* base_mean = probe_mean_ + size_t(from) * G * D;
-    const float* base_var = probe_var_ + size_t(from) * G;
-    const uint16_t* index = turn_index_ + size_t(turn) * G;
-    for (uint32_t g = 0; g < G; ++g) {
-      var[g] = base_var[index[g]];
-      std::copy(base_mean + size_t(index[g]) * D, base_mean + size_t(index[g] + 1) * D, mean + size_t(g) * D);
-    }
-    return;
-  }
   // Map grid offsets g (map frame) are R^T g = Rz(-yaw) g in the query frame.
   const float yaw = static_cast<float>(kTwoPi * yaw_bin / config_.yaw_bins);
   make_probe_grid(field_, -yaw, grid_);

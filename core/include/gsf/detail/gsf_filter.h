@@ -133,6 +133,8 @@ class GsfFilter {
   // Fills the probe of (qi, yaw_bin) into `slot`: the field's regression at the grid turned by the
   // bin's angle, or for a bin a whole turn of the grid past a base bin, the base's probe permuted.
   void fill_probe(const QueryFields& qf, uint32_t qi, uint32_t yaw_bin, uint32_t slot, float max_var);
+  // The field's regression at the grid turned by yaw_bin's angle, into `slot`.
+  void regress_probe(const QueryFields& qf, uint32_t qi, uint32_t yaw_bin, uint32_t slot, float max_var);
   GsfFilterConfig config_{};
   FieldConfig field_{};
   FieldSolver* solver_ = nullptr;
