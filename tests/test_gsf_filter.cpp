@@ -108,6 +108,23 @@ OneMap make_map(FieldSolver& solver, const FieldConfig& fc, const Neighbourhood&
   return map;
 }
 
+// A filter (36 yaw bins) over a solver and a one-instance map of the neighbourhood, on field config fc.
+struct OneInstanceFilter {
+  FieldConfig fc;
+  GsfFilterConfig gc;
+  gsf_test::ArenaBuffer buf;
+  FieldSolver solver;
+  GsfFilter filter;
+  Neighbourhood nb;
+  OneMap map;
+  explicit OneInstanceFilter(const FieldConfig& field)
+      : fc(field), buf(FieldSolver::required_bytes(fc, 64) + GsfFilter::required_bytes(gc, fc) + 256) {
+    REQUIRE(solver.bind(buf.arena, fc, 64) == Status::Ok);
+    REQUIRE(filter.bind(buf.arena, gc, fc, &solver) == Status::Ok);
+    map = make_map(solver, fc, nb, 1);
+  }
+};
+
 }  // namespace
 
 TEST_CASE("triangle_yaw_bin: a triangle rotated by yaw lands in round(yaw / bin width)") {
@@ -132,17 +149,12 @@ TEST_CASE("triangle_yaw_bin: a triangle rotated by yaw lands in round(yaw / bin 
 }
 
 TEST_CASE("GSF similarity: a field against itself seen from a rotated frame is ~1 at its yaw, lower elsewhere") {
-  FieldConfig fc;
-  GsfFilterConfig gc;  // 36 yaw bins
-  gsf_test::ArenaBuffer buf(FieldSolver::required_bytes(fc, 64) + GsfFilter::required_bytes(gc, fc) + 256);
-  FieldSolver solver;
-  REQUIRE(solver.bind(buf.arena, fc, 64) == Status::Ok);
-  GsfFilter filter;
-  REQUIRE(filter.bind(buf.arena, gc, fc, &solver) == Status::Ok);
-  const Neighbourhood nb;
-  const OneMap map = make_map(solver, fc, nb, 1);
+  OneInstanceFilter one{FieldConfig()};
+  const FieldConfig& fc = one.fc;
+  GsfFilter& filter = one.filter;
+  const OneMap& map = one.map;
   // The scan sees the neighbourhood rotated: map = R(50 deg) scan, so scan = R(-50 deg) map.
-  const Fitted q = fit(solver, fc, nb, -50.0 * kPi / 180.0);
+  const Fitted q = fit(one.solver, fc, one.nb, -50.0 * kPi / 180.0);
   const QueryFields qf{q.inputs.data(), q.alpha.data(), q.chol.data(), &q.m, fc.inducing_points};
   const float at_yaw = filter.similarity(qf, 0, map.view, 0, 5);     // 50 deg
   const float near_yaw = filter.similarity(qf, 0, map.view, 0, 4);   // 40 deg
@@ -182,19 +194,15 @@ float fresh_omega(FieldSolver& solver, const FieldConfig& fc, const GsfFilterCon
 
 TEST_CASE("A yaw bin a whole turn of the probe grid from another reuses its regression, re-indexed") {
   for (const uint32_t ny : {6u, 4u}) {  // square grid: quarter turns; 6 x 4: half turns only
-    FieldConfig fc;
-    fc.grid_ny = ny;
-    GsfFilterConfig gc;  // 36 yaw bins: a quarter turn is 9 bins
-    gsf_test::ArenaBuffer buf(FieldSolver::required_bytes(fc, 64) + GsfFilter::required_bytes(gc, fc) + 256);
-    FieldSolver solver;
-    REQUIRE(solver.bind(buf.arena, fc, 64) == Status::Ok);
-    GsfFilter filter;
-    REQUIRE(filter.bind(buf.arena, gc, fc, &solver) == Status::Ok);
-    const Neighbourhood nb;
-    const OneMap map = make_map(solver, fc, nb, 1);
+    FieldConfig grid;
+    grid.grid_ny = ny;
+    OneInstanceFilter one(grid);  // 36 yaw bins: a quarter turn is 9 bins
+    const FieldConfig& fc = one.fc;
+    GsfFilter& filter = one.filter;
+    const OneMap& map = one.map;
     // Seen at 140 deg (bin 14, a quarter turn past bin 5), 230 deg (bin 23, a half turn) and 320 deg.
     for (const double deg : {140.0, 230.0, 320.0}) {
-      const Fitted q = fit(solver, fc, nb, -deg * kPi / 180.0);
+      const Fitted q = fit(one.solver, fc, one.nb, -deg * kPi / 180.0);
       const QueryFields qf{q.inputs.data(), q.alpha.data(), q.chol.data(), &q.m, fc.inducing_points};
       const uint32_t bin = static_cast<uint32_t>(deg / 10.0);
       filter.reset();
@@ -205,7 +213,7 @@ TEST_CASE("A yaw bin a whole turn of the probe grid from another reuses its regr
       CHECK(filter.probes() == 1);
       CHECK(filter.probe_ready(qf, 0, 5) == whole_turn);
       CHECK(shared > 0.99f);  // the field against itself at its yaw
-      CHECK(std::fabs(shared - fresh_omega(solver, fc, gc, q, map.view, bin)) < 1e-4f);
+      CHECK(std::fabs(shared - fresh_omega(one.solver, fc, one.gc, q, map.view, bin)) < 1e-4f);
       // The other bins of the same base cost no regression; a bin of another base does.
       for (uint32_t turn = 0; turn < 4; ++turn) filter.similarity(qf, 0, map.view, 0, 5 + 9 * turn);
       CHECK(filter.probes() == (quarter ? 1u : 2u));  // 6 x 4: bins 5 and 23 share, 14 and 32 do too
