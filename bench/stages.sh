@@ -85,7 +85,8 @@ STAGES = [
     ("floor", ["bench_floor_bucket("], []),
     ("voxel layer", ["gsf::VoxelLayer::build("], []),
     ("clustering", ["gsf::InstanceClustering::build("], []),
-    ("query fields", ["gsf::collect_field_points(", "gsf::FieldSolver::fit("], []),
+    # the gather and the fit of every query instance (before 2026-12-07: collect_field_points + fit)
+    ("query fields", ["gsf::fit_instance_field("], []),
     ("triangles", ["gsf::TriangleBuilder::build("], []),
     ("matching", ["gsf::TriangleMatcher::match("], []),
     ("GSF filter", ["gsf::GsfFilter::similarity("], []),

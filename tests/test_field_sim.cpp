@@ -3,6 +3,7 @@
 #include <catch2/catch.hpp>
 
 #include <cmath>
+#include <cstring>
 
 #include "arena_buffer.h"
 #include "field_ablation.h"
@@ -121,6 +122,60 @@ TEST_CASE("Identical zone columns with different surroundings differ more than o
   // With ~180 pairs, 62% is more than 3 standard deviations above chance. The localizer combines three
   // vertices per triangle and a clique, which is why its zone success is higher than this pairwise rate.
   CHECK(same_closer * 100 >= pairs * 62);
+}
+
+TEST_CASE("A field fitted from the layer's voxels equals the fit on their copied training set") {
+  // fit_instance_field reads only the M voxels Algorithm 1 keeps (FieldGather holds ids and labels);
+  // collect_field_points + FieldSolver::fit copies every gathered voxel first. The map builder and the
+  // localizer take the first path, tests and bench_field the second: the fields must be the same bits,
+  // with the gather truncated at its capacity too.
+  const auto& w = gsf_test::tiny_world();
+  const LocalizerConfig& cfg = w.config;
+  Buffer buf(VoxelLayer::required_bytes(cfg.voxel) +
+             InstanceClustering::required_bytes(cfg.cluster, cfg.voxel.max_voxels) +
+             FieldSolver::required_bytes(cfg.field, 4096));
+  VoxelLayer layer;
+  InstanceClustering clusters;
+  FieldSolver solver;
+  REQUIRE(layer.bind(buf.arena, cfg.voxel) == Status::Ok);
+  REQUIRE(clusters.bind(buf.arena, cfg.cluster, cfg.voxel.max_voxels) == Status::Ok);
+  REQUIRE(solver.bind(buf.arena, cfg.field, 4096) == Status::Ok);
+  const size_t M = kMaxInducing;
+  std::vector<uint32_t> ids(4096), ids2(4096);
+  std::vector<uint8_t> lab(4096), lab2(4096);
+  std::vector<float> xyz(4096 * 3), tgt(4096 * kNumClasses);
+  std::vector<float> in1(M * 3), al1(M * kNumClasses), ch1(M * M), in2(M * 3), al2(M * kNumClasses), ch2(M * M);
+  int fitted = 0, truncated = 0;
+  for (size_t q = 0; q < w.queries.size() && fitted < 60; q += 3) {
+    if (layer.build(w.queries[q].view(), nullptr) != Status::Ok) continue;
+    clusters.build(layer, nullptr);
+    for (uint32_t i = 0; i < clusters.size() && fitted < 60; ++i) {
+      const float* c = clusters.instance(i).centroid;
+      for (uint32_t capacity : {4096u, 50u}) {
+        uint32_t total = 0, got = 0, m1 = 0, m2 = 0;
+        const uint32_t n =
+            collect_field_points(layer, cfg.field, c, capacity, ids.data(), xyz.data(), tgt.data(), lab.data(), &total);
+        const Status s1 = solver.fit(xyz.data(), tgt.data(), lab.data(), n, in1.data(), al1.data(), ch1.data(), &m1);
+        uint32_t total2 = 0;
+        const FieldGather gather{capacity, ids2.data(), lab2.data()};
+        const Status s2 =
+            fit_instance_field(solver, layer, c, gather, in2.data(), al2.data(), ch2.data(), &m2, &got, &total2);
+        REQUIRE(s1 == s2);
+        REQUIRE(got == n);
+        REQUIRE(total2 == total);
+        REQUIRE(m1 == m2);
+        if (s1 != Status::Ok) continue;
+        CHECK(std::memcmp(in1.data(), in2.data(), sizeof(float) * 3 * m1) == 0);
+        CHECK(std::memcmp(al1.data(), al2.data(), sizeof(float) * kNumClasses * m1) == 0);
+        CHECK(std::memcmp(ch1.data(), ch2.data(), sizeof(float) * m1 * m1) == 0);
+        fitted += capacity == 4096u;
+        truncated += total > capacity;
+      }
+    }
+  }
+  INFO(fitted << " instances, " << truncated << " gathers truncated");
+  REQUIRE(fitted >= 40);
+  REQUIRE(truncated >= 10);
 }
 
 }  // namespace test_field_sim

@@ -130,14 +130,25 @@ void make_probe_grid(const FieldConfig& c, float yaw, float* out) {
       }
 }
 
+namespace {
+
+// The voxels within config.radius of `center` (ids) and their labels: what Algorithm 1 chooses from.
+uint32_t gather_field_voxels(const VoxelLayer& layer, const FieldConfig& config, const float center[3], uint32_t max,
+                             uint32_t* ids, uint8_t* labels, uint32_t* total) {
+  const uint32_t n = layer.gather_within(center, config.radius, config.input_dims == 2, ids, max, total);
+  for (uint32_t k = 0; k < n; ++k) labels[k] = layer.voxel(ids[k]).label;
+  return n;
+}
+
+}  // namespace
+
 uint32_t collect_field_points(const VoxelLayer& layer, const FieldConfig& config, const float center[3], uint32_t max,
                               uint32_t* ids, float* xyz, float* targets, uint8_t* labels, uint32_t* total) {
-  const uint32_t n = layer.gather_within(center, config.radius, config.input_dims == 2, ids, max, total);
+  const uint32_t n = gather_field_voxels(layer, config, center, max, ids, labels, total);
   for (uint32_t k = 0; k < n; ++k) {
     const Voxel& v = layer.voxel(ids[k]);
     for (int d = 0; d < 3; ++d) xyz[3 * k + d] = v.centroid[d] - center[d];
     for (int d = 0; d < kNumClasses; ++d) targets[size_t(k) * kNumClasses + d] = v.prob[d];
-    labels[k] = v.label;
   }
   return n;
 }
@@ -190,33 +201,56 @@ GSF_AVX2_CLONE Status FieldSolver::factor(const float* inputs, uint32_t m, float
   return cholesky(chol, m) ? Status::Ok : Status::InvalidInput;
 }
 
-// An AVX2 clone on x86-64 (avx2_clone.h): the two solves for alpha vectorise over the D outputs.
-GSF_AVX2_CLONE Status FieldSolver::fit(const float* xyz, const float* targets, const uint8_t* labels, uint32_t n,
-                                       float* inputs, float* alpha, float* chol, uint32_t* m_out) {
+template <class Load>
+Status FieldSolver::fit_selected(const uint8_t* labels, uint32_t n, const Load& load, float* inputs, float* alpha,
+                                 float* chol, uint32_t* m_out) {
   *m_out = 0;
   if (!bound_) return Status::NotInitialized;
   if (n == 0) return Status::InvalidInput;
   if (n > max_points_) return Status::CapacityExceeded;
   const uint32_t m = sparsify_semantic(labels, n, config_.inducing_points, config_.seed, selected_, scratch_);
   for (uint32_t r = 0; r < m; ++r) {
-    const uint32_t i = selected_[r];
+    float xyz[3];
+    float* y = alpha + size_t(r) * kNumClasses;
+    load(selected_[r], xyz, y);
     for (int k = 0; k < 3; ++k) {
-      const float v = xyz[3 * i + k];
-      if (!std::isfinite(v)) return Status::InvalidInput;
-      inputs[3 * r + k] = (k == 2 && config_.input_dims == 2) ? 0.0f : v;
+      if (!std::isfinite(xyz[k])) return Status::InvalidInput;
+      inputs[3 * r + k] = (k == 2 && config_.input_dims == 2) ? 0.0f : xyz[k];
     }
-    for (int d = 0; d < kNumClasses; ++d) {
-      const float y = targets[size_t(i) * kNumClasses + d];
-      if (!std::isfinite(y)) return Status::InvalidInput;
-      alpha[r * kNumClasses + d] = y;
-    }
+    for (int d = 0; d < kNumClasses; ++d)
+      if (!std::isfinite(y[d])) return Status::InvalidInput;
   }
+  const Status s = solve_alpha(inputs, alpha, chol, m);
+  if (s == Status::Ok) *m_out = m;
+  return s;
+}
+
+// An AVX2 clone on x86-64 (avx2_clone.h): the two solves for alpha vectorise over the D outputs.
+GSF_AVX2_CLONE Status FieldSolver::solve_alpha(const float* inputs, float* alpha, float* chol, uint32_t m) {
   const Status f = factor(inputs, m, chol);
   if (f != Status::Ok) return f;
   forward_solve(chol, m, alpha, kNumClasses);
   backward_solve(chol, m, alpha, kNumClasses);
-  *m_out = m;
   return Status::Ok;
+}
+
+Status FieldSolver::fit(const float* xyz, const float* targets, const uint8_t* labels, uint32_t n, float* inputs,
+                        float* alpha, float* chol, uint32_t* m_out) {
+  const auto load = [xyz, targets](uint32_t i, float* p, float* y) {
+    for (int k = 0; k < 3; ++k) p[k] = xyz[3 * i + k];
+    for (int d = 0; d < kNumClasses; ++d) y[d] = targets[size_t(i) * kNumClasses + d];
+  };
+  return fit_selected(labels, n, load, inputs, alpha, chol, m_out);
+}
+
+Status FieldSolver::fit_voxels(const VoxelLayer& layer, const uint32_t* ids, const uint8_t* labels, uint32_t n,
+                               const float center[3], float* inputs, float* alpha, float* chol, uint32_t* m_out) {
+  const auto load = [&layer, ids, center](uint32_t i, float* p, float* y) {
+    const Voxel& v = layer.voxel(ids[i]);
+    for (int k = 0; k < 3; ++k) p[k] = v.centroid[k] - center[k];
+    for (int d = 0; d < kNumClasses; ++d) y[d] = v.prob[d];
+  };
+  return fit_selected(labels, n, load, inputs, alpha, chol, m_out);
 }
 
 // An AVX2 clone on x86-64 (avx2_clone.h): the kernel rows, the mean and the solve run 8 lanes a vector,
@@ -288,9 +322,8 @@ Status fit_instance_field(FieldSolver& solver, const VoxelLayer& layer, const fl
                           uint32_t* gathered, uint32_t* total) {
   *m = 0;
   *total = 0;
-  *gathered = collect_field_points(layer, solver.config(), center, gather.capacity, gather.ids, gather.xyz,
-                                   gather.targets, gather.labels, total);
-  return solver.fit(gather.xyz, gather.targets, gather.labels, *gathered, inputs, alpha, chol, m);
+  *gathered = gather_field_voxels(layer, solver.config(), center, gather.capacity, gather.ids, gather.labels, total);
+  return solver.fit_voxels(layer, gather.ids, gather.labels, *gathered, center, inputs, alpha, chol, m);
 }
 
 }  // namespace gsf

@@ -88,8 +88,6 @@ struct Localizer::Impl {
   uint32_t* q_m = nullptr;     // I (0: no field)
   // Gather scratch for one field fit.
   uint32_t* gather_ids = nullptr;
-  float* gather_xyz = nullptr;
-  float* gather_targets = nullptr;
   uint8_t* gather_labels = nullptr;
   HeightSample* height_samples = nullptr;    // C: the answer height's scratch
   uint8_t* instance_marks = nullptr;         // I: inliers_at's (all 0 between calls)
@@ -170,8 +168,6 @@ Status Localizer::bind_workspace(Arena& ar, const LocalizerConfig& config, Impl&
   im.q_chol = ar.allocate<float>(size_t(I) * M * M);
   im.q_m = ar.allocate<uint32_t>(I);
   im.gather_ids = ar.allocate<uint32_t>(P);
-  im.gather_xyz = ar.allocate<float>(size_t(P) * 3);
-  im.gather_targets = ar.allocate<float>(size_t(P) * kNumClasses);
   im.gather_labels = ar.allocate<uint8_t>(P);
   record(&b.field);
   if (im.triangle_builder.bind(ar, config.triangle, I) != Status::Ok) return Status::InvalidArgument;
@@ -415,7 +411,7 @@ void Localizer::Impl::fit_query_fields(const LocalizerConfig& cfg, LocalizeResul
     q_m[i] = 0;
     if (!gsf_on) continue;
     uint32_t total = 0;
-    const FieldGather gather{cfg.match.max_field_points, gather_ids, gather_xyz, gather_targets, gather_labels};
+    const FieldGather gather{cfg.match.max_field_points, gather_ids, gather_labels};
     uint32_t m = 0, got = 0;
     if (fit_instance_field(solver, voxels, centroids + 3 * i, gather, q_inputs + size_t(i) * M * 3,
                            q_alpha + size_t(i) * M * kNumClasses, q_chol + size_t(i) * M * M, &m, &got,

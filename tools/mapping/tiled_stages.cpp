@@ -120,8 +120,6 @@ class FieldFitter {
     if (solver_.bind(ws_.arena, fc_, max_pts_) != Status::Ok) return false;
     const uint32_t D = kNumClasses;
     std::vector<uint32_t>(max_pts_).swap(ids_);
-    std::vector<float>(size_t(max_pts_) * 3).swap(xyz_);
-    std::vector<float>(size_t(max_pts_) * D).swap(targets_);
     std::vector<float>(size_t(M_) * M_).swap(chol_);
     std::vector<float>(size_t(G_) * 3).swap(grid_);
     std::vector<float>(size_t(M_) * 3).swap(field_inputs_);
@@ -143,7 +141,7 @@ class FieldFitter {
     std::fill(row_var_.begin(), row_var_.end(), fc_.signal_variance);
     float* in_i = field_inputs_.data();  // needed only to probe the grid
     float* al_i = field_alpha_.data();
-    const FieldGather gather{max_pts_, ids_.data(), xyz_.data(), targets_.data(), gl_.data()};
+    const FieldGather gather{max_pts_, ids_.data(), gl_.data()};
     uint32_t m = 0, got = 0, total = 0;
     const Status fit =
         fit_instance_field(solver_, layer, c->in.centroid, gather, in_i, al_i, chol_.data(), &m, &got, &total);
@@ -166,7 +164,7 @@ class FieldFitter {
   Workspace ws_;
   FieldSolver solver_;
   std::vector<uint32_t> ids_;
-  std::vector<float> xyz_, targets_, chol_, grid_, field_inputs_, field_alpha_;
+  std::vector<float> chol_, grid_, field_inputs_, field_alpha_;
   std::vector<float> row_mean_, row_var_;  // one instance's grid before quantisation
   std::vector<uint8_t> gl_;
 };

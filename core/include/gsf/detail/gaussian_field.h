@@ -48,12 +48,12 @@ void make_probe_grid(const FieldConfig& config, float yaw_radians, float* out_xy
 uint32_t collect_field_points(const VoxelLayer& layer, const FieldConfig& config, const float center[3], uint32_t max,
                               uint32_t* ids, float* xyz, float* targets, uint8_t* labels, uint32_t* total = nullptr);
 
-// Caller-owned scratch for fit_instance_field: room for `capacity` gathered points.
+// Caller-owned scratch for fit_instance_field: room for `capacity` gathered voxels' ids and labels.
+// Only the M points Algorithm 1 keeps are read further (position and class probabilities, straight
+// from the layer), so the gather holds 5 B a voxel, not the 93 B of a copied training set.
 struct FieldGather {
   uint32_t capacity = 0;
   uint32_t* ids = nullptr;    // capacity
-  float* xyz = nullptr;       // capacity x 3
-  float* targets = nullptr;   // capacity x D
   uint8_t* labels = nullptr;  // capacity
 };
 
@@ -68,6 +68,11 @@ class FieldSolver {
   // (M x M, lower, row-major, kept for probing) into the given arrays; *m_out = rows used.
   Status fit(const float* xyz, const float* targets, const uint8_t* labels, uint32_t n, float* inputs_out,
              float* alpha_out, float* chol_out, uint32_t* m_out);
+  // The same fit from n gathered voxels of `layer` (ids, dense labels), instance-local about `center`:
+  // only the M points Algorithm 1 picks are read from the layer. Same checks and results as fit() on
+  // the copied training set (collect_field_points).
+  Status fit_voxels(const VoxelLayer& layer, const uint32_t* ids, const uint8_t* labels, uint32_t n,
+                    const float center[3], float* inputs_out, float* alpha_out, float* chol_out, uint32_t* m_out);
   // Recompute the Cholesky factor of K + sigma^2 I for stored inputs (map side: not stored in the map).
   Status factor(const float* inputs, uint32_t m, float* chol_out);
 
@@ -81,6 +86,12 @@ class FieldSolver {
 
  private:
   float kernel(const float* a, const float* b) const;
+  // fit()'s body: Algorithm 1 on the labels, then load(i, xyz, y) puts point i's instance-local
+  // position (3) and targets (D) in place, checked finite, and the factor and the solves.
+  template <class Load>
+  Status fit_selected(const uint8_t* labels, uint32_t n, const Load& load, float* inputs, float* alpha, float* chol,
+                      uint32_t* m_out);
+  Status solve_alpha(const float* inputs, float* alpha, float* chol, uint32_t m);
   FieldConfig config_{};
   uint32_t max_points_ = 0;
   uint32_t* selected_ = nullptr;
@@ -91,9 +102,10 @@ class FieldSolver {
 };
 
 // The per-instance field fit, one function for the query (localizer) and the map (map builder), so
-// their fields cannot drift apart: collect_field_points within solver.config().radius of `center` into
-// `gather`, then FieldSolver::fit into inputs / alpha / chol (*m rows). *gathered: points used; *total:
-// points that matched (more than gathered: truncated by gather.capacity). Returns fit's status.
+// their fields cannot drift apart: the layer's voxels within solver.config().radius of `center` into
+// `gather`, then FieldSolver::fit_voxels into inputs / alpha / chol (*m rows). *gathered: points used;
+// *total: points that matched (more than gathered: truncated by gather.capacity). Returns the fit's
+// status.
 Status fit_instance_field(FieldSolver& solver, const VoxelLayer& layer, const float center[3],
                           const FieldGather& gather, float* inputs, float* alpha, float* chol, uint32_t* m,
                           uint32_t* gathered, uint32_t* total);
