@@ -240,6 +240,55 @@ TEST_CASE("W2: zero for identical, symmetric, 1-D and diagonal closed forms, tri
         Approx(w2_mean_term(base.data(), pole.data(), 1, w_stab.data())));
 }
 
+TEST_CASE("The observed W2 sums in its documented order: the scalar lanes' bits, near the double sum") {
+  // wasserstein.cpp: lane k adds classes k and k + 8 of every compared point, the tail lanes classes
+  // 16-18, and the lanes meet in a fixed tree. Written out here in plain scalars, the vectorised
+  // function (AVX2, SSE2 or NEON, whichever this build runs) must give the same bits; and it stays
+  // within float rounding of the double sum (w2_mean_term over the same points).
+  std::mt19937 rng(11);
+  std::uniform_real_distribution<float> u(0.0f, 1.0f);
+  const uint32_t g = 36;
+  std::vector<float> mq(g * kNumClasses), mm(g * kNumClasses), vq(g), vm(g), w(kNumClasses);
+  for (auto& x : mq) x = u(rng);
+  for (auto& x : mm) x = u(rng);
+  for (auto& x : vm) x = u(rng);
+  for (auto& x : w) x = 0.1f + u(rng);
+  for (uint32_t s = 0; s < g; ++s) vq[s] = s % 5 == 0 ? 0.9f : 0.3f * u(rng);  // every 5th point unobserved
+  const float max_var = 0.6f;
+  float lane[8] = {}, tail[kNumClasses - 16] = {};
+  uint32_t used = 0;
+  std::vector<float> oq, om;  // the compared points, for the double reference
+  for (uint32_t s = 0; s < g; ++s) {
+    if (!(vq[s] <= max_var)) continue;
+    const float* a = &mq[s * kNumClasses];
+    const float* b = &mm[s * kNumClasses];
+    for (int k = 0; k < 8; ++k) {
+      const float x0 = a[k] - b[k], x1 = a[k + 8] - b[k + 8];
+      lane[k] = lane[k] + w[k] * (x0 * x0);
+      lane[k] = lane[k] + w[k + 8] * (x1 * x1);
+    }
+    for (int k = 0; k < kNumClasses - 16; ++k) {
+      const float x = a[k + 16] - b[k + 16];
+      tail[k] = tail[k] + w[k + 16] * (x * x);
+    }
+    oq.insert(oq.end(), a, a + kNumClasses);
+    om.insert(om.end(), b, b + kNumClasses);
+    ++used;
+  }
+  float t = 0.0f;
+  for (float x : tail) t = t + x;
+  const float expected =
+      (((lane[0] + lane[4]) + (lane[2] + lane[6])) + ((lane[1] + lane[5]) + (lane[3] + lane[7]))) + t;
+  const ObservedW2 r = w2_squared_diag_observed(mq.data(), vq.data(), mm.data(), vm.data(), g, w.data(), max_var, 0.0f);
+  REQUIRE(r.used == used);
+  REQUIRE(used == 28);
+  CHECK(r.w2 == double(expected));  // bit for bit
+  CHECK(r.w2 == Approx(w2_mean_term(oq.data(), om.data(), used, w.data())).epsilon(1e-6));
+  // The covariance term adds on top in double, where asked for.
+  const ObservedW2 c = w2_squared_diag_observed(mq.data(), vq.data(), mm.data(), vm.data(), g, w.data(), max_var, 1.0f);
+  CHECK(c.w2 > r.w2);
+}
+
 TEST_CASE("W2 between fields is invariant when data and grid move rigidly together") {
   FieldConfig fc;  // bird's-eye
   Buffer buf(FieldSolver::required_bytes(fc, 200) + 2 * W2Exact::required_bytes(kMaxGridPoints) + 64);

@@ -33,7 +33,8 @@ struct ObservedW2 {
 };
 // Diagonal W2 over the grid points where var_query(s) <= max_query_var. cov_weight scales the
 // covariance term (1 = the paper's W2; 0 = mean term only; the localizer's is
-// GsfFilterConfig::covariance_weight, default 0).
+// GsfFilterConfig::covariance_weight, default 0). The mean term is summed in float (relative error
+// about 1e-6 of w2_mean_term's double sum), in a fixed order that every build keeps.
 ObservedW2 w2_squared_diag_observed(const float* mean_query, const float* var_query, const float* mean_map,
                                     const float* var_map, uint32_t g, const float* weights, float max_query_var,
                                     float cov_weight);
