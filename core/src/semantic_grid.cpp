@@ -96,27 +96,42 @@ inline GridAxis grid_axis(const GridConstants& k, float x) {
 }
 
 // grid_axis over a block of positions at once: the same arithmetic without branches (a position outside
-// the representable tiles, or NaN, computes on 0 and is then marked outside), so the compiler runs it a
+// the representable tiles, or NaN, computes on a finite stand-in and is then marked outside), so the compiler runs it a
 // vector of positions at a time. tile[j], cell[j]: grid_axis(k, x[j]), bit for bit.
 template <bool kExactInverse>
 inline void grid_axes(const GridConstants& k, const float* __restrict x, uint32_t m, int32_t* __restrict tile,
                       int32_t* __restrict cell) {
   const float inv_tile = k.inv_tile, inv_cell = k.inv_cell, tile_m = k.tile, cell_m = k.cell;
   const int32_t last = k.tile_cells - 1;
+#if defined(__aarch64__)
+  const float x_limit = 32768.0f * tile_m;
+#endif
   for (uint32_t j = 0; j < m; ++j) {
     const float q = kExactInverse ? x[j] * inv_tile : x[j] / tile_m;
     const bool inside = (q >= -32767.0f) & (q < 32768.0f);
+    // Inside the tiles q and x themselves; outside (or NaN) finite values in range of the casts, whose
+    // results the masks below discard. ARM64 clamps (fmaxnm / fminnm, one NEON instruction each: GCC 12
+    // turns selects of floats into branches there under -fno-exceptions, and the loop would not
+    // vectorise); x86-64 selects (its fmin / fmax are library calls).
+#if defined(__aarch64__)
+    const float qs = std::fmin(std::fmax(q, -32767.0f), 32768.0f);
+    const float xs = std::fmin(std::fmax(x[j], -x_limit), x_limit);
+#else
     const float qs = inside ? q : 0.0f, xs = inside ? x[j] : 0.0f;
+#endif
     int32_t t = static_cast<int32_t>(qs);
-    float f = static_cast<float>(t);
-    const bool below = f > qs;
+    const bool below = static_cast<float>(t) > qs;
     t -= below ? 1 : 0;
-    f -= below ? 1.0f : 0.0f;
+    // |t| <= 32768: exact in float, so this is the float floor itself (the float less one, or selects
+    // for the stores, kept ARM64's loop scalar too).
+    const float f = static_cast<float>(t);
     const float r = xs - f * tile_m;
     int32_t c = static_cast<int32_t>(kExactInverse ? r * inv_cell : r / cell_m);
-    c = c < 0 ? 0 : (c > last ? last : c);
-    tile[j] = inside ? t : kOutsideTiles;
-    cell[j] = inside ? c : 0;
+    c = c < 0 ? 0 : c;
+    c = c > last ? last : c;
+    const int32_t keep = -static_cast<int32_t>(inside);  // all ones inside the tiles, else 0
+    tile[j] = (t & keep) | (kOutsideTiles & ~keep);
+    cell[j] = c & keep;
   }
 }
 
