@@ -89,16 +89,17 @@ constexpr int kLanes = 8;
 constexpr int kTail = kNumClasses - 2 * kLanes;
 static_assert(kTail > 0 && kTail <= kLanes, "the classes fill two lanes' rows and a tail");
 
-#if defined(__GNUC__)
+#if defined(__GNUC__) && !defined(GSF_NO_VECTOR_EXTENSIONS)
 // GCC's and Clang's generic vectors: element-wise IEEE operations, lowered to one AVX2 register, two
 // SSE2 or NEON ones, or scalars. (The compilers do not vectorise the scalar lanes below by themselves.)
 // Loaded and stored through memcpy, never passed by value (a 32-byte vector argument is an ABI question
-// for the baseline x86-64 build).
+// for the baseline x86-64 build). Other compilers, or -DGSF_NO_VECTOR_EXTENSIONS, take the scalar lanes:
+// the same bits (checked on x86-64 with both).
 typedef float Lanes __attribute__((vector_size(kLanes * sizeof(float))));
 #endif
 
 struct MeanTermLanes {
-#if defined(__GNUC__)
+#if defined(__GNUC__) && !defined(GSF_NO_VECTOR_EXTENSIONS)
   Lanes lane = {};
   Lanes w_lo, w_hi;
   explicit MeanTermLanes(const float* w) {
@@ -116,7 +117,7 @@ struct MeanTermLanes {
 
   // Point (a, b)'s classes, w the class weights.
   GSF_ALWAYS_INLINE void add(const float* a, const float* b, const float* w_all) {
-#if defined(__GNUC__)
+#if defined(__GNUC__) && !defined(GSF_NO_VECTOR_EXTENSIONS)
     Lanes a0, b0, a1, b1;
     std::memcpy(&a0, a, sizeof a0);
     std::memcpy(&b0, b, sizeof b0);
