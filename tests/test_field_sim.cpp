@@ -19,16 +19,30 @@ using namespace gsf;
 
 namespace {
 using Buffer = gsf_test::ArenaBuffer;
+
+// A scan's voxel layer, its instances and a field solver for up to 4,096 gathered voxels, bound to one
+// buffer: what a query's fields are fitted from.
+struct FieldStages {
+  explicit FieldStages(const LocalizerConfig& cfg)
+      : buf(VoxelLayer::required_bytes(cfg.voxel) +
+            InstanceClustering::required_bytes(cfg.cluster, cfg.voxel.max_voxels) +
+            FieldSolver::required_bytes(cfg.field, 4096)) {
+    REQUIRE(layer.bind(buf.arena, cfg.voxel) == Status::Ok);
+    REQUIRE(clusters.bind(buf.arena, cfg.cluster, cfg.voxel.max_voxels) == Status::Ok);
+    REQUIRE(solver.bind(buf.arena, cfg.field, 4096) == Status::Ok);
+  }
+  Buffer buf;
+  VoxelLayer layer;
+  InstanceClustering clusters;
+  FieldSolver solver;
+};
 }  // namespace
 
 TEST_CASE("Fig. 4 on simulated scans: semantic sparsification reconstructs at least as well as random") {
   const auto& w = gsf_test::tiny_world();
-  Buffer buf(VoxelLayer::required_bytes(w.config.voxel) +
-             InstanceClustering::required_bytes(w.config.cluster, w.config.voxel.max_voxels));
-  VoxelLayer layer;
-  InstanceClustering clusters;
-  REQUIRE(layer.bind(buf.arena, w.config.voxel) == Status::Ok);
-  REQUIRE(clusters.bind(buf.arena, w.config.cluster, w.config.voxel.max_voxels) == Status::Ok);
+  FieldStages st(w.config);
+  VoxelLayer& layer = st.layer;
+  InstanceClustering& clusters = st.clusters;
   std::vector<uint32_t> ids(4096);
   std::vector<float> xyz(4096 * 3), tgt(4096 * kNumClasses);
   std::vector<uint8_t> lab(4096);
@@ -62,15 +76,10 @@ TEST_CASE("Identical zone columns with different surroundings differ more than o
   const uint32_t G = grid_points(cfg.field);
   float weights[kNumClasses];
   stability_weights(weights);
-  Buffer buf(VoxelLayer::required_bytes(cfg.voxel) +
-             InstanceClustering::required_bytes(cfg.cluster, cfg.voxel.max_voxels) +
-             FieldSolver::required_bytes(cfg.field, 4096));
-  VoxelLayer layer;
-  InstanceClustering clusters;
-  FieldSolver solver;
-  REQUIRE(layer.bind(buf.arena, cfg.voxel) == Status::Ok);
-  REQUIRE(clusters.bind(buf.arena, cfg.cluster, cfg.voxel.max_voxels) == Status::Ok);
-  REQUIRE(solver.bind(buf.arena, cfg.field, 4096) == Status::Ok);
+  FieldStages st(cfg);
+  VoxelLayer& layer = st.layer;
+  InstanceClustering& clusters = st.clusters;
+  FieldSolver& solver = st.solver;
   std::vector<uint32_t> ids(4096);
   std::vector<float> xyz(4096 * 3), tgt(4096 * kNumClasses), in(kMaxInducing * 3), al(kMaxInducing * kNumClasses),
       ch(kMaxInducing * kMaxInducing), grid(G * 3), qm(G * kNumClasses), qv(G), mm(G * kNumClasses), mv(G);
@@ -131,15 +140,10 @@ TEST_CASE("A field fitted from the layer's voxels equals the fit on their copied
   // with the gather truncated at its capacity too.
   const auto& w = gsf_test::tiny_world();
   const LocalizerConfig& cfg = w.config;
-  Buffer buf(VoxelLayer::required_bytes(cfg.voxel) +
-             InstanceClustering::required_bytes(cfg.cluster, cfg.voxel.max_voxels) +
-             FieldSolver::required_bytes(cfg.field, 4096));
-  VoxelLayer layer;
-  InstanceClustering clusters;
-  FieldSolver solver;
-  REQUIRE(layer.bind(buf.arena, cfg.voxel) == Status::Ok);
-  REQUIRE(clusters.bind(buf.arena, cfg.cluster, cfg.voxel.max_voxels) == Status::Ok);
-  REQUIRE(solver.bind(buf.arena, cfg.field, 4096) == Status::Ok);
+  FieldStages st(cfg);
+  VoxelLayer& layer = st.layer;
+  InstanceClustering& clusters = st.clusters;
+  FieldSolver& solver = st.solver;
   const size_t M = kMaxInducing;
   std::vector<uint32_t> ids(4096), ids2(4096);
   std::vector<uint8_t> lab(4096), lab2(4096);
