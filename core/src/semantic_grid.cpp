@@ -96,8 +96,8 @@ inline GridAxis grid_axis(const GridConstants& k, float x) {
 }
 
 // grid_axis over a block of positions at once: the same arithmetic without branches (a position outside
-// the representable tiles, or NaN, computes on a finite stand-in and is then marked outside), so the compiler runs it a
-// vector of positions at a time. tile[j], cell[j]: grid_axis(k, x[j]), bit for bit.
+// the representable tiles, or NaN, computes on a finite stand-in and is then marked outside), so the
+// compiler runs it a vector of positions at a time. tile[j], cell[j]: grid_axis(k, x[j]), bit for bit.
 template <bool kExactInverse>
 inline void grid_axes(const GridConstants& k, const float* __restrict x, uint32_t m, int32_t* __restrict tile,
                       int32_t* __restrict cell) {
@@ -122,8 +122,8 @@ inline void grid_axes(const GridConstants& k, const float* __restrict x, uint32_
     int32_t t = static_cast<int32_t>(qs);
     const bool below = static_cast<float>(t) > qs;
     t -= below ? 1 : 0;
-    // |t| <= 32768: exact in float, so this is the float floor itself (the float less one, or selects
-    // for the stores, kept ARM64's loop scalar too).
+    // |t| <= 32768: exact in float, so this is the float floor itself. (Taking 1.0f off the float, or
+    // selecting the stores instead of masking them, also kept ARM64's loop scalar.)
     const float f = static_cast<float>(t);
     const float r = xs - f * tile_m;
     int32_t c = static_cast<int32_t>(kExactInverse ? r * inv_cell : r / cell_m);

@@ -102,21 +102,20 @@ struct MeanTermLanes {
 #if defined(__GNUC__) && !defined(GSF_NO_VECTOR_EXTENSIONS)
   Lanes lane = {};
   Lanes w_lo, w_hi;
-  explicit MeanTermLanes(const float* w) {
+  explicit MeanTermLanes(const float* weights) : w(weights) {
     std::memcpy(&w_lo, w, sizeof w_lo);
     std::memcpy(&w_hi, w + kLanes, sizeof w_hi);
   }
-  GSF_ALWAYS_INLINE float lane_at(int k) const { return lane[k]; }
 #else
   float lane[kLanes] = {};
-  const float* w;
   explicit MeanTermLanes(const float* weights) : w(weights) {}
-  float lane_at(int k) const { return lane[k]; }
 #endif
+  const float* w;  // the D class weights
   float tail[kTail] = {};
 
-  // Point (a, b)'s classes, w the class weights.
-  GSF_ALWAYS_INLINE void add(const float* a, const float* b, const float* w_all) {
+  GSF_ALWAYS_INLINE float lane_at(int k) const { return lane[k]; }
+  // Point (a, b)'s classes.
+  GSF_ALWAYS_INLINE void add(const float* a, const float* b) {
 #if defined(__GNUC__) && !defined(GSF_NO_VECTOR_EXTENSIONS)
     Lanes a0, b0, a1, b1;
     std::memcpy(&a0, a, sizeof a0);
@@ -136,7 +135,7 @@ struct MeanTermLanes {
 #endif
     for (int k = 0; k < kTail; ++k) {
       const float x = a[k + 2 * kLanes] - b[k + 2 * kLanes];
-      tail[k] = tail[k] + w_all[k + 2 * kLanes] * (x * x);
+      tail[k] = tail[k] + w[k + 2 * kLanes] * (x * x);
     }
   }
   GSF_ALWAYS_INLINE float total() const {
@@ -158,7 +157,7 @@ GSF_AVX2_CLONE ObservedW2 w2_squared_diag_observed(const float* mq, const float*
   double cov = 0.0;
   for (uint32_t s = 0; s < g; ++s) {
     if (!(vq[s] <= max_var)) continue;
-    sum.add(mq + size_t(s) * kNumClasses, mm + size_t(s) * kNumClasses, w);
+    sum.add(mq + size_t(s) * kNumClasses, mm + size_t(s) * kNumClasses);
     if (tw != 0.0) {
       const double e = std::sqrt(double(vq[s] > 0 ? vq[s] : 0)) - std::sqrt(double(vm[s] > 0 ? vm[s] : 0));
       cov += e * e;
