@@ -66,6 +66,9 @@ def logistic(x):
 # scan's instances is capped at 0.5 whatever the model says; the replay caps the same way (the fit sees
 # them uncapped: their evidence is evidence of the model's factors like any other).
 FEW_INSTANCES, FEW_INSTANCES_CAP = 5, 0.5
+# confidence_probability's cap for a scan mostly off the map (confidence.h, kMinKnownShare): at most 0.5
+# when fewer than a third of the samples land on the map's observed cells; replayed the same way.
+MIN_KNOWN_SHARE = 1.0 / 3.0
 RESULTS = "results.json"  # --results: the file name of a suite's per-world results
 DISTRACTOR = "distractor"  # --distractor-dir: bench/distractors.sh's directory in a suite dir
 
@@ -109,8 +112,9 @@ def records(path, mode):
             if distractor and q["success"]:
                 continue  # the other world happens to match here (same road grid): neither right nor wrong
             z = features(e, q)
-            few = q.get("diagnostics", {}).get("instances", FEW_INSTANCES) < FEW_INSTANCES
-            out.append((z, bool(q["success"]) and not distractor, distractor, few))
+            capped = (q.get("diagnostics", {}).get("instances", FEW_INSTANCES) < FEW_INSTANCES or
+                      e.get("known_share", 1.0) < MIN_KNOWN_SHARE)
+            out.append((z, bool(q["success"]) and not distractor, distractor, capped))
     return out
 
 
@@ -232,7 +236,7 @@ def report(name, recs, m, threshold):
     if n == 0:
         return
     right = sum(r[1] for r in recs)
-    probs = [min(FEW_INSTANCES_CAP, probability(m, z)) if few else probability(m, z) for z, _, _, few in recs]
+    probs = [min(FEW_INSTANCES_CAP, probability(m, z)) if capped else probability(m, z) for z, _, _, capped in recs]
     ans = [r[1] for p, r in zip(probs, recs) if p >= threshold]
     bins = [[0, 0.0, 0] for _ in range(10)]
     for p, (_, y, _, _) in zip(probs, recs):

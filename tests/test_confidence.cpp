@@ -190,6 +190,7 @@ TEST_CASE("The 8 m probes are a z of their own: a right answer may be off by les
   // still right), an answer well ahead of its 8 m neighbours is confident; where those tie too, not.
   ConfidenceEvidence a;
   a.samples = e.samples;
+  a.known_share = 1.0f;
   a.z_rival = 10.0f;
   a.rival_margin = 1.0f;
   a.inlier_share = 1.0f;
@@ -244,6 +245,7 @@ TEST_CASE("The 180-degree probe counts only when it is ahead of the answer if th
 TEST_CASE("The probability is a product of rising logistic factors, in [0, 1]") {
   ConfidenceEvidence e;
   e.samples = 1000;
+  e.known_share = 1.0f;
   e.z_rival = e.z_shift = e.z_shift_far = e.z_turn = 10.0f;
   e.rival_margin = 1.0f;
   e.inlier_share = 1.0f;
@@ -438,6 +440,31 @@ TEST_CASE("Hostile scans and a map without a semantic layer: a status or a confi
   CHECK(!r.verified);
   CHECK(r.confidence == 0.0);
   CHECK(!r.confident);
+}
+
+TEST_CASE("An answer checked on less than a third of its scan is never vouched for, whatever its factors") {
+  ConfidenceEvidence e;
+  e.samples = 1000;
+  e.z_rival = e.z_shift = e.z_shift_far = e.z_turn = 10.0f;
+  e.rival_margin = 1.0f;
+  e.inlier_share = 1.0f;
+  e.known_share = 1.0f;
+  const double whole = confidence_probability(e);
+  REQUIRE(whole > 0.99);
+  e.known_share = kMinKnownShare;  // a third of the samples on the map's observed cells: the factors decide
+  CHECK(confidence_probability(e) == whole);
+  e.known_share = std::nextafter(kMinKnownShare, 0.0f);  // just below: capped
+  CHECK(confidence_probability(e) == kPartlyMappedConfidence);
+  CHECK(confidence_probability(e) < 0.9);  // below the default rule (confidence.min_probability)
+  e.known_share = 0.0f;
+  CHECK(confidence_probability(e) == kPartlyMappedConfidence);
+  // The cap only lowers: a weak answer keeps its own probability.
+  e.z_rival = 0.0f;
+  e.rival_margin = 0.02f;
+  const double weak = confidence_probability(e);
+  e.known_share = 1.0f;
+  CHECK(weak == confidence_probability(e));
+  CHECK(weak < kPartlyMappedConfidence);
 }
 
 }  // namespace test_confidence

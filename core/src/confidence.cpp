@@ -62,7 +62,8 @@ double confidence_probability(const ConfidenceEvidence& e, const ConfidenceModel
                       m.peak_shift_slope * clipped(e.z_shift, kZMin, kZMax) +
                       m.peak_turn_slope * clipped(e.z_turn, kZMin, kZMax);
   const double inlier = m.inlier_offset + m.inlier_slope * clipped(e.inlier_share, 0.0f, 1.0f);
-  return logistic(rival) * logistic(peak) * logistic(inlier);
+  const double p = logistic(rival) * logistic(peak) * logistic(inlier);
+  return e.known_share < kMinKnownShare ? std::min(p, kPartlyMappedConfidence) : p;
 }
 
 size_t AnswerConfidence::required_bytes(uint32_t max_points) { return counted_bytes<AnswerConfidence>(max_points); }

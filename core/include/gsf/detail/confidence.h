@@ -58,7 +58,18 @@ struct ConfidenceModel {
 // Fitted by bench/fit_confidence.py (docs/confidence.md).
 extern const ConfidenceModel kConfidenceModel;
 
-// P from the evidence (the model above).
+// An answer that puts fewer than kMinKnownShare of its samples on the map's observed cells is checked
+// against the map on too little of its scan: P is at most kPartlyMappedConfidence there, whatever the
+// factors read, so the default rule (0.9) never vouches for it. A scan beyond the map's edge whose
+// place the map holds a copy of (a hall's 180-degree twin, an avenue's repeat) fits that copy as well
+// as a right answer fits the truth, on the few samples that land on it: the 27 confident wrong answers of
+// scans off the map in the edge worlds of seeds 9-18 had a known share of 0.13-0.32; right answers below
+// a third were 4 of 12,099 on the families, 1-2% off the map (docs/confidence.md, *Answers checked on a
+// third of their scan*). Label noise does not move the share (a mislabelled sample lands on the same cell).
+constexpr float kMinKnownShare = 1.0f / 3.0f;
+constexpr double kPartlyMappedConfidence = 0.5;
+
+// P from the evidence (the model above), capped for a scan mostly off the map (kMinKnownShare).
 double confidence_probability(const ConfidenceEvidence& e, const ConfidenceModel& model = kConfidenceModel);
 // One logistic factor of a z: s(offset + slope z), z clipped to the range the model reads ([-3, 10]).
 double z_factor(float offset, float slope, float z);
