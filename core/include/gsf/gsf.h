@@ -145,7 +145,8 @@ typedef struct gsf_result {
   // The pose, row-major 3x4 [R | t] (p = R p_scan + t), in two frames with the same R:
   double map_T_scan[12];        // map-local frame: t relative to the map origin (gsf_map_info.origin)
   double map_frame_T_scan[12];  // the map's frame (gsf_map_info.frame): t = map-local t + origin, in double
-  double confidence;            // calibrated probability that the pose is right (t < 5 m, r < 10 deg)
+  double confidence;            // calibrated probability that the pose is right (t < 5 m, r < 10 deg);
+                                // at most 0.5 when under a third of the scan lands on the mapped area
   double score;                 // sum of inlier weights
   uint64_t clique_nodes;
   uint32_t clique_size, query_instances, query_triangles, triangle_matches, gsf_survivors, correspondences;

@@ -63,7 +63,9 @@ struct LocalizeResult {
   double score = 0.0;  // sum of inlier weights
   // Calibrated probability that map_T_scan is right (translation < 5 m and rotation < 10 deg from the
   // truth); 0 without an answer. `confident` is the default decision rule, confidence >=
-  // config.confidence.min_probability: act on the pose only when it is true.
+  // config.confidence.min_probability: act on the pose only when it is true. At most 0.5 when fewer
+  // than a third of the scan's sampled voxels land on cells the map observed
+  // (confidence_evidence.known_share): a scan mostly beyond the map is never vouched for.
   double confidence = 0.0;
   bool confident = false;
   ConfidenceEvidence confidence_evidence;  // what the confidence was computed from (diagnostics)
