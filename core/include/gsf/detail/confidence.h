@@ -64,8 +64,9 @@ extern const ConfidenceModel kConfidenceModel;
 // place the map holds a copy of (a hall's 180-degree twin, an avenue's repeat) fits that copy as well
 // as a right answer fits the truth, on the few samples that land on it: the 27 confident wrong answers of
 // scans off the map in the edge worlds of seeds 9-18 had a known share of 0.13-0.32; right answers below
-// a third were 4 of 12,099 on the families, 1-2% off the map (docs/confidence.md, *Answers checked on a
-// third of their scan*). Label noise does not move the share (a mislabelled sample lands on the same cell).
+// a third were 16 of 24,393 on the families of seeds 7-10 (all edge), 1-2% off the map
+// (docs/confidence.md, *Answers checked on a third of their scan*). Label noise does not move the
+// share (a mislabelled sample lands on the same cell).
 constexpr float kMinKnownShare = 1.0f / 3.0f;
 constexpr double kPartlyMappedConfidence = 0.5;
 
