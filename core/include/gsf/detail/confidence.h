@@ -62,11 +62,13 @@ extern const ConfidenceModel kConfidenceModel;
 // against the map on too little of its scan: P is at most kPartlyMappedConfidence there, whatever the
 // factors read, so the default rule (0.9) never vouches for it. A scan beyond the map's edge whose
 // place the map holds a copy of (a hall's 180-degree twin, an avenue's repeat) fits that copy as well
-// as a right answer fits the truth, on the few samples that land on it: the 27 confident wrong answers of
-// scans off the map in the edge worlds of seeds 9-18 had a known share of 0.13-0.32; right answers below
-// a third were 16 of 24,393 on the families of seeds 7-10 (all edge), 1-2% off the map
-// (docs/confidence.md, *Answers checked on a third of their scan*). Label noise does not move the
-// share (a mislabelled sample lands on the same cell).
+// as a right answer fits the truth, on the samples that land on it. Where the copy's surroundings are
+// not mapped (a hall's twin: the 27 confident wrong answers at one in the edge worlds of seeds 9-18),
+// few do: a known share of 0.13-0.32. A row's or an avenue's twin, whose surroundings repeat mapped,
+// keeps 0.76-0.87 and is not reached (8 of the edge family's 10 on seeds 7-10). Right answers below a
+// third: 16 of 24,393 on the families of seeds 7-10 (all edge), 1-2% off the map (docs/confidence.md,
+// *Answers checked on a third of their scan*). Label noise does not move the share (a mislabelled
+// sample lands on the same cell).
 constexpr float kMinKnownShare = 1.0f / 3.0f;
 constexpr double kPartlyMappedConfidence = 0.5;
 
