@@ -3,7 +3,8 @@
 
 A thin-margin answer: its best rival scores nearly as well (z_rival < 1.2 and rival_margin < 0.1 in
 diagnostics.confidence_evidence) while the answer explains most of the scan's instances on the map
-(inlier_share > 0.5), from at least 5 instances (fewer are capped at 0.5 anyway). The confidence sees
+(inlier_share > 0.5), not capped at 0.5 anyway (fewer than 5 instances, or under a third of the scan on
+the map's observed cells: fit_confidence.records' flag). The confidence sees
 the same evidence in every family, so it gives these answers about one probability; when the share that
 is right differs by family, no single calibration can hold on every family, and the table says by how
 much. Distractor directories (bench/distractors.sh) are left out: every answer there is wrong.
@@ -32,7 +33,7 @@ def family_rows(family_dir, m):
     """(answers with a pose, thin-margin ones, of those right, their mean predicted probability), from
     fit_confidence.records (the queries with a pose and confidence evidence)."""
     recs = fc.records(family_dir, "gsf")
-    thin = [(z, y) for z, y, _, few in recs if not few and thin_margin(z)]
+    thin = [(z, y) for z, y, _, capped in recs if not capped and thin_margin(z)]
     return len(recs), len(thin), sum(y for _, y in thin), sum(fc.probability(m, z) for z, _ in thin)
 
 
