@@ -44,6 +44,9 @@ expect 2 "need --prior-sigma" -- "$gsf" evaluate --map m --dataset d --prior-bia
 expect 2 "need --prior-sigma" -- "$gsf" evaluate --map m --dataset d --prior-heading-tolerance 30
 expect 2 "prior-heading-tolerance in" -- "$gsf" evaluate --map m --dataset d --prior-sigma 5 \
   --prior-heading-tolerance 200
+expect 2 "one-shot-too needs --prior-sigma" -- "$gsf" evaluate --map m --dataset d --one-shot-too
+expect 2 "repeat must be 1..100" -- "$gsf" evaluate --map m --dataset d --repeat 0
+expect 2 "for the per-query modes" -- "$gsf" evaluate --map m --dataset d --mode track --repeat 2
 expect 2 "odometry-noise must be in" -- "$gsf" evaluate --map m --dataset d --mode track --odometry-noise 2
 expect 2 "prediction-offset must be in" -- "$gsf" evaluate --map m --dataset d --mode track --prediction-offset -1
 expect 2 "sequence-window must be 1..4" -- "$gsf" evaluate --map m --dataset d --sequence-window 5
@@ -82,6 +85,9 @@ cmp -s "$tmp/map.gsfmap" "$tmp/map1.gsfmap" || fail "the one-pass map differs fr
   >/dev/null || fail "evaluate --sequence-window"
 "$gsf" evaluate --map "$tmp/map.gsfmap" --dataset "$tmp/ds" --sequence 01 --json "$tmp/prior.json" --mode gsf --limit 6 \
   --prior-sigma 5 --prior-radius 20 --quiet >/dev/null || fail "evaluate --prior-sigma"
+"$gsf" evaluate --map "$tmp/map.gsfmap" --dataset "$tmp/ds" --sequence 01 --json "$tmp/prior_both.json" --mode gsf \
+  --limit 6 --prior-sigma 5 --prior-radius 20 --one-shot-too --repeat 2 --quiet >/dev/null ||
+  fail "evaluate --one-shot-too --repeat"
 "$gsf" evaluate --map "$tmp/map.gsfmap" --dataset "$tmp/ds" --sequence 01 --json "$tmp/prior_heading.json" --mode gsf \
   --limit 6 --prior-sigma 5 --prior-radius 20 --prior-heading-tolerance 30 --quiet >/dev/null ||
   fail "evaluate --prior-heading-tolerance"
@@ -199,6 +205,15 @@ assert pr["prior"]["radius_m"] == 20 and pr["modes"]["gsf"]["summary"]["successe
 ph = json.load(open(f"{t}/prior_heading.json"))  # a heading 30 deg wide keeps the true poses
 assert ph["prior"]["heading_tolerance_deg"] == 30 and pr["prior"]["heading_tolerance_deg"] == 0, ph["prior"]
 assert ph["modes"]["gsf"]["summary"]["successes"] >= 5, ph["modes"]["gsf"]["summary"]
+# --one-shot-too: the prior's run answers as --prior-sigma alone, and its one-shot twin as --mode gsf does
+# (out.json: the same scans without a prior); --repeat keeps the answers and only times again.
+pb = json.load(open(f"{t}/prior_both.json"))["modes"]
+assert set(pb) == {"gsf", "gsf-one-shot"}, set(pb)
+for a, b in zip(pb["gsf"]["queries"], pr["modes"]["gsf"]["queries"]):
+    assert a["pose"] == b["pose"] and a["confidence"] == b["confidence"], (a["index"], a["pose"], b["pose"])
+for a, b in zip(pb["gsf-one-shot"]["queries"], r["modes"]["gsf"]["queries"]):
+    assert a["pose"] == b["pose"] and a["confidence"] == b["confidence"], (a["index"], a["pose"], b["pose"])
+assert not any(q["diagnostics"].get("prior_outside_matches") for q in pb["gsf-one-shot"]["queries"])
 assert all(q["diagnostics"]["prior_outside_matches"] > 0 for q in pr["modes"]["gsf"]["queries"])
 one_prior = json.loads(open(f"{t}/one_prior.json").read().splitlines()[0])
 assert one_prior["status"] == "Ok" and one_prior["diagnostics"]["prior_outside_matches"] > 0, one_prior["status"]

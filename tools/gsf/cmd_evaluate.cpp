@@ -1,6 +1,7 @@
 // gsf evaluate --map MAP --dataset DIR --sequence 01 --json OUT.json [--mode gsf|instance|scan-context|all]
 // [--min-confidence P] [--svg DIR [--png]] [--label-noise P] [--object-confusion P] [--thin-miss P] [--noise-seed N]
-// [--prior-sigma S [--prior-bias B] [--prior-radius R] [--prior-seed N]] | --mode track [--odometry-noise F]
+// [--prior-sigma S [--prior-bias B] [--prior-radius R] [--prior-seed N] [--one-shot-too]] [--repeat R]
+// | --mode track [--odometry-noise F]
 // [--prediction-offset D]
 // | --sequence-window N [--odometry-noise F]
 #include <algorithm>
@@ -112,6 +113,14 @@ std::vector<OptionSpec> evaluate_option_specs() {
        "with --prior-sigma: the prior also carries a heading (a GNSS course), the truth's yaw with N(0, (T/3)^2) "
        "deg of error, tolerance T deg (0: none)",
        "0"},
+      {"one-shot-too",
+       "with --prior-sigma: each localizer mode also localizes every query without the prior, right after it (the "
+       "run MODE-one-shot): the prior's time against one-shot's on the same scans under the same load",
+       "", true},
+      {"repeat",
+       "localizer modes (not track, drive or --sequence-window): each query localized R times in a row, its time the "
+       "fastest run's (the answers are the same; a load spike then costs no query its time)",
+       "1"},
       {"odometry-noise",
        "--mode track, --sequence-window: odometry error as a share of the distance travelled (and 10 deg/m x it of "
        "yaw)",
@@ -173,7 +182,19 @@ bool parse_eval_options(const Args& args, EvalOptions* o, std::string* error) {
     }
   }
   o->limit = static_cast<uint32_t>(lim);
-  return parse_vehicle_mode_options(args, o, error);
+  long long repeat;
+  if (!args.get_int("repeat", &repeat, error) || repeat < 1 || repeat > 100) {
+    if (error->empty()) *error = "--repeat must be 1..100";
+    return false;
+  }
+  o->repeat = static_cast<uint32_t>(repeat);
+  o->one_shot_too = args.flag("one-shot-too");
+  if (!parse_vehicle_mode_options(args, o, error)) return false;
+  if (o->one_shot_too && !o->prior.enabled) {
+    *error = "--one-shot-too needs --prior-sigma";
+    return false;
+  }
+  return true;
 }
 
 }  // namespace
@@ -193,6 +214,11 @@ int cmd_evaluate(int argc, char** argv) {
   if (!args.parse(argc, argv, 2, specs, &err)) return usage_error("evaluate", err);
   EvalOptions o;
   if (!parse_eval_options(args, &o, &err)) return usage_error("evaluate", err);
+  const bool stretches = args.has("sequence-window") || args.get("mode") == "track" || args.get("mode") == "drive";
+  if (stretches && (o.repeat > 1 || o.one_shot_too))  // their scans depend on the scans before them
+    return usage_error("evaluate",
+                       "--repeat and --one-shot-too are for the per-query modes, not track, drive or "
+                       "--sequence-window");
   if (args.has("sequence-window")) {
     long long n = 0;
     if (!args.get_int("sequence-window", &n, &err) || n < 1 || n > 4)

@@ -31,6 +31,13 @@ struct EvalOptions {
   double odometry_noise = 0.02;    // --mode track, --sequence-window: odometry noise (vehicle_modes.h noisy_odometry)
   double prediction_offset = 0;    // --mode track: predictions knocked off (vehicle_modes.h offset_prediction)
   uint32_t sequence_window = 0;    // --sequence-window N (1..4): localize_sequence over the stretches; 0: off
+  // --repeat R: each query localized R times in a row by each localizer mode, its time the fastest run's
+  // (the library is deterministic: every run gives the same answer), so a load spike costs no row.
+  uint32_t repeat = 1;
+  // --one-shot-too (with a prior): each localizer mode also localizes each query without the prior, right
+  // after it, as the run "MODE-one-shot": the prior's time against one-shot's on the same scans under the
+  // same machine load.
+  bool one_shot_too = false;
 };
 
 // Returns the process exit code.
