@@ -303,18 +303,25 @@ constexpr double kMaxOdometryStepM = 1e3;
 
 // Verification inside a prior's disc: its hypotheses crowd at one or two places (the answer and, in a
 // symmetric place, its flip), so pattern searches of the best two and of the best turned more than 90
-// deg settle them (one-shot runs 4 and 2). The second search is the answer's closest rival's: the
+// deg settle them (one-shot runs 4 and 3). The second search is the answer's closest rival's: the
 // confidence compares the answer with its rivals, and a rival left unsearched reads weaker than it is
 // (z_rival too high: the model was fitted on searched rivals). With one search, held-out family seed
 // 7's b16 avenue with the prior 100 m off answered a 180-degree copy at 0.949 (its rival, searched,
 // reads 0.885, and one-shot gave the copy 0.76). On the 120 family worlds of seeds 7-8
 // (docs/vehicle-modes.md, *The prior on every family*): the 20 m prior answers 12,200 right instead of
 // 12,223 and the prior 100 m off 0 confident wrong instead of 1 of 13,620, one search more a query
-// (4 and 2 searches: 12,185 right, 0 wrong, 0.71-0.78x one-shot's median time).
+// (4 and 2 searches: 12,185 right, 0 wrong, 0.71-0.78x one-shot's median time). The best 8 by the
+// coarse score are scored on the full sample (one-shot 16; the disc holds about 12 distinct poses):
+// on seeds 15-23 with the 20 m prior the same answers, 0.603 -> 0.587x one-shot's median time with the
+// gather index left out below (bench/prior_time.sh); the family worlds of seeds 7-8 one answer more
+// right, 0 more wrong. 4 was faster (0.582x) but lost rivals: the rivals come from the fully scored,
+// and an avenue's flip ranked below 4 by the coarse score went unscored (o10 seed 7, query 90: z_rival
+// 0.59 -> 1.89, answered wrong at 0.988). docs/vehicle-modes.md, *The prior's time on the same scans*.
 VerifyConfig disc_verify_config(const VerifyConfig& vc) {
   VerifyConfig disc = vc;
   disc.refine_top = std::min<uint32_t>(vc.refine_top, 2);
   disc.refine_turned = std::min<uint32_t>(vc.refine_turned, 1);
+  disc.full_top = std::min<uint32_t>(vc.full_top, 8);
   return disc;
 }
 
@@ -929,7 +936,8 @@ Status Localizer::localize_in(const ScanView& scan, const PositionPrior* prior, 
     // fields would read the logits' probabilities): the query runs on the labels, without the filter
     // (docs/vehicle-modes.md, "The prior on labels").
     im.gsf_on = cfg.gsf.enabled && prior == nullptr;
-    s = im.build_voxels(scan, out, true, prior == nullptr);
+    // The layer's 2-D gather index serves the query fields alone (gather_within): not built without them.
+    s = im.build_voxels(scan, out, im.gsf_on, prior == nullptr);
     lap(&out.times.voxel);
     if (s != Status::Ok) return finish(s);
     s = im.find_instances(cfg, out);
