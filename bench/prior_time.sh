@@ -29,22 +29,24 @@ for s in $seeds; do
     --one-shot-too --repeat "$repeat" --quiet --json "$out/time-$tag-$s.json" >/dev/null
   runs+=("$out/time-$tag-$s.json")
 done
-python3 - "$repeat" "${LABELS:-default}" "${runs[@]}" <<'EOF'
-import json, statistics, sys
-repeat, labels, paths = sys.argv[1], sys.argv[2], sys.argv[3:]
-def stats(queries):
-    t = [q["time_ms"] for q in queries]
-    return (len(t), sum(q["success"] and q["answered"] for q in queries),
-            sum(q["answered"] and not q["success"] for q in queries), statistics.median(t) if t else float("nan"))
-pooled = {"gsf": [], "gsf-one-shot": []}
+python3 - "$(dirname "$0")" "$repeat" "${LABELS:-default}" "${runs[@]}" <<'EOF'
+import statistics, sys
+sys.path.insert(0, sys.argv[1])
+import prior_summary  # its per-run counts: queries, answered right, confident wrong, times
+repeat, labels, paths = sys.argv[2], sys.argv[3], sys.argv[4:]
+modes = ("gsf", "gsf-one-shot")
+totals = {m: {"n": 0, "right": 0, "wrong": 0, "times": []} for m in modes}
 print(f"fastest of {repeat} runs a query; prior: 20 m radius, sigma 5 m; labels: {labels}")
 print("| world | queries | prior: right / wrong | one-shot: right / wrong | prior median ms | one-shot median ms | ratio |")
 print("| --- | ---: | --- | --- | ---: | ---: | ---: |")
 for p in paths:
-    modes = json.load(open(p))["modes"]
-    a, b = stats(modes["gsf"]["queries"]), stats(modes["gsf-one-shot"]["queries"])
-    for m in pooled: pooled[m] += modes[m]["queries"]
-    print(f"| {p} | {a[0]} | {a[1]} / {a[2]} | {b[1]} / {b[2]} | {a[3]:.2f} | {b[3]:.2f} | {a[3] / b[3]:.3f} |")
-a, b = stats(pooled["gsf"]), stats(pooled["gsf-one-shot"])
-print(f"| pooled | {a[0]} | {a[1]} / {a[2]} | {b[1]} / {b[2]} | {a[3]:.2f} | {b[3]:.2f} | **{a[3] / b[3]:.3f}** |")
+    a, b = prior_summary.summary(p, "gsf"), prior_summary.summary(p, "gsf-one-shot")
+    for m, s in zip(modes, (a, b)):
+        for k in totals[m]: totals[m][k] += s[k]
+    print(f"| {p} | {a['n']} | {a['right']} / {a['wrong']} | {b['right']} / {b['wrong']} | {a['median']:.2f} |"
+          f" {b['median']:.2f} | {a['median'] / b['median']:.3f} |")
+a, b = totals["gsf"], totals["gsf-one-shot"]
+ma, mb = statistics.median(a["times"]), statistics.median(b["times"])
+print(f"| pooled | {a['n']} | {a['right']} / {a['wrong']} | {b['right']} / {b['wrong']} | {ma:.2f} | {mb:.2f} |"
+      f" **{ma / mb:.3f}** |")
 EOF

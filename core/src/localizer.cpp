@@ -311,11 +311,11 @@ constexpr double kMaxOdometryStepM = 1e3;
 // (docs/vehicle-modes.md, *The prior on every family*): the 20 m prior answers 12,200 right instead of
 // 12,223 and the prior 100 m off 0 confident wrong instead of 1 of 13,620, one search more a query
 // (4 and 2 searches: 12,185 right, 0 wrong, 0.71-0.78x one-shot's median time). The best 8 by the
-// coarse score are scored on the full sample (one-shot 16; the disc holds about 12 distinct poses):
-// on seeds 15-23 with the 20 m prior the same answers, 0.603 -> 0.587x one-shot's median time with the
-// gather index left out below (bench/prior_time.sh); the family worlds of seeds 7-8 one answer more
-// right, 0 more wrong. 4 was faster (0.582x) but lost rivals: the rivals come from the fully scored,
-// and an avenue's flip ranked below 4 by the coarse score went unscored (o10 seed 7, query 90: z_rival
+// coarse score are scored on the full sample (one-shot 16; those scored are nearly all distinct poses,
+// not near-twins of the answer): on seeds 15-23 with the 20 m prior the same answers, 0.603 -> 0.587x
+// one-shot's median time with the gather index left out below (bench/prior_time.sh); the family worlds
+// of seeds 7-8 one answer more right, 0 more wrong. 4 was faster (0.582x) but lost rivals: the rivals come from the
+// fully scored, and an avenue's flip ranked below 4 by the coarse score went unscored (o10 seed 7, query 90: z_rival
 // 0.59 -> 1.89, answered wrong at 0.988). docs/vehicle-modes.md, *The prior's time on the same scans*.
 VerifyConfig disc_verify_config(const VerifyConfig& vc) {
   VerifyConfig disc = vc;
