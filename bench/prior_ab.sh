@@ -14,6 +14,7 @@
 # Usage: bench/prior_ab.sh BASE_GSF NEW_GSF OUT [SEEDS] [BIASES]
 #   SEEDS default "6 7 8 9 10 11 12 13 14", BIASES default "100".
 set -euo pipefail
+. "$(dirname "$0")/vehicle_world.sh"
 [ $# -ge 3 ] || { awk 'NR > 1 && /^#/ { sub(/^# ?/, ""); print; next } NR > 1 { exit }' "$0"; exit 2; }
 base=$(realpath "$1"); new=$(realpath "$2"); out=$3
 seeds=${4:-"6 7 8 9 10 11 12 13 14"}
@@ -29,10 +30,7 @@ if [ -n "${HEADING:-}" ]; then
 fi
 for s in $seeds; do
   d=$out/w$s
-  if [ ! -f "$d/m.map" ]; then
-    "$new" simulate --out "$d" --preset suite --seed "$s" --zone auto --stretches 6 --quiet >"$out/sim$s.log"
-    "$new" build-map --dataset "$d" --out "$d/m.map" --quiet >>"$out/sim$s.log"
-  fi
+  vehicle_world "$new" "$out" "$s"
   r=(--map "$d/m.map" --dataset "$d" "${labels[@]}")
   "$new" evaluate "${r[@]}" --mode gsf --quiet --json "$out/$tag-oneshot-$s.json" >/dev/null
   for b in base new; do

@@ -11,6 +11,7 @@
 # Usage: bench/prior_time.sh GSF OUT [SEEDS] [REPEAT]
 #   SEEDS default "15 16 17 18 19 20 21 22 23", REPEAT default 3.
 set -euo pipefail
+. "$(dirname "$0")/vehicle_world.sh"
 [ $# -ge 2 ] || { awk 'NR > 1 && /^#/ { sub(/^# ?/, ""); print; next } NR > 1 { exit }' "$0"; exit 2; }
 gsf=$(realpath "$1"); out=$2
 seeds=${3:-"15 16 17 18 19 20 21 22 23"}
@@ -21,10 +22,7 @@ mkdir -p "$out"
 runs=()
 for s in $seeds; do
   d=$out/w$s
-  if [ ! -f "$d/m.map" ]; then
-    "$gsf" simulate --out "$d" --preset suite --seed "$s" --zone auto --stretches 6 --quiet >"$out/sim$s.log"
-    "$gsf" build-map --dataset "$d" --out "$d/m.map" --quiet >>"$out/sim$s.log"
-  fi
+  vehicle_world "$gsf" "$out" "$s"
   "$gsf" evaluate --map "$d/m.map" --dataset "$d" "${labels[@]}" --mode gsf --prior-sigma 5 --prior-radius 20 \
     --one-shot-too --repeat "$repeat" --quiet --json "$out/time-$tag-$s.json" >/dev/null
   runs+=("$out/time-$tag-$s.json")

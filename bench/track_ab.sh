@@ -11,6 +11,7 @@
 # Usage: bench/track_ab.sh BASE_GSF NEW_GSF OUT [SEEDS] [NOISES]
 #   SEEDS default "6 7 8 9 10 11 12 13 14", NOISES default "0.02 0.3 1.0".
 set -euo pipefail
+. "$(dirname "$0")/vehicle_world.sh"
 [ $# -ge 3 ] || { awk 'NR > 1 && /^#/ { sub(/^# ?/, ""); print; next } NR > 1 { exit }' "$0"; exit 2; }
 base=$(realpath "$1"); new=$(realpath "$2"); out=$3
 seeds=${4:-"6 7 8 9 10 11 12 13 14"}
@@ -20,10 +21,7 @@ tag=${LABEL_NOISE:+l$LABEL_NOISE-}  # the runs with label errors are kept beside
 mkdir -p "$out"
 for s in $seeds; do
   d=$out/w$s
-  if [ ! -f "$d/m.map" ]; then
-    "$new" simulate --out "$d" --preset suite --seed "$s" --zone auto --stretches 6 --quiet >"$out/sim$s.log"
-    "$new" build-map --dataset "$d" --out "$d/m.map" --quiet >>"$out/sim$s.log"
-  fi
+  vehicle_world "$new" "$out" "$s"
   for n in $noises; do
     "$base" evaluate --map "$d/m.map" --dataset "$d" --mode track --odometry-noise "$n" "${labels[@]}" \
       --json "$out/${tag}base-$n-$s.json" --quiet >/dev/null &
