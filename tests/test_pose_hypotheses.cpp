@@ -118,6 +118,27 @@ TEST_CASE("Heading-diverse cliques give the true heading a hypothesis when the l
   CHECK(st.heading_cliques == 1);
 }
 
+TEST_CASE("Shift-vote keys sort as std::sort by key then index: radix within 2^16 bins a side, std::sort beyond") {
+  // Keys x << 21 | y (21 bits each) with many ties; the reference is the comparison the votes used before.
+  std::mt19937 rng(11);
+  for (const int64_t span : {3, 200, 70000}) {  // the last is wider than 2^16 bins: the fallback
+    std::uniform_int_distribution<int64_t> u(0, span);
+    const uint32_t n = 5000;
+    std::vector<uint64_t> key(n);
+    for (uint64_t& k : key) k = (uint64_t((1 << 20) + u(rng)) << 21) | uint64_t((1 << 20) - u(rng) / 2);
+    std::vector<uint32_t> order(n), scratch_key(n), scratch_order(n), want(n);
+    for (uint32_t i = 0; i < n; ++i) want[i] = i;
+    std::sort(want.begin(), want.end(),
+              [&](uint32_t a, uint32_t b) { return key[a] < key[b] || (key[a] == key[b] && a < b); });
+    sort_by_shift_key(key.data(), n, order.data(), scratch_key.data(), scratch_order.data());
+    CHECK(order == want);
+  }
+  uint64_t one = 7;
+  uint32_t o = 99, sk = 0, so = 0;
+  sort_by_shift_key(&one, 1, &o, &sk, &so);
+  CHECK(o == 0);
+}
+
 TEST_CASE("Removing the edges at a heading removes exactly the pairs that turn by it") {
   // Three correspondences turned by 90 deg (pairwise consistent), one pair of which is too short to
   // tell a heading, and one correspondence consistent with all but turned by 0 deg relative to the first.

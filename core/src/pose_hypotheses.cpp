@@ -21,6 +21,37 @@ double yaw_of(const Eigen::Isometry3d& T) { return std::atan2(T.linear()(1, 0), 
 
 }  // namespace
 
+void sort_by_shift_key(const uint64_t* key, uint32_t n, uint32_t* order, uint32_t* scratch_key,
+                       uint32_t* scratch_order) {
+  for (uint32_t i = 0; i < n; ++i) order[i] = i;
+  if (n < 2) return;
+  uint64_t x0 = UINT64_MAX, x1 = 0, y0 = UINT64_MAX, y1 = 0;
+  for (uint32_t i = 0; i < n; ++i) {
+    const uint64_t x = key[i] >> 21, y = key[i] & 0x1FFFFF;
+    x0 = std::min(x0, x);
+    x1 = std::max(x1, x);
+    y0 = std::min(y0, y);
+    y1 = std::max(y1, y);
+  }
+  if (x1 - x0 > 0xFFFF || y1 - y0 > 0xFFFF) {
+    std::sort(order, order + n,
+              [key](uint32_t a, uint32_t b) { return key[a] < key[b] || (key[a] == key[b] && a < b); });
+    return;
+  }
+  uint32_t* rel = scratch_key;  // (x - x0) << 16 | (y - y0): the same order as the key
+  for (uint32_t i = 0; i < n; ++i) rel[i] = uint32_t(((key[i] >> 21) - x0) << 16) | uint32_t((key[i] & 0x1FFFFF) - y0);
+  uint32_t *from = order, *to = scratch_order;
+  for (uint32_t shift = 0; shift < 32; shift += 8) {
+    uint32_t count[257] = {};
+    for (uint32_t i = 0; i < n; ++i) ++count[((rel[from[i]] >> shift) & 0xFF) + 1];
+    if (count[((rel[from[0]] >> shift) & 0xFF) + 1] == n) continue;  // one digit for all: the order stays
+    for (uint32_t d = 0; d < 256; ++d) count[d + 1] += count[d];
+    for (uint32_t i = 0; i < n; ++i) to[count[(rel[from[i]] >> shift) & 0xFF]++] = from[i];
+    std::swap(from, to);
+  }
+  if (from != order) std::copy(from, from + n, order);
+}
+
 size_t PoseHypotheses::required_bytes(uint32_t max_correspondences, uint32_t max_hypotheses, uint32_t max_votes) {
   return counted_bytes<PoseHypotheses>(max_correspondences, max_hypotheses, max_votes);
 }
@@ -81,7 +112,24 @@ uint32_t PoseHypotheses::rank_shift_bins(uint32_t bins, const float* w, const Hy
   auto rank = [&](uint32_t k, uint32_t support_count) {
     bin_rank_[k] = support_count >= c.min_inliers ? 2 : (bin_count_[k] >= c.min_inliers ? 1 : 0);
   };
+  // The 3 x 3 bins around bin k are found from a cursor per neighbouring column at the first bin not
+  // below the column's lowest key wanted (key + dx 2^21 - 1 as an integer, growing with k: a cursor only
+  // moves forward): find_bin's answers, without its binary search per neighbour (9 a bin, the stage's
+  // largest cost in a lattice's votes).
+  struct Column {
+    uint32_t base = 0;
+    void seek(const uint64_t* keys, uint32_t n, int64_t lowest) {
+      while (base < n && int64_t(keys[base]) < lowest) ++base;
+    }
+    uint32_t find(const uint64_t* keys, uint32_t n, uint64_t key) const {
+      for (uint32_t i = base; i < n && keys[i] <= key; ++i)
+        if (keys[i] == key) return i;
+      return UINT32_MAX;
+    }
+  } column[3];
   for (uint32_t k = 0; k < bins; ++k) {
+    for (int64_t dx = -1; dx <= 1; ++dx)
+      column[dx + 1].seek(bin_key_, bins, int64_t(bin_key_[k]) + dx * (int64_t(1) << 21) - 1);
     float mx = 0.0f, my = 0.0f;
     for (uint32_t e = bin_begin_[k]; e < bin_begin_[k + 1]; ++e) {
       mx += vote_t_[2 * vote_order_[e]];
@@ -98,7 +146,7 @@ uint32_t PoseHypotheses::rank_shift_bins(uint32_t bins, const float* w, const Hy
       for (int64_t dy = -1; dy <= 1; ++dy) {
         const int64_t x = kx + dx, y = ky + dy;
         if (x < 0 || y < 0 || x > 0x1FFFFF || y > 0x1FFFFF) continue;
-        const uint32_t j = (dx == 0 && dy == 0) ? k : find_bin(shift_key(x, y), bins);
+        const uint32_t j = column[dx + 1].find(bin_key_, bins, shift_key(x, y));
         if (j == UINT32_MAX) continue;
         for (uint32_t e = bin_begin_[j]; e < bin_begin_[j + 1]; ++e) {
           const uint32_t i = vote_order_[e];
@@ -402,13 +450,10 @@ uint32_t PoseHypotheses::bin_votes(const Run& r, const Eigen::Matrix3d& R) {
   for (uint32_t i = 0; i < V; ++i) {
     const Eigen::Vector3d t = point(r.b, i) - R * point(r.a, i);
     vote_key_[i] = shift_key(shift_coord(t.x(), r.c.shift_bin), shift_coord(t.y(), r.c.shift_bin));
-    vote_order_[i] = i;
     vote_t_[2 * i] = static_cast<float>(t.x());
     vote_t_[2 * i + 1] = static_cast<float>(t.y());
   }
-  std::sort(vote_order_, vote_order_ + V, [this](uint32_t x, uint32_t y) {
-    return vote_key_[x] < vote_key_[y] || (vote_key_[x] == vote_key_[y] && x < y);
-  });
+  sort_by_shift_key(vote_key_, V, vote_order_, gather_, bin_first_);  // both free until the bins are filled
   uint32_t bins = 0;
   for (uint32_t k = 0; k < V;) {
     uint32_t e = k;

@@ -47,6 +47,14 @@ struct HypothesisStats {
   uint32_t vote_pairs = 0;        // pairs the shift votes saw
 };
 
+// order = 0..n-1 sorted by key (shift-vote bin keys: x << 21 | y, 21 bits each), equal keys by index,
+// as std::sort with that comparison would. A stable LSD radix sort of the keys made relative to their
+// smallest x and y (a scan's translations span far fewer than 2^16 bins a side), 8 bits a pass, a pass
+// skipped when every vote has the same digit; std::sort when the span is wider. The shift votes sort up
+// to 8,192 votes once per heading tried. Scratch: n words each.
+void sort_by_shift_key(const uint64_t* key, uint32_t n, uint32_t* order, uint32_t* scratch_key,
+                       uint32_t* scratch_order);
+
 class PoseHypotheses {
  public:
   static constexpr uint32_t kMaxHypotheses = 256;
