@@ -29,6 +29,41 @@ void lattice_correspondences(int shift, float noise, std::vector<float>* a, std:
   }
 }
 
+// A pose turned by yaw_deg about z and moved to (x, y, 0).
+Eigen::Isometry3d yawed(double yaw_deg, double x, double y) {
+  Eigen::Isometry3d P = Eigen::Isometry3d::Identity();
+  P.linear() = Eigen::AngleAxisd(yaw_deg * M_PI / 180.0, Eigen::Vector3d::UnitZ()).toRotationMatrix();
+  P.translation() = Eigen::Vector3d(x, y, 0);
+  return P;
+}
+
+// Correspondences of the scan points pts (n x 3) to their images under pose, appended to a and b.
+template <size_t N>
+void add_correspondences(const float (&pts)[N][3], const Eigen::Isometry3d& pose, std::vector<float>* a,
+                         std::vector<float>* b) {
+  for (const auto& p : pts) {
+    const Eigen::Vector3d q(p[0], p[1], p[2]), m = pose * q;
+    for (int d = 0; d < 3; ++d) {
+      a->push_back(float(q[d]));
+      b->push_back(float(m[d]));
+    }
+  }
+}
+
+// Index of the first hypothesis within 0.1 m and 0.01 rad of pose, or -1.
+int find_pose(const PoseHypotheses& hyp, const Eigen::Isometry3d& pose) {
+  for (uint32_t h = 0; h < hyp.size(); ++h) {
+    const Eigen::Isometry3d d = pose.inverse() * hyp[h].map_T_scan;
+    if (d.translation().norm() < 0.1 && Eigen::AngleAxisd(d.linear()).angle() < 0.01) return int(h);
+  }
+  return -1;
+}
+
+// 8 scan points for a pose the most correspondences agree on, and 6 for another.
+const float kEightPoints[8][3] = {{5, 17, 1},    {-19, 11, 0.5f}, {22, -13, 1.2f}, {-9, -21, 0.3f},
+                                  {9, -2, 0.9f}, {-4, 8, 1.1f},   {14, 3, 0.4f},   {-24, -9, 0.8f}};
+const float kSixPoints[6][3] = {{3, 1, 0.5f}, {-7, 4, 1}, {12, -5, 0.2f}, {-2, -14, 1.5f}, {18, 9, 0.7f}, {-15, -3, 1}};
+
 }  // namespace
 
 TEST_CASE("Peeling yields one hypothesis per lattice shift, the largest clique first") {
@@ -63,25 +98,11 @@ TEST_CASE("Heading-diverse cliques give the true heading a hypothesis when the l
   // 8 correspondences agree on a wrong pose W (a lattice's 180 deg turn), 6 on the truth T (yaw 12 deg).
   // With one peeled clique, every hypothesis (the clique and its shift votes) has W's heading; the
   // heading-diverse search removes the edges at that heading and finds T's clique.
-  const double yaw_t = 12.0 * M_PI / 180.0, yaw_w = yaw_t + M_PI;
-  Eigen::Isometry3d T = Eigen::Isometry3d::Identity(), W = Eigen::Isometry3d::Identity();
-  T.linear() = Eigen::AngleAxisd(yaw_t, Eigen::Vector3d::UnitZ()).toRotationMatrix();
-  T.translation() = Eigen::Vector3d(100, 50, 0);
-  W.linear() = Eigen::AngleAxisd(yaw_w, Eigen::Vector3d::UnitZ()).toRotationMatrix();
-  W.translation() = Eigen::Vector3d(140, 70, 0);
-  const float true_pts[6][3] = {{3, 1, 0.5f}, {-7, 4, 1}, {12, -5, 0.2f}, {-2, -14, 1.5f}, {18, 9, 0.7f}, {-15, -3, 1}};
-  const float wrong_pts[8][3] = {{5, 17, 1},    {-19, 11, 0.5f}, {22, -13, 1.2f}, {-9, -21, 0.3f},
-                                 {9, -2, 0.9f}, {-4, 8, 1.1f},   {14, 3, 0.4f},   {-24, -9, 0.8f}};
+  const Eigen::Isometry3d T = yawed(12, 100, 50), W = yawed(192, 140, 70);
+  const double yaw_t = 12.0 * M_PI / 180.0;
   std::vector<float> a, b;
-  auto add = [&](const float* p, const Eigen::Isometry3d& pose) {
-    const Eigen::Vector3d q(p[0], p[1], p[2]), m = pose * q;
-    for (int d = 0; d < 3; ++d) {
-      a.push_back(float(q[d]));
-      b.push_back(float(m[d]));
-    }
-  };
-  for (const auto& p : wrong_pts) add(p, W);
-  for (const auto& p : true_pts) add(p, T);
+  add_correspondences(kEightPoints, W, &a, &b);
+  add_correspondences(kSixPoints, T, &a, &b);
   const uint32_t n = static_cast<uint32_t>(a.size() / 3);
   std::vector<float> w(n, 1.0f);
   HypothesisConfig hc;
@@ -90,13 +111,6 @@ TEST_CASE("Heading-diverse cliques give the true heading a hypothesis when the l
   ArenaBuffer buf(PoseHypotheses::required_bytes(64, 16));
   PoseHypotheses hyp;
   REQUIRE(hyp.bind(buf.arena, 64, 16) == Status::Ok);
-  auto has_pose = [&](const Eigen::Isometry3d& pose) {
-    for (uint32_t h = 0; h < hyp.size(); ++h) {
-      const Eigen::Isometry3d d = pose.inverse() * hyp[h].map_T_scan;
-      if (d.translation().norm() < 0.1 && Eigen::AngleAxisd(d.linear()).angle() < 0.01) return true;
-    }
-    return false;
-  };
   auto has_heading = [&](double yaw) {
     for (uint32_t h = 0; h < hyp.size(); ++h) {
       const Eigen::Matrix3d R = hyp[h].map_T_scan.linear();
@@ -108,14 +122,47 @@ TEST_CASE("Heading-diverse cliques give the true heading a hypothesis when the l
   hc.heading_cliques = 0;
   REQUIRE(hyp.generate(a.data(), b.data(), w.data(), n, hc, &st) == Status::Ok);
   CHECK(hyp[0].clique_size == 8);
-  CHECK(has_pose(W));
+  CHECK(find_pose(hyp, W) >= 0);
   CHECK_FALSE(has_heading(yaw_t));  // the truth's heading is never tried
   hc.heading_cliques = 3;
   REQUIRE(hyp.generate(a.data(), b.data(), w.data(), n, hc, &st) == Status::Ok);
   CHECK(hyp[0].clique_size == 8);  // the paper's answer stays first
-  CHECK(has_pose(W));
-  CHECK(has_pose(T));
+  CHECK(find_pose(hyp, W) >= 0);
+  CHECK(find_pose(hyp, T) >= 0);
   CHECK(st.heading_cliques == 1);
+}
+
+TEST_CASE("Heading-diverse cliques run when peeling already filled the headings with a stray one") {
+  // 8 correspondences agree on a wrong pose W (a lattice's turn), 4 on a stray pose S at a third heading,
+  // 3 on the truth T. Two peeled cliques (W, then S) give shift_headings = 2 distinct headings; before,
+  // that stopped the heading-diverse search and T's heading was never tried (seed 41's lattice: a clique
+  // of 3 at a stray heading left out the true heading, and the answer was a confident 180-degree flip).
+  const Eigen::Isometry3d W = yawed(190, 140, 70), S = yawed(57, -60, 20), T = yawed(10, 100, 50);
+  const float stray_pts[4][3] = {{30, 30, 1}, {-31, 27, 0.6f}, {26, -33, 1.4f}, {-28, -29, 0.2f}};
+  const float true_pts[3][3] = {{3, 1, 0.5f}, {-7, 4, 1}, {12, -5, 0.2f}};
+  std::vector<float> a, b;
+  add_correspondences(kEightPoints, W, &a, &b);
+  add_correspondences(stray_pts, S, &a, &b);
+  add_correspondences(true_pts, T, &a, &b);
+  const uint32_t n = static_cast<uint32_t>(a.size() / 3);
+  std::vector<float> w(n, 1.0f);
+  HypothesisConfig hc;
+  hc.max_peeled = 2;
+  hc.shift_headings = 2;
+  hc.heading_cliques = 3;
+  ArenaBuffer buf(PoseHypotheses::required_bytes(64, 16));
+  PoseHypotheses hyp;
+  REQUIRE(hyp.bind(buf.arena, 64, 16) == Status::Ok);
+  HypothesisStats st;
+  REQUIRE(hyp.generate(a.data(), b.data(), w.data(), n, hc, &st) == Status::Ok);
+  CHECK(find_pose(hyp, W) == 0);  // the maximum clique first
+  CHECK(find_pose(hyp, S) == 1);  // peeled second
+  CHECK(find_pose(hyp, T) >= 2);  // found by the heading-diverse search
+  CHECK(st.heading_cliques >= 1);
+  // Without it, T is not found.
+  hc.heading_cliques = 0;
+  REQUIRE(hyp.generate(a.data(), b.data(), w.data(), n, hc, &st) == Status::Ok);
+  CHECK(find_pose(hyp, T) < 0);
 }
 
 TEST_CASE("Shift-vote keys sort as std::sort by key then index: radix within 2^16 bins a side, std::sort beyond") {

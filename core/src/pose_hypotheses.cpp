@@ -19,6 +19,13 @@ uint64_t shift_key(int64_t x, int64_t y) { return (uint64_t(x & 0x1FFFFF) << 21)
 Eigen::Vector3d point(const float* p, uint32_t i) { return Eigen::Vector3d(p[3 * i], p[3 * i + 1], p[3 * i + 2]); }
 double yaw_of(const Eigen::Isometry3d& T) { return std::atan2(T.linear()(1, 0), T.linear()(0, 0)); }
 
+// Upright at a hypothesis' heading: any clique of this heading may carry degrees of roll or pitch
+// (mid-height centroids constrain them poorly), and the bird's-eye verification cannot see tilt, so a
+// vote hypothesis must not inherit it.
+Eigen::Matrix3d upright_at(const Eigen::Isometry3d& T) {
+  return Eigen::AngleAxisd(yaw_of(T), Eigen::Vector3d::UnitZ()).toRotationMatrix();
+}
+
 }  // namespace
 
 void sort_by_shift_key(const uint64_t* key, uint32_t n, uint32_t* order, uint32_t* scratch_key,
@@ -352,26 +359,14 @@ bool PoseHypotheses::fit_clique(Run& r, TlsResult* tls, uint32_t* m) {
   return true;
 }
 
-// Hypothesis hp's heading differs from every earlier hypothesis' by at least same_pose_deg.
-bool PoseHypotheses::new_heading(const Run& r, uint32_t hp) const {
-  for (uint32_t e = 0; e < hp; ++e)
-    if (Eigen::AngleAxisd(hyps_[e].map_T_scan.linear().transpose() * hyps_[hp].map_T_scan.linear()).angle() <
-        r.same_rad)
-      return false;
-  return true;
-}
-
-uint32_t PoseHypotheses::distinct_headings(const Run& r) const {
-  uint32_t d = 0;
-  for (uint32_t hp = 0; hp < count_; ++hp) d += new_heading(r, hp);
-  return d;
-}
-
 // 1b. Heading-diverse cliques (HypothesisConfig::heading_cliques): the edges that make cliques at the
-// headings found so far leave the graph, and the search runs again on every correspondence.
+// headings found so far leave the graph, and the search runs again on every correspondence. They run
+// however many headings peeling found: a clique of min_inliers pairs at a stray heading is a heading
+// too, and in a lattice two of them left no room for a true heading that peeling never reached
+// (vote_shifts ranks the headings by their shift votes; seed 41's lattice: two confident 180-degree flips).
 void PoseHypotheses::find_heading_cliques(Run& r) {
   const HypothesisConfig& c = r.c;
-  if (c.heading_cliques == 0 || count_ == 0 || count_ >= r.K || distinct_headings(r) >= c.shift_headings) return;
+  if (c.heading_cliques == 0 || count_ == 0 || count_ >= r.K) return;
   const double separation = deg_to_rad(double(c.heading_separation_deg));
   const float min_pair = c.tls_threshold;  // shorter pairs cannot tell a heading to within the separation
   uint32_t cleared = 0;                    // hypotheses whose heading's edges are gone
@@ -379,7 +374,6 @@ void PoseHypotheses::find_heading_cliques(Run& r) {
   for (uint32_t extra = 0; extra < c.heading_cliques && count_ < r.K; ++extra) {
     for (; cleared < count_; ++cleared)
       graph_.remove_edges_at_heading(r.a, r.b, yaw_of(hyps_[cleared].map_T_scan), separation, min_pair);
-    if (distinct_headings(r) >= c.shift_headings) break;
     CliqueStats cs;
     solver_.solve(graph_, c.next_budget, clique_, &cs, allowed_);
     ++r.st.searches;
@@ -399,29 +393,52 @@ void PoseHypotheses::find_heading_cliques(Run& r) {
   }
 }
 
+// The distinct headings of the hypotheses so far (each the first hypothesis not within same_pose_deg of
+// an earlier distinct one) into heads, best supported first: by the support of the heading's best shift-
+// vote bin (rank_shift_bins: the weight of the vote pairs within tls_threshold of one translation), ties
+// in the order found. A clique's own inlier count does not tell a true heading from a stray one: its fit
+// can keep 3 of its 13-16 pairs at the true heading (the cheap family's hall) as at a stray one (seed
+// 41's lattice), while at the true heading and a lattice's turns many vote pairs agree on a translation.
+// Returns how many.
+uint32_t PoseHypotheses::ranked_headings(const Run& r, uint32_t* heads) {
+  float support[kMaxHypotheses];
+  uint32_t n = 0;
+  for (uint32_t hp = 0; hp < count_; ++hp) {
+    bool seen = false;
+    for (uint32_t k = 0; k < n && !seen; ++k)
+      seen =
+          Eigen::AngleAxisd(hyps_[heads[k]].map_T_scan.linear().transpose() * hyps_[hp].map_T_scan.linear()).angle() <
+          r.same_rad;
+    if (seen) continue;
+    const uint32_t bins = rank_shift_bins(bin_votes(r, upright_at(hyps_[hp].map_T_scan)), r.w, r.c);
+    float best = 0.0f;
+    for (uint32_t k = 0; k < bins; ++k)
+      if (bin_rank_[k] == 2) best = std::max(best, bin_weight_[k]);
+    heads[n] = hp;
+    support[n++] = best;
+  }
+  for (uint32_t i = 1; i < n; ++i)  // insertion sort, stable: n <= max_peeled + heading_cliques
+    for (uint32_t j = i; j > 0 && support[j] > support[j - 1]; --j) {
+      std::swap(support[j], support[j - 1]);
+      std::swap(heads[j], heads[j - 1]);
+    }
+  return n;
+}
+
 // 2. Shift votes. In a repetitive layout the true answer is one translation among many that the
-// cliques' headings allow, and peeling may never form it. For each distinct heading found, every
-// correspondence votes for the translation b - R a (bins of shift_bin metres); the best-supported
-// bins (rank_shift_bins: by the votes within tls_threshold of a bin's mean, ties by bin key) become
-// hypotheses until K are found.
+// cliques' headings allow, and peeling may never form it. For each of the shift_headings best-supported
+// headings found (ranked_headings), every correspondence votes for the translation b - R a (bins of
+// shift_bin metres); the best-supported bins (rank_shift_bins: by the votes within tls_threshold of a
+// bin's mean, ties by bin key) become hypotheses until K are found.
 void PoseHypotheses::vote_shifts(Run& r) {
   const HypothesisConfig& c = r.c;
-  const uint32_t peeled = count_;
-  uint32_t total_headings = 0;
-  for (uint32_t hp = 0; hp < peeled && total_headings < c.shift_headings; ++hp) total_headings += new_heading(r, hp);
-  uint32_t headings = 0;
-  for (uint32_t hp = 0; hp < peeled && headings < c.shift_headings && count_ < r.K; ++hp) {
-    if (!new_heading(r, hp)) continue;
+  uint32_t heads[kMaxHypotheses];
+  const uint32_t total_headings = std::min(ranked_headings(r, heads), c.shift_headings);
+  for (uint32_t k = 0; k < total_headings && count_ < r.K; ++k) {
     // An even share of the remaining slots for each remaining heading: the true heading need not be
     // the first clique's.
-    const uint32_t quota = (r.K - count_ + (total_headings - headings) - 1) / (total_headings - headings);
-    ++headings;
-    // Upright at the clique's heading: any clique of this heading may carry degrees of roll or pitch
-    // (mid-height centroids constrain them poorly), and the bird's-eye verification cannot see tilt,
-    // so a vote hypothesis must not inherit it.
-    const Eigen::Matrix3d R =
-        Eigen::AngleAxisd(yaw_of(hyps_[hp].map_T_scan), Eigen::Vector3d::UnitZ()).toRotationMatrix();
-    vote_at_heading(r, R, count_ + quota);
+    const uint32_t quota = (r.K - count_ + (total_headings - k) - 1) / (total_headings - k);
+    vote_at_heading(r, upright_at(hyps_[heads[k]].map_T_scan), count_ + quota);
   }
 }
 

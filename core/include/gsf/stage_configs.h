@@ -175,14 +175,18 @@ struct HypothesisConfig {
   // slots among up to shift_headings headings; 96 left the true shift out in lattice zones (suite seeds
   // 1-5, lattice zone 86.5% at 96, 97.0% at 192; docs/results.md). Verification scores each coarsely.
   uint32_t max_hypotheses = 192;
-  uint32_t max_peeled = 8;      // of which from peeled maximum cliques; the rest from shift votes,
-                                // shared evenly by the headings
-  uint32_t shift_headings = 4;  // distinct clique headings whose translations are voted on
-  // Heading-diverse cliques: after peeling, while fewer than shift_headings distinct headings were found,
-  // up to this many more clique searches run with the consistency graph's edges at the found headings
-  // removed (pair directions within heading_separation_deg), so each finds a clique at another heading.
-  // In a symmetric layout (a lattice's 90 / 180 deg turns, a row's or avenue's 180) every large clique can
-  // share one wrong heading, and the shift votes then never see the true one. 0 = off.
+  uint32_t max_peeled = 8;  // of which from peeled maximum cliques; the rest from shift votes,
+                            // shared evenly by the headings
+  // Distinct clique headings whose translations are voted on: of all found, the best supported by the
+  // votes (their best translation bin's support; a clique's own fit can keep 3 of its 13-16 pairs at a
+  // stray heading, which then took the place of a true one: seed 41's lattice, the cheap family's hall).
+  uint32_t shift_headings = 4;
+  // Heading-diverse cliques: after peeling, up to this many more clique searches run with the consistency
+  // graph's edges at the found headings removed (pair directions within heading_separation_deg), so each
+  // finds a clique at another heading. In a symmetric layout (a lattice's 90 / 180 deg turns, a row's or
+  // avenue's 180) every large clique can share one wrong heading, and the shift votes then never see the
+  // true one. They run however many headings peeling found (before 2026-12-08 only while fewer than
+  // shift_headings: two stray headings then kept a lattice's true heading out). 0 = off.
   uint32_t heading_cliques = 3;
   float heading_separation_deg = 15.0f;
   // m; translation vote bins. Bins are ranked by their support, the weight of the votes within

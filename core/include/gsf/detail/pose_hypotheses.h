@@ -95,8 +95,7 @@ class PoseHypotheses {
   bool record(Run& r, const TlsResult& tls, uint32_t core_size, uint32_t m);
   bool make_upright(Run& r, TlsResult* tls, uint32_t m);
   bool repeats_earlier(Run& r, const Eigen::Isometry3d& pose) const;
-  bool new_heading(const Run& r, uint32_t hp) const;
-  uint32_t distinct_headings(const Run& r) const;
+  uint32_t ranked_headings(const Run& r, uint32_t* heads);
   void vote_at_heading(Run& r, const Eigen::Matrix3d& R, uint32_t stop);
   uint32_t bin_votes(const Run& r, const Eigen::Matrix3d& R);
   void bring_best_bin_to(uint32_t taken, uint32_t bins);
