@@ -138,6 +138,9 @@ std::vector<OptionSpec> evaluate_option_specs() {
   return specs;
 }
 
+// --mode track or drive: the modes that run the simulator's 10 Hz stretches scan after scan.
+bool stretch_mode(const Args& args) { return args.get("mode") == "track" || args.get("mode") == "drive"; }
+
 // The options into *o, in the order the command line is checked; false with *error on a usage error.
 bool parse_eval_options(const Args& args, EvalOptions* o, std::string* error) {
   o->map_path = args.get("map");
@@ -159,7 +162,7 @@ bool parse_eval_options(const Args& args, EvalOptions* o, std::string* error) {
   o->overrides = args.get("set");
   o->classes = args.get("classes");
   if (!parse_label_error_options(args, &o->label_errors, error)) return false;
-  if (args.get("mode") == "track" || args.get("mode") == "drive") {
+  if (stretch_mode(args)) {
     o->modes = {args.get("mode")};
   } else if (!parse_modes(args.get("mode"), &o->modes)) {
     *error = "bad --mode '" + args.get("mode") + "'";
@@ -214,7 +217,7 @@ int cmd_evaluate(int argc, char** argv) {
   if (!args.parse(argc, argv, 2, specs, &err)) return usage_error("evaluate", err);
   EvalOptions o;
   if (!parse_eval_options(args, &o, &err)) return usage_error("evaluate", err);
-  const bool stretches = args.has("sequence-window") || args.get("mode") == "track" || args.get("mode") == "drive";
+  const bool stretches = args.has("sequence-window") || stretch_mode(args);
   if (stretches && (o.repeat > 1 || o.one_shot_too))  // their scans depend on the scans before them
     return usage_error("evaluate",
                        "--repeat and --one-shot-too are for the per-query modes, not track, drive or "
@@ -227,7 +230,7 @@ int cmd_evaluate(int argc, char** argv) {
     if (!args.has("sequence")) o.sequence = "02";  // the simulator's stretches
     return run_window(o);
   }
-  if (args.get("mode") == "track" || args.get("mode") == "drive") {
+  if (stretch_mode(args)) {
     if (!args.has("sequence")) o.sequence = "02";  // the simulator's stretches
     return run_tracking(o);
   }
