@@ -2,9 +2,11 @@
 """Fits the confidence model of core/src/confidence.cpp (kConfidenceModel) to recorded queries, and
 replays any model on held-out ones.
 
-The model (core/include/gsf/detail/confidence.h): P = s(a_r + b_r z_rival + c_r rival_margin)
+The model (core/include/gsf/detail/confidence.h): P = s(a_r + b_r z_rival inlier_share)
 s(a_p + b_f z_shift_far + b_s z_shift + b_t z_turn) s(a_i + b_i inlier_share), s the logistic function,
-each z clipped to [-3, 10], the margin to [0, 1]. --factors fits other forms (e.g. inlier_share+inliers).
+each z clipped to [-3, 10], the margin to [0, 1]. --factors fits other forms (e.g. z_rival+rival_margin:
+the rival factor of the models before 2026-12-08). Every slope is held >= 0 (each factor rises with its
+evidence), so a field that says nothing the others do not is fitted to 0 rather than to a sign flip.
 The evidence is the library's own measurement, written per query by `gsf evaluate --json`
 (diagnostics.confidence_evidence), so a fit needs no re-run of the localizer: fit on some runs, paste
 the printed C++ line, rebuild, and report on other runs (other seeds) from the library itself.
@@ -22,7 +24,7 @@ seeds than the model it replaced; docs/confidence.md).
 
 Usage:
   bench/fit_confidence.py --train DIR [DIR ...] [--test DIR [DIR ...]] [--mode gsf] [--min-confidence 0.9]
-  bench/fit_confidence.py --model=a_r,b_r,c_r,a_s,b_s,a_t,b_t,a_i,b_i --test DIR [DIR ...]   (replay only)
+  bench/fit_confidence.py --model=a_r,b_r,a_p,b_f,b_s,b_t,a_i,b_i --test DIR [DIR ...]   (replay only)
 Prints the fitted numbers as the C++ initializer of kConfidenceModel, then per DIR (train and test) the
 replayed rule: success, answered, precision, wrong, declined right, ECE. Standard library only."""
 import argparse
@@ -39,8 +41,9 @@ FEATURES = {"z_rival": (-3.0, 10.0), "rival_margin": (0.0, 1.0), "z_shift": (-3.
             "inlier_share": (0.0, 1.0), "inliers": (3.0, 12.0), "known_share": (0.0, 1.0),
             "excess_inliers": (0.0, 9.0), "excess_share": (0.0, 1.0), "beyond_clique": (0.0, 60.0),
             "explained_share": (0.0, 1.0), "explained_excess": (0.0, 20.0),
-            "layer_share": (0.0, 1.0), "layer_excess": (0.0, 20.0)}
-FACTORS = [["z_rival", "rival_margin"], ["z_shift_far", "z_shift", "z_turn"], ["inlier_share"]]
+            "layer_share": (0.0, 1.0), "layer_excess": (0.0, 20.0),
+            "rival_share": (-3.0, 10.0), "margin_share": (0.0, 1.0)}
+FACTORS = [["rival_share"], ["z_shift_far", "z_shift", "z_turn"], ["inlier_share"]]
 
 
 def parameter_count():
@@ -48,13 +51,13 @@ def parameter_count():
 
 
 def parse_model(text):
-    """--model's numbers, as many as the factors take (the models before 2026-12-06 evening have eight:
-    no z_shift_far)."""
+    """--model's numbers, as many as the factors take (the nine-number models of 2026-12-06 evening to
+    2026-12-07 replay with --factors z_rival+rival_margin,z_shift_far+z_shift+z_turn,inlier_share)."""
     m = [float(v) for v in text.split(",")]
     if len(m) != parameter_count():
         raise SystemExit(f"the model has {len(m)} numbers, the factors {','.join('+'.join(f) for f in FACTORS)} "
-                         f"take {parameter_count()} (an eight-number model: fit_confidence.py --factors "
-                         "z_rival+rival_margin,z_shift+z_turn,inlier_share)")
+                         f"take {parameter_count()} (a nine-number model of 2026-12-07: fit_confidence.py "
+                         "--factors z_rival+rival_margin,z_shift_far+z_shift+z_turn,inlier_share)")
     return m
 
 
@@ -129,6 +132,10 @@ def features(e, q):
 def evidence(e, name):
     """A recorded field, or one derived from them: the inliers beyond the 3 every clique explains, as a
     count and as a share of the instances on the map beyond those 3."""
+    if name == "rival_share":  # z_rival (clipped) scaled by the inlier share: weak where few instances fit
+        return min(10.0, max(-3.0, e["z_rival"])) * min(1.0, max(0.0, e["inlier_share"]))
+    if name == "margin_share":
+        return min(1.0, max(0.0, e["rival_margin"])) * min(1.0, max(0.0, e["inlier_share"]))
     if name == "excess_inliers":
         return float(e["inliers"]) - 3.0
     if name == "beyond_clique":
@@ -209,6 +216,7 @@ def fit(data, l2=1e-3, iterations=400, start=None, free=None):
     if start is not None:
         m = list(start)
     free = free or [True] * n
+    slope = [j > 0 for f in FACTORS for j in range(1 + len(f))]  # False for each factor's offset
     step, last = [0.1 if free[i] else 0.0 for i in range(n)], [0.0] * n
     loss = 0.0
     for _ in range(iterations):
@@ -225,6 +233,8 @@ def fit(data, l2=1e-3, iterations=400, start=None, free=None):
                 m[i] -= step[i]
             elif grad[i] < 0:
                 m[i] += step[i]
+            if slope[i] and m[i] < 0.0:  # each factor rises with its evidence (tests/test_confidence.cpp)
+                m[i] = 0.0
             last[i] = grad[i]
         if max(step) < 1e-5:
             break

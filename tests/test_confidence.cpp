@@ -260,12 +260,25 @@ TEST_CASE("The probability is a product of rising logistic factors, in [0, 1]") 
     last = p;
   }
   last = 0.0;
-  for (float m = 0.0f; m <= 1.0f; m += 0.05f) {  // and with the rival's margin
-    e.rival_margin = m;
+  for (float share = 0.0f; share <= 1.0f; share += 0.05f) {  // and with the share of instances explained
+    e.inlier_share = share;
     const double p = confidence_probability(e);
     CHECK(p >= last);
     last = p;
   }
+  // The rival's lead counts in proportion to that share. A wrong map's look-alike crossing (a vehicle
+  // off its map: median z_rival 2.4 at an inlier share of 0.26-0.41) is not vouched for; a right answer
+  // explaining most of the scan is at the same lead, and one explaining as few as a real scan's right
+  // answers (0.5) is with a real right answer's lead (z_rival about 6).
+  e.z_rival = 2.4f;
+  e.inlier_share = 0.35f;
+  CHECK(confidence_probability(e) < 0.9);
+  e.inlier_share = 0.9f;
+  CHECK(confidence_probability(e) >= 0.9);
+  e.z_rival = 6.0f;
+  e.inlier_share = 0.5f;
+  CHECK(confidence_probability(e) >= 0.9);
+  e.inlier_share = 1.0f;
   double last_turn = 0.0;
   e.z_rival = 0.0f;  // no separation from the rival, a near-tie: a coin toss at best
   e.rival_margin = 0.02f;
@@ -305,7 +318,7 @@ TEST_CASE("The probability is a product of rising logistic factors, in [0, 1]") 
   e.inlier_share = 0.0f;  // none of the scan's instances explained: a coincidence somewhere else
   CHECK(confidence_probability(e) < 0.05);
   CHECK(confidence_probability(e) < half);
-  const ConfidenceModel flat{0, 0, 0, 0, 0, 0, 0, 0, 0};  // every factor (rival, peak, inlier) 1/2
+  const ConfidenceModel flat{0, 0, 0, 0, 0, 0, 0, 0};  // every factor (rival, peak, inlier) 1/2
   CHECK(confidence_probability(e, flat) == Approx(0.125));
 }
 

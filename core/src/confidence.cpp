@@ -12,8 +12,11 @@ namespace gsf {
 // right answers reach (about 0.8) and real ones do not (0.3-0.5). The rival and peak factors were refitted
 // on 2026-12-07 when the probes came to score confidence.probe_points (8,192) voxels instead of
 // verify.max_points (4,096): the same difference over twice the samples reads a larger z, so the model is
-// fitted at the probes' sample (docs/confidence.md, *The probes read the scan whole*).
-const ConfidenceModel kConfidenceModel = {-1.758f, 3.034f, 6.295f, -14.327f, 1.790f, 0.717f, 2.036f, -5.006f, 29.669f};
+// fitted at the probes' sample (docs/confidence.md, *The probes read the scan whole*). On 2026-12-08 the
+// rival factor came to read z_rival x inlier_share (*The rival's lead, weighed by what the answer
+// explains*): refitted with the peak factor on seeds 1-3 of this build, every slope held rising, the fit
+// left z_rival alone and the margin at 0.
+const ConfidenceModel kConfidenceModel = {-2.346f, 4.404f, -14.054f, 2.031f, 0.562f, 2.096f, -5.006f, 29.669f};
 
 namespace {
 
@@ -26,8 +29,6 @@ static_assert(kBlocks <= 65536, "block indices are uint16");
 // z is clipped to this range before the logistic factors: beyond it the factors are flat, and a
 // comparison that moved no sample (z = 0 / 0) reads as no evidence either way.
 constexpr float kZMin = -3.0f, kZMax = 10.0f;
-// The margin is clipped too: beyond 1 (every sample's evidence gone at the rival) it says nothing more.
-constexpr float kMarginMax = 1.0f;
 
 uint16_t block_index(float x, float y) {
   auto axis = [](float v) {
@@ -56,12 +57,12 @@ double z_factor(float offset, float slope, float z) { return logistic(offset + s
 
 double confidence_probability(const ConfidenceEvidence& e, const ConfidenceModel& m) {
   if (e.samples == 0) return 0.0;
-  const double rival = m.rival_offset + m.rival_slope * clipped(e.z_rival, kZMin, kZMax) +
-                       m.rival_margin_slope * clipped(e.rival_margin, 0.0f, kMarginMax);
+  const double share = clipped(e.inlier_share, 0.0f, 1.0f);
+  const double rival = m.rival_offset + m.rival_share_slope * clipped(e.z_rival, kZMin, kZMax) * share;
   const double peak = m.peak_offset + m.peak_far_slope * clipped(e.z_shift_far, kZMin, kZMax) +
                       m.peak_shift_slope * clipped(e.z_shift, kZMin, kZMax) +
                       m.peak_turn_slope * clipped(e.z_turn, kZMin, kZMax);
-  const double inlier = m.inlier_offset + m.inlier_slope * clipped(e.inlier_share, 0.0f, 1.0f);
+  const double inlier = m.inlier_offset + m.inlier_slope * share;
   const double p = logistic(rival) * logistic(peak) * logistic(inlier);
   return e.known_share < kMinKnownShare ? std::min(p, kPartlyMappedConfidence) : p;
 }
