@@ -5,6 +5,7 @@
 #include <new>
 
 #include "gsf/detail/angles.h"
+#include "gsf/detail/pose_distance.h"
 #include "gsf/detail/pose_solver.h"
 
 namespace gsf {
@@ -17,7 +18,6 @@ int64_t shift_coord(double v, float bin) { return static_cast<int64_t>(std::floo
 uint64_t shift_key(int64_t x, int64_t y) { return (uint64_t(x & 0x1FFFFF) << 21) | uint64_t(y & 0x1FFFFF); }
 
 Eigen::Vector3d point(const float* p, uint32_t i) { return Eigen::Vector3d(p[3 * i], p[3 * i + 1], p[3 * i + 2]); }
-double yaw_of(const Eigen::Isometry3d& T) { return std::atan2(T.linear()(1, 0), T.linear()(0, 0)); }
 
 // Upright at a hypothesis' heading: any clique of this heading may carry degrees of roll or pitch
 // (mid-height centroids constrain them poorly), and the bird's-eye verification cannot see tilt, so a
