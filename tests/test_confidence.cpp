@@ -267,9 +267,9 @@ TEST_CASE("The probability is a product of rising logistic factors, in [0, 1]") 
     last = p;
   }
   // The rival's lead counts in proportion to that share. A wrong map's look-alike crossing (a vehicle
-  // off its map: median z_rival 2.4 at an inlier share of 0.26-0.41) is not vouched for; a right answer
-  // explaining most of the scan is at the same lead, and one explaining as few as a real scan's right
-  // answers (0.5) is with a real right answer's lead (z_rival about 6).
+  // off its map: median z_rival 2.4 at an inlier share of 0.26-0.41) is not vouched for; an answer
+  // explaining most of the scan is, at the same lead; and one explaining as few as a real scan's right
+  // answers do (0.5) is vouched for at a real right answer's lead (z_rival about 6).
   e.z_rival = 2.4f;
   e.inlier_share = 0.35f;
   CHECK(confidence_probability(e) < 0.9);
