@@ -243,6 +243,12 @@ TEST_CASE("The 180-degree probe counts only when it is ahead of the answer if th
 }
 
 TEST_CASE("The probability is a product of rising logistic factors, in [0, 1]") {
+  // The fit holds every slope >= 0 (bench/fit_confidence.py): a pasted model that falls with its
+  // evidence is a fit of noise.
+  const ConfidenceModel& m = kConfidenceModel;
+  for (const float slope :
+       {m.rival_share_slope, m.peak_far_slope, m.peak_shift_slope, m.peak_turn_slope, m.inlier_slope})
+    CHECK(slope >= 0.0f);
   ConfidenceEvidence e;
   e.samples = 1000;
   e.known_share = 1.0f;
