@@ -10,6 +10,7 @@
 #include "arena_buffer.h"
 #include "gsf/config.h"
 #include "gsf/detail/max_clique.h"
+#include "gsf/detail/pose_distance.h"
 #include "gsf/detail/pose_hypotheses.h"
 
 namespace test_pose_hypotheses {
@@ -50,6 +51,16 @@ void add_correspondences(const float (&pts)[N][3], const Eigen::Isometry3d& pose
   }
 }
 
+// PoseHypotheses bound in an arena of its own, for 64 correspondences.
+struct BoundHypotheses {
+  ArenaBuffer buf;
+  PoseHypotheses hyp;
+  explicit BoundHypotheses(uint32_t max_hypotheses, uint32_t max_votes = 0)
+      : buf(PoseHypotheses::required_bytes(64, max_hypotheses, max_votes)) {
+    REQUIRE(hyp.bind(buf.arena, 64, max_hypotheses, max_votes) == Status::Ok);
+  }
+};
+
 // Index of the first hypothesis within 0.1 m and 0.01 rad of pose, or -1.
 int find_pose(const PoseHypotheses& hyp, const Eigen::Isometry3d& pose) {
   for (uint32_t h = 0; h < hyp.size(); ++h) {
@@ -76,9 +87,8 @@ TEST_CASE("Peeling yields one hypothesis per lattice shift, the largest clique f
   const uint32_t n = static_cast<uint32_t>(a.size() / 3);
   std::vector<float> w(n, 1.0f);
   HypothesisConfig hc;
-  ArenaBuffer buf(PoseHypotheses::required_bytes(64, 8));
-  PoseHypotheses hyp;
-  REQUIRE(hyp.bind(buf.arena, 64, 8) == Status::Ok);
+  BoundHypotheses bound(8);
+  PoseHypotheses& hyp = bound.hyp;
   HypothesisStats st;
   REQUIRE(hyp.generate(a.data(), b.data(), w.data(), n, hc, &st) == Status::Ok);
   REQUIRE(hyp.size() >= 2);
@@ -108,13 +118,11 @@ TEST_CASE("Heading-diverse cliques give the true heading a hypothesis when the l
   HypothesisConfig hc;
   hc.max_peeled = 1;
   hc.shift_headings = 2;
-  ArenaBuffer buf(PoseHypotheses::required_bytes(64, 16));
-  PoseHypotheses hyp;
-  REQUIRE(hyp.bind(buf.arena, 64, 16) == Status::Ok);
+  BoundHypotheses bound(16);
+  PoseHypotheses& hyp = bound.hyp;
   auto has_heading = [&](double yaw) {
     for (uint32_t h = 0; h < hyp.size(); ++h) {
-      const Eigen::Matrix3d R = hyp[h].map_T_scan.linear();
-      if (std::fabs(std::remainder(std::atan2(R(1, 0), R(0, 0)) - yaw, 2 * M_PI)) < 5.0 * M_PI / 180.0) return true;
+      if (std::fabs(std::remainder(yaw_of(hyp[h].map_T_scan) - yaw, 2 * M_PI)) < 5.0 * M_PI / 180.0) return true;
     }
     return false;
   };
@@ -150,9 +158,8 @@ TEST_CASE("Heading-diverse cliques run when peeling already filled the headings 
   hc.max_peeled = 2;
   hc.shift_headings = 2;
   hc.heading_cliques = 3;
-  ArenaBuffer buf(PoseHypotheses::required_bytes(64, 16));
-  PoseHypotheses hyp;
-  REQUIRE(hyp.bind(buf.arena, 64, 16) == Status::Ok);
+  BoundHypotheses bound(16);
+  PoseHypotheses& hyp = bound.hyp;
   HypothesisStats st;
   REQUIRE(hyp.generate(a.data(), b.data(), w.data(), n, hc, &st) == Status::Ok);
   CHECK(find_pose(hyp, W) == 0);  // the maximum clique first
@@ -296,9 +303,8 @@ TEST_CASE("Shift votes rank bins by their support: a translation split across a 
   const uint32_t n = sc.size();
   std::vector<float> w(n, 1.0f);
   HypothesisConfig hc = ShiftVoteScene::one_heading(4);  // the clique and 3 shift votes
-  ArenaBuffer buf(PoseHypotheses::required_bytes(64, 8));
-  PoseHypotheses hyp;
-  REQUIRE(hyp.bind(buf.arena, 64, 8) == Status::Ok);
+  BoundHypotheses bound(8);
+  PoseHypotheses& hyp = bound.hyp;
   auto has_translation = [&](double tx, double ty) {
     for (uint32_t h = 0; h < hyp.size(); ++h)
       if ((hyp[h].map_T_scan.translation().head<2>() - Eigen::Vector2d(tx, ty)).norm() < 0.2) return true;
@@ -331,9 +337,8 @@ TEST_CASE("Shift votes over the pairs ranked out of the graph find the true shif
   const uint32_t total = sc.size();
   std::vector<float> w(total, 1.0f);
   HypothesisConfig hc = ShiftVoteScene::one_heading(3);  // the clique and the two best shift bins
-  ArenaBuffer buf(PoseHypotheses::required_bytes(64, 8, 128));
-  PoseHypotheses hyp;
-  REQUIRE(hyp.bind(buf.arena, 64, 8, 128) == Status::Ok);
+  BoundHypotheses bound(8, 128);
+  PoseHypotheses& hyp = bound.hyp;
   auto find_translation = [&](double tx, double ty) {
     for (uint32_t h = 0; h < hyp.size(); ++h)
       if ((hyp[h].map_T_scan.translation().head<2>() - Eigen::Vector2d(tx, ty)).norm() < 0.2) return int(h);
